@@ -1,0 +1,267 @@
+//! The case file as written on disk (`cases/<id>.toml`), before validation.
+//!
+//! Every table denies unknown keys so a typo is an error, not a silently ignored setting.
+//! Vectors are written with as many components as the case's dimension (2 or 3).
+
+use serde::Deserialize;
+
+/// A whole case file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CaseFile {
+    /// Stable id; must equal the file stem.
+    pub id: String,
+    /// One line saying what the case is.
+    pub title: String,
+    /// Output family: `rigid_body` or `springs` (decides the contract columns).
+    pub family: String,
+    /// 2 or 3.
+    pub dimension: u8,
+    /// Time incrementation.
+    #[serde(default)]
+    pub time: TimeTable,
+    /// Penalty contact settings.
+    #[serde(default)]
+    pub contact: ContactTable,
+    /// Output sampling and columns.
+    pub output: OutputTable,
+    /// Named local coordinate systems for nodal DOFs.
+    #[serde(default)]
+    pub frames: Vec<FrameTable>,
+    /// Nodes.
+    pub nodes: Vec<NodeTable>,
+    /// Rigid bodies.
+    #[serde(default)]
+    pub bodies: Vec<BodyTable>,
+    /// Point masses on nodes (on a body node they build the body's mass properties).
+    #[serde(default)]
+    pub masses: Vec<MassTable>,
+    /// Springs.
+    #[serde(default)]
+    pub springs: Vec<ElementTable>,
+    /// Dashpots.
+    #[serde(default)]
+    pub dashpots: Vec<ElementTable>,
+    /// Node-to-face contact pairs.
+    #[serde(default)]
+    pub contacts: Vec<ContactPairTable>,
+    /// Constant point loads.
+    #[serde(default)]
+    pub loads: Vec<LoadTable>,
+    /// Initial velocities, applied at the start of the first dynamic step.
+    #[serde(default)]
+    pub initial_velocities: Vec<InitialVelocityTable>,
+    /// Analysis steps, in order.
+    pub steps: Vec<StepTable>,
+    /// Tolerances each engine must meet against the closed form (read by the comparison).
+    #[serde(default)]
+    pub tolerances: toml::Table,
+}
+
+/// `[time]`: how the time increment is chosen.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimeTable {
+    /// A fixed increment (the role of the source problems' dummy element).
+    pub increment: Option<f64>,
+    /// Or: a target accumulated phase error of the highest structural mode.
+    pub accuracy: Option<f64>,
+    /// Fraction of the stable increment used when neither is given (default 0.9).
+    pub safety: Option<f64>,
+    /// `centred` (second order, default) or `lagged` (dashpots see the previous half-step velocity).
+    pub damping: Option<String>,
+}
+
+/// `[contact]`: penalty settings.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactTable {
+    /// Penalty stiffness k_p; overrides the rule.
+    pub penalty_stiffness: Option<f64>,
+    /// k_p = ratio × the largest spring stiffness in the scene (default 1000).
+    pub penalty_ratio: Option<f64>,
+    /// `consistent` (start at the penetration that carries the initial contact force) or `touching`.
+    pub start: Option<String>,
+}
+
+/// `[output]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputTable {
+    /// Rows in every CSV (uniform in time, first t = 0, last t = duration), at least 200.
+    pub rows: usize,
+    /// The columns after `t`, in order; the family's contract columns come first.
+    pub columns: Vec<ColumnTable>,
+}
+
+/// One output column: exactly one of the probe keys.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ColumnTable {
+    /// Column name in the CSV header.
+    pub name: String,
+    /// Displacement of this node along `direction`.
+    pub displacement: Option<String>,
+    /// Velocity of this node along `direction`.
+    pub velocity: Option<String>,
+    /// Rotation of this body about `axis` (2D: about z).
+    pub rotation: Option<String>,
+    /// Normal force of this contact pair, compressive positive.
+    pub contact_force: Option<String>,
+    /// A column that is identically zero, with the reason (e.g. no middle mass).
+    pub zero: Option<String>,
+    /// Direction for displacement/velocity (global).
+    pub direction: Option<Vec<f64>>,
+    /// Axis for rotation (3D only; default z).
+    pub axis: Option<Vec<f64>>,
+}
+
+/// `[[frames]]`: an orthonormal local system (x axis, and in 3D a y axis).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrameTable {
+    /// Name nodes refer to.
+    pub id: String,
+    /// Local x axis (normalised on reading).
+    pub x_axis: Vec<f64>,
+    /// Local y axis (3D only; made orthogonal to x).
+    pub y_axis: Option<Vec<f64>>,
+}
+
+/// `[[nodes]]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NodeTable {
+    /// Node name.
+    pub id: String,
+    /// Position at t = 0.
+    pub at: Vec<f64>,
+    /// Body the node is a material point of.
+    pub body: Option<String>,
+    /// Local frame its DOFs are expressed in.
+    pub frame: Option<String>,
+    /// Held in every DOF in every step (a ground node).
+    #[serde(default)]
+    pub fixed: bool,
+}
+
+/// `[[bodies]]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodyTable {
+    /// Body name.
+    pub id: String,
+    /// Reference node: the body's generalised coordinates live there.
+    pub reference: String,
+    /// Mass lumped at the reference node.
+    pub mass: Option<f64>,
+    /// Inertia lumped at the reference node: a number in 2D; `[Ixx, Iyy, Izz]` or a 3×3 matrix in 3D.
+    pub inertia: Option<toml::Value>,
+}
+
+/// `[[masses]]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MassTable {
+    /// Node carrying the mass.
+    pub node: String,
+    /// Mass.
+    pub mass: f64,
+}
+
+/// `[[springs]]` and `[[dashpots]]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ElementTable {
+    /// Optional name.
+    pub id: Option<String>,
+    /// `grounded` (one DOF of one node), `fixed_direction` (two nodes, fixed global direction),
+    /// `axial` (two nodes, along their current line).
+    pub kind: String,
+    /// One node (grounded) or two.
+    pub nodes: Vec<String>,
+    /// Grounded: the DOF (`ux`, `uy`, `uz`, `rx`, `ry`, `rz`, in the node's frame).
+    pub dof: Option<String>,
+    /// Fixed direction: the global direction.
+    pub direction: Option<Vec<f64>>,
+    /// Spring stiffness.
+    pub stiffness: Option<f64>,
+    /// Dashpot coefficient.
+    pub damping: Option<f64>,
+}
+
+/// `[[contacts]]`: a node against a planar face of a rigid body.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactPairTable {
+    /// Name.
+    pub id: String,
+    /// The slave node.
+    pub node: String,
+    /// The body whose face it touches.
+    pub body: String,
+    /// A point of the face at t = 0 (global coordinates).
+    pub face_point: Vec<f64>,
+    /// Outward normal of the face at t = 0.
+    pub face_normal: Vec<f64>,
+}
+
+/// `[[loads]]`: constant force at a material point, fixed in direction.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LoadTable {
+    /// Node (a free node or a body's material point).
+    pub node: String,
+    /// Force vector (global).
+    pub force: Vec<f64>,
+}
+
+/// `[[initial_velocities]]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitialVelocityTable {
+    /// Node (for a body: its reference node).
+    pub node: String,
+    /// Translational velocity.
+    pub velocity: Option<Vec<f64>>,
+    /// Angular velocity of a body: a number in 2D, a vector in 3D.
+    pub angular: Option<toml::Value>,
+}
+
+/// `[[steps]]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StepTable {
+    /// `static` or `dynamic`.
+    pub kind: String,
+    /// Duration of a dynamic step.
+    pub duration: Option<f64>,
+    /// DOFs held in this step (besides fixed nodes).
+    #[serde(default)]
+    pub hold: Vec<HoldTable>,
+    /// Prescribed displacements (static steps).
+    #[serde(default)]
+    pub prescribe: Vec<PrescribeTable>,
+}
+
+/// A set of held DOFs of one node.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HoldTable {
+    /// Node.
+    pub node: String,
+    /// DOF names, or `["all"]`.
+    pub dofs: Vec<String>,
+}
+
+/// A prescribed displacement.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PrescribeTable {
+    /// Node.
+    pub node: String,
+    /// DOF name (in the node's frame).
+    pub dof: String,
+    /// Value.
+    pub value: f64,
+}

@@ -1,0 +1,483 @@
+//! The validated scene: the one type every engine reads.
+//!
+//! A [`Scene`] is built from a case file by [`Scene::from_case`] (see `build.rs`) and is then
+//! immutable. Positions and directions are stored as 3-vectors; in a 2D scene every z component
+//! is zero and only the in-plane DOFs (`ux`, `uy`, `rz`) exist.
+
+mod build;
+
+use nalgebra::{Matrix3, Vector3};
+use std::fmt;
+
+pub use build::SceneError;
+
+/// Index of a node in [`Scene::nodes`].
+pub type NodeId = usize;
+/// Index of a body in [`Scene::bodies`].
+pub type BodyId = usize;
+
+/// Spatial dimension of a scene.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Dimension {
+    /// Planar: x, y and rotation about z.
+    Two,
+    /// Spatial.
+    Three,
+}
+
+impl Dimension {
+    /// Number of translational components.
+    pub fn count(self) -> usize {
+        match self {
+            Dimension::Two => 2,
+            Dimension::Three => 3,
+        }
+    }
+}
+
+/// The output family: decides which contract columns every CSV starts with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Family {
+    /// Rigid body with springs, contact and a load: `rz, ux, ux_node, contact_force`.
+    RigidBody,
+    /// Spring/dashpot/mass systems: `u_end, u_mid, v_end, v_mid`.
+    Springs,
+}
+
+impl Family {
+    /// The contract columns of the family, in order (see the spec's output conventions).
+    pub fn contract_columns(self) -> &'static [&'static str] {
+        match self {
+            Family::RigidBody => &["rz", "ux", "ux_node", "contact_force"],
+            Family::Springs => &["u_end", "u_mid", "v_end", "v_mid"],
+        }
+    }
+    /// Name as written in case files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Family::RigidBody => "rigid_body",
+            Family::Springs => "springs",
+        }
+    }
+}
+
+/// What a node is attached to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Attachment {
+    /// An independent point (a particle, or a ground node when held).
+    Free,
+    /// The reference node of a body: carries the body's generalised coordinates.
+    Reference(BodyId),
+    /// A material point of a body.
+    OnBody(BodyId),
+}
+
+/// A node.
+#[derive(Debug, Clone)]
+pub struct Node {
+    /// Name from the case file.
+    pub name: String,
+    /// Position at t = 0.
+    pub position: Vector3<f64>,
+    /// Independent, or part of a body.
+    pub attachment: Attachment,
+    /// Local frame: column i is the direction of DOF `ui` (and of `ri`).
+    pub frame: Matrix3<f64>,
+    /// Point mass on the node (for a body node: part of the body's mass properties).
+    pub mass: f64,
+}
+
+/// A rigid body: generalised coordinates at its reference node.
+#[derive(Debug, Clone)]
+pub struct RigidBody {
+    /// Name from the case file.
+    pub name: String,
+    /// The reference node.
+    pub reference: NodeId,
+    /// Total mass (lumped at the reference node plus point masses on the body).
+    pub mass: f64,
+    /// Centre of mass relative to the reference node, at t = 0.
+    pub centre_offset: Vector3<f64>,
+    /// Inertia tensor about the reference node, at t = 0 (2D: only `[(2, 2)]` is used).
+    pub inertia: Matrix3<f64>,
+}
+
+/// A nodal degree of freedom, in the node's frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Dof {
+    /// Translation along frame axis 0, 1 or 2.
+    Translation(usize),
+    /// Rotation about frame axis 0, 1 or 2 (body reference nodes only).
+    Rotation(usize),
+}
+
+impl Dof {
+    /// Parse `ux`…`rz`.
+    pub fn parse(name: &str) -> Option<Dof> {
+        Some(match name {
+            "ux" => Dof::Translation(0),
+            "uy" => Dof::Translation(1),
+            "uz" => Dof::Translation(2),
+            "rx" => Dof::Rotation(0),
+            "ry" => Dof::Rotation(1),
+            "rz" => Dof::Rotation(2),
+            _ => return None,
+        })
+    }
+    /// The DOFs a node has in a dimension (rotations only for reference nodes).
+    pub fn all(dim: Dimension, rotations: bool) -> Vec<Dof> {
+        let mut v = vec![Dof::Translation(0), Dof::Translation(1)];
+        if dim == Dimension::Three {
+            v.push(Dof::Translation(2));
+        }
+        if rotations {
+            if dim == Dimension::Three {
+                v.extend([Dof::Rotation(0), Dof::Rotation(1)]);
+            }
+            v.push(Dof::Rotation(2));
+        }
+        v
+    }
+    /// The axis index.
+    pub fn axis(self) -> usize {
+        match self {
+            Dof::Translation(i) | Dof::Rotation(i) => i,
+        }
+    }
+}
+
+impl fmt::Display for Dof {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let axis = ["x", "y", "z"];
+        match self {
+            Dof::Translation(i) => write!(f, "u{}", axis[*i]),
+            Dof::Rotation(i) => write!(f, "r{}", axis[*i]),
+        }
+    }
+}
+
+/// How a spring or dashpot connects (the three element kinds of the source problems).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Connection {
+    /// SPRING1/DASHPOT1: one DOF of one node, to ground.
+    Grounded {
+        /// The node.
+        node: NodeId,
+        /// Its DOF (in the node's frame).
+        dof: Dof,
+    },
+    /// SPRING2/DASHPOT2: two nodes, relative motion along a fixed global direction.
+    FixedDirection {
+        /// The two nodes (force on `nodes[1]` is −k·elongation·direction).
+        nodes: [NodeId; 2],
+        /// Unit direction, global and constant.
+        direction: Vector3<f64>,
+    },
+    /// SPRINGA/DASHPOTA: along the current line joining the two nodes.
+    Axial {
+        /// The two nodes.
+        nodes: [NodeId; 2],
+    },
+}
+
+impl Connection {
+    /// Kind name as written in case files.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Connection::Grounded { .. } => "grounded",
+            Connection::FixedDirection { .. } => "fixed_direction",
+            Connection::Axial { .. } => "axial",
+        }
+    }
+}
+
+/// A linear spring (`coefficient` = stiffness) or dashpot (`coefficient` = damping).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Element {
+    /// Name (from the file, or `spring-<n>` / `dashpot-<n>`).
+    pub name: String,
+    /// How it connects.
+    pub connection: Connection,
+    /// Stiffness or damping coefficient.
+    pub coefficient: f64,
+}
+
+/// A frictionless node-to-surface contact pair: a node against a planar face of a body.
+#[derive(Debug, Clone)]
+pub struct ContactPair {
+    /// Name.
+    pub name: String,
+    /// The slave node.
+    pub node: NodeId,
+    /// The master body.
+    pub body: BodyId,
+    /// A point of the face at t = 0.
+    pub face_point: Vector3<f64>,
+    /// Unit outward normal of the face at t = 0.
+    pub face_normal: Vector3<f64>,
+}
+
+/// A constant force at a material point, fixed in direction.
+#[derive(Debug, Clone)]
+pub struct PointLoad {
+    /// The node (a particle or a body's material point).
+    pub node: NodeId,
+    /// The force (global, constant).
+    pub force: Vector3<f64>,
+}
+
+/// Initial velocity of a node (for a body, of its reference node, with its angular velocity).
+#[derive(Debug, Clone)]
+pub struct InitialVelocity {
+    /// The node.
+    pub node: NodeId,
+    /// Translational velocity (global).
+    pub velocity: Vector3<f64>,
+    /// Angular velocity (global; 2D: z component only).
+    pub angular: Vector3<f64>,
+}
+
+/// A held or prescribed DOF in a step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BoundaryCondition {
+    /// Node.
+    pub node: NodeId,
+    /// DOF in the node's frame.
+    pub dof: Dof,
+    /// Prescribed displacement from the initial position (`None`: held where it is).
+    pub value: Option<f64>,
+}
+
+/// What a step does.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StepKind {
+    /// Static equilibrium with the step's boundary conditions; takes no time.
+    Static,
+    /// Dynamic response over a duration.
+    Dynamic {
+        /// Step duration.
+        duration: f64,
+    },
+}
+
+/// An analysis step: its kind and the complete set of boundary conditions in force.
+#[derive(Debug, Clone)]
+pub struct Step {
+    /// Static or dynamic.
+    pub kind: StepKind,
+    /// Every held or prescribed DOF in this step (fixed nodes included).
+    pub conditions: Vec<BoundaryCondition>,
+}
+
+/// What an output column measures.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Probe {
+    /// Displacement of a node along a unit direction.
+    Displacement {
+        /// Node.
+        node: NodeId,
+        /// Unit direction.
+        direction: Vector3<f64>,
+    },
+    /// Velocity of a node along a unit direction.
+    Velocity {
+        /// Node.
+        node: NodeId,
+        /// Unit direction.
+        direction: Vector3<f64>,
+    },
+    /// Rotation of a body about a unit axis (2D: z).
+    Rotation {
+        /// Body.
+        body: BodyId,
+        /// Unit axis.
+        axis: Vector3<f64>,
+    },
+    /// Normal force of a contact pair, compressive positive.
+    ContactForce {
+        /// Index in [`Scene::contacts`].
+        contact: usize,
+    },
+    /// Identically zero (the reason is kept for the reader).
+    Zero {
+        /// Why.
+        reason: String,
+    },
+}
+
+/// One output column.
+#[derive(Debug, Clone)]
+pub struct Column {
+    /// Header name.
+    pub name: String,
+    /// What it measures.
+    pub probe: Probe,
+}
+
+/// How dashpots see the velocity.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DampingTreatment {
+    /// Velocity-dependent forces at the mid-step velocity (v½ before + v½ after)/2, solved by
+    /// fixed-point iteration: second order; damping does not lower the stable increment.
+    Centred,
+    /// Dashpots see the previous half-step velocity (classic explicit): first order in the
+    /// damping term; stable increment (2/ω)(√(1+ζ²) − ζ).
+    Lagged,
+}
+
+/// How the time increment is chosen.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum IncrementRule {
+    /// Given in the case file.
+    Given(f64),
+    /// From a target accumulated phase error of the highest structural mode.
+    Accuracy(f64),
+    /// A fraction of the stable increment.
+    Stable {
+        /// The fraction (0, 1].
+        safety: f64,
+    },
+}
+
+/// The penalty stiffness rule.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PenaltyRule {
+    /// k_p given.
+    Stiffness(f64),
+    /// k_p = ratio × the largest spring stiffness in the scene.
+    Ratio(f64),
+}
+
+/// How a penalty contact starts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ContactStart {
+    /// At the penetration that carries the contact force the rigid model has at t = 0 (no
+    /// penalty ringing).
+    Consistent,
+    /// At zero penetration, as the geometry gives (rings at the penalty frequency).
+    Touching,
+}
+
+/// Solver settings a case declares (overridable per run).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SceneSettings {
+    /// Increment rule.
+    pub increment: IncrementRule,
+    /// Damping treatment.
+    pub damping: DampingTreatment,
+    /// Penalty rule.
+    pub penalty: PenaltyRule,
+    /// Contact start.
+    pub contact_start: ContactStart,
+}
+
+/// Default penalty ratio: k_p = 1000 × the largest spring stiffness.
+pub const DEFAULT_PENALTY_RATIO: f64 = 1.0e3;
+/// Default fraction of the stable increment.
+pub const DEFAULT_SAFETY: f64 = 0.9;
+
+/// A validated scene.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// Case id (the file stem).
+    pub id: String,
+    /// One-line description.
+    pub title: String,
+    /// Output family.
+    pub family: Family,
+    /// 2D or 3D.
+    pub dimension: Dimension,
+    /// Nodes.
+    pub nodes: Vec<Node>,
+    /// Rigid bodies.
+    pub bodies: Vec<RigidBody>,
+    /// Springs.
+    pub springs: Vec<Element>,
+    /// Dashpots.
+    pub dashpots: Vec<Element>,
+    /// Contact pairs.
+    pub contacts: Vec<ContactPair>,
+    /// Point loads.
+    pub loads: Vec<PointLoad>,
+    /// Initial velocities (at the start of the first dynamic step).
+    pub initial_velocities: Vec<InitialVelocity>,
+    /// Steps in order.
+    pub steps: Vec<Step>,
+    /// Output rows (uniform over the dynamic duration, ends included).
+    pub output_rows: usize,
+    /// Output columns after `t`.
+    pub columns: Vec<Column>,
+    /// Solver settings.
+    pub settings: SceneSettings,
+    /// Raw `[tolerances]` table, read by the comparison.
+    pub tolerances: toml::Table,
+}
+
+impl Scene {
+    /// Total duration of the dynamic steps (the time axis of every output).
+    pub fn duration(&self) -> f64 {
+        self.steps
+            .iter()
+            .map(|s| match s.kind {
+                StepKind::Dynamic { duration } => duration,
+                StepKind::Static => 0.0,
+            })
+            .sum()
+    }
+
+    /// Output sample times.
+    pub fn output_times(&self) -> Vec<f64> {
+        let n = self.output_rows - 1;
+        let d = self.duration();
+        (0..=n).map(|i| d * i as f64 / n as f64).collect()
+    }
+
+    /// Node index by name.
+    pub fn node_named(&self, name: &str) -> Option<NodeId> {
+        self.nodes.iter().position(|n| n.name == name)
+    }
+
+    /// The largest spring stiffness (the penalty rule's reference).
+    pub fn largest_stiffness(&self) -> f64 {
+        self.springs.iter().map(|s| s.coefficient).fold(0.0, f64::max)
+    }
+
+    /// Penalty stiffness after the rule.
+    pub fn penalty_stiffness(&self, rule: PenaltyRule) -> f64 {
+        match rule {
+            PenaltyRule::Stiffness(k) => k,
+            PenaltyRule::Ratio(r) => r * self.largest_stiffness().max(f64::MIN_POSITIVE),
+        }
+    }
+
+    /// The effects this scene calls for, as short words (what `crosscheck list` prints).
+    pub fn effects(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        let mut kinds = |label: &str, elements: &[Element]| {
+            let mut seen: Vec<&str> = Vec::new();
+            for e in elements {
+                if !seen.contains(&e.connection.kind()) {
+                    seen.push(e.connection.kind());
+                }
+            }
+            if !seen.is_empty() {
+                out.push(format!("{label}({})", seen.join(",")));
+            }
+        };
+        kinds("springs", &self.springs);
+        kinds("dashpots", &self.dashpots);
+        if !self.bodies.is_empty() {
+            out.push(format!("rigid_bodies({})", self.bodies.len()));
+        }
+        if !self.contacts.is_empty() {
+            out.push(format!("contact({})", self.contacts.len()));
+        }
+        if !self.loads.is_empty() {
+            out.push(format!("loads({})", self.loads.len()));
+        }
+        if self.steps.iter().any(|s| s.kind == StepKind::Static) {
+            out.push("static_step".into());
+        }
+        out
+    }
+}

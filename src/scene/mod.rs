@@ -332,6 +332,8 @@ pub enum IncrementRule {
     Given(f64),
     /// From a target accumulated phase error of the highest structural mode.
     Accuracy(f64),
+    /// Used as given even above the stable increment: for stability studies only.
+    Forced(f64),
     /// A fraction of the stable increment.
     Stable {
         /// The fraction (0, 1].

@@ -106,7 +106,8 @@ pub trait Space: Copy + Debug + Send + Sync + 'static {
     fn gyroscopic(w: &Self::W, i: &Self::Inertia) -> Self::W;
     /// Solve the rigid-body equations at the reference node,
     /// `[m, −m[c]×; m[c]×, I] [a; α] = [f; m_O]`, with the accelerations along the held
-    /// translation and rotation axes (orthonormal) forced to zero.
+    /// translation and rotation axes (orthonormal) forced to zero. Non-finite input gives
+    /// non-finite accelerations.
     fn solve_body(
         inertia: &BodyInertia<Self>,
         held_translations: &[Self::V],
@@ -214,10 +215,13 @@ impl Space for Planar {
                 rhs[k] = 0.0;
             }
         }
-        let x = a
-            .cholesky()
-            .expect("body mass matrix is positive definite on its free DOFs (validated)")
-            .solve(&rhs);
+        // The matrix is positive definite on the free DOFs (validated); only a diverged,
+        // non-finite state fails here, and it yields non-finite accelerations that the time
+        // loop reports as a failed run.
+        let Some(chol) = a.cholesky() else {
+            return (Vector2::repeat(f64::NAN), f64::NAN);
+        };
+        let x = chol.solve(&rhs);
         (basis[0] * x[0] + basis[1] * x[1], x[2])
     }
 }
@@ -333,10 +337,10 @@ impl Space for Spatial {
             a[(k, k)] = 1.0;
             rhs[k] = 0.0;
         }
-        let x = t * a
-            .cholesky()
-            .expect("body mass matrix is positive definite on its free DOFs (validated)")
-            .solve(&rhs);
+        let Some(chol) = a.cholesky() else {
+            return (Vector3::repeat(f64::NAN), Vector3::repeat(f64::NAN));
+        };
+        let x = t * chol.solve(&rhs);
         (
             Vector3::new(x[0], x[1], x[2]),
             Vector3::new(x[3], x[4], x[5]),

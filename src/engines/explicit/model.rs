@@ -1,0 +1,941 @@
+//! The scene compiled into the force terms it actually has.
+//!
+//! Compilation resolves every element end to a [`Point`] (ground, particle or body material
+//! point) once, so the time loop does no name look-ups and no work for absent effects. The
+//! `FINITE` const parameter selects finite rotation (`explicit`) or the benchmark's
+//! small-rotation idealisation (`explicit_small`); it is resolved at compile time.
+
+use super::space::{BodyInertia, Lin, Space};
+use crate::scene::{Attachment, BoundaryCondition, Connection, Dof, Scene, Step};
+use std::marker::PhantomData;
+
+/// Where an element end or a load acts.
+#[derive(Debug, Clone, Copy)]
+pub enum Point<S: Space> {
+    /// A fixed point of space.
+    Ground(S::V),
+    /// A particle (free node), by index.
+    Particle(usize),
+    /// A material point of a body: offset `rho` from the reference node at t = 0.
+    Body {
+        /// Body index.
+        body: usize,
+        /// Offset from the reference node in the body frame (= world frame at t = 0).
+        rho: S::V,
+    },
+}
+
+/// Positions: particles and bodies (reference node position and orientation).
+#[derive(Debug, Clone)]
+pub struct Config<S: Space> {
+    /// Particle positions.
+    pub x: Vec<S::V>,
+    /// Reference node positions.
+    pub bx: Vec<S::V>,
+    /// Body orientations (finite rotation).
+    pub br: Vec<S::R>,
+    /// Body rotation vectors (small rotation).
+    pub bth: Vec<S::W>,
+}
+
+/// Velocities or accelerations of every particle and body.
+#[derive(Debug, Clone)]
+pub struct Rates<S: Space> {
+    /// Particles.
+    pub p: Vec<S::V>,
+    /// Body reference nodes.
+    pub b: Vec<S::V>,
+    /// Body angular.
+    pub w: Vec<S::W>,
+}
+
+impl<S: Space> Rates<S> {
+    /// All zero.
+    pub fn zeros(particles: usize, bodies: usize) -> Self {
+        Self {
+            p: vec![S::V::zero(); particles],
+            b: vec![S::V::zero(); bodies],
+            w: vec![S::W::zero(); bodies],
+        }
+    }
+    /// `self + s · other`.
+    pub fn plus(&self, s: f64, other: &Self) -> Self {
+        Self {
+            p: self.p.iter().zip(&other.p).map(|(a, b)| *a + *b * s).collect(),
+            b: self.b.iter().zip(&other.b).map(|(a, b)| *a + *b * s).collect(),
+            w: self.w.iter().zip(&other.w).map(|(a, b)| *a + *b * s).collect(),
+        }
+    }
+    /// In place: `self = a + s · b`.
+    pub fn set_plus(&mut self, a: &Self, s: f64, b: &Self) {
+        for (o, (x, y)) in self.p.iter_mut().zip(a.p.iter().zip(&b.p)) {
+            *o = *x + *y * s;
+        }
+        for (o, (x, y)) in self.b.iter_mut().zip(a.b.iter().zip(&b.b)) {
+            *o = *x + *y * s;
+        }
+        for (o, (x, y)) in self.w.iter_mut().zip(a.w.iter().zip(&b.w)) {
+            *o = *x + *y * s;
+        }
+    }
+    /// Largest absolute difference of any component, and the largest component.
+    pub fn max_difference(&self, other: &Self) -> (f64, f64) {
+        let mut d: f64 = 0.0;
+        let mut m: f64 = 0.0;
+        for (a, b) in self.p.iter().zip(&other.p).chain(self.b.iter().zip(&other.b)) {
+            let e = *a - *b;
+            d = d.max(e.dot(&e).sqrt());
+            m = m.max(a.dot(a).sqrt());
+        }
+        for (a, b) in self.w.iter().zip(&other.w) {
+            let e = *a - *b;
+            d = d.max(e.dot(&e).sqrt());
+            m = m.max(a.dot(a).sqrt());
+        }
+        (d, m)
+    }
+}
+
+/// Forces on particles and wrenches on bodies (about their reference nodes), plus what the
+/// same pass measured.
+#[derive(Debug, Clone)]
+pub struct Forces<S: Space> {
+    /// Particle forces.
+    pub p: Vec<S::V>,
+    /// Body forces.
+    pub b: Vec<S::V>,
+    /// Body moments about the reference node.
+    pub m: Vec<S::W>,
+    /// Elastic energy of springs and penalty.
+    pub elastic: f64,
+    /// Dissipation power of dashpots.
+    pub dissipation: f64,
+    /// Normal force per contact pair (compressive positive).
+    pub contact: Vec<f64>,
+}
+
+impl<S: Space> Forces<S> {
+    fn zeros(particles: usize, bodies: usize, contacts: usize) -> Self {
+        Self {
+            p: vec![S::V::zero(); particles],
+            b: vec![S::V::zero(); bodies],
+            m: vec![S::W::zero(); bodies],
+            elastic: 0.0,
+            dissipation: 0.0,
+            contact: vec![0.0; contacts],
+        }
+    }
+    /// Reset to zero, keeping the allocation.
+    pub fn clear(&mut self) {
+        self.p.iter_mut().for_each(|x| *x = S::V::zero());
+        self.b.iter_mut().for_each(|x| *x = S::V::zero());
+        self.m.iter_mut().for_each(|x| *x = S::W::zero());
+        self.contact.iter_mut().for_each(|x| *x = 0.0);
+        self.elastic = 0.0;
+        self.dissipation = 0.0;
+    }
+}
+
+/// How contact is evaluated.
+#[derive(Debug, Clone, Copy)]
+pub enum ContactMode<'a> {
+    /// Penalty, compression only (the simulation).
+    Unilateral,
+    /// Penalty acting in tension too (the linearisation about a closed contact).
+    Bilateral,
+    /// No contact force (the structure alone).
+    Off,
+    /// Given normal forces instead of the penalty (the consistent start).
+    Given(&'a [f64]),
+}
+
+/// Work counters: they prove what a run did and did not evaluate.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Counters {
+    /// Position-dependent force passes.
+    pub force_evaluations: u64,
+    /// Contact pair evaluations.
+    pub contact_evaluations: u64,
+    /// Dashpot passes.
+    pub damping_evaluations: u64,
+    /// Body orientation updates.
+    pub rotation_updates: u64,
+    /// Rigid-body acceleration solves.
+    pub body_solves: u64,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Grounded<S: Space> {
+    point: Point<S>,
+    /// Translation direction (None for a rotational DOF).
+    direction: Option<S::V>,
+    /// Rotation axis and body (rotational DOF at a reference node).
+    rotation: Option<(usize, S::W)>,
+    x0: S::V,
+    c: f64,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct TwoPoint<S: Space> {
+    a: Point<S>,
+    b: Point<S>,
+    /// Fixed direction, or for axial elements the initial unit direction.
+    direction: S::V,
+    axial: bool,
+    a0: S::V,
+    b0: S::V,
+    length0: f64,
+    c: f64,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Contact<S: Space> {
+    particle: usize,
+    body: usize,
+    /// A face point relative to the reference node (body frame).
+    face: S::V,
+    /// Outward normal (body frame).
+    normal: S::V,
+    /// The contact node's offset from the reference node at t = 0 (small-rotation arm).
+    arm0: S::V,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Load<S: Space> {
+    point: Point<S>,
+    force: S::V,
+}
+
+/// A particle's constant data.
+#[derive(Debug, Clone)]
+pub struct Particle<S: Space> {
+    /// Scene node.
+    pub node: usize,
+    /// Mass.
+    pub mass: f64,
+    /// Position at t = 0.
+    pub x0: S::V,
+    /// Frame axes (DOF directions).
+    pub axes: Vec<S::V>,
+}
+
+/// A body's constant data.
+#[derive(Debug, Clone)]
+pub struct Body<S: Space> {
+    /// Scene body index.
+    pub index: usize,
+    /// Reference node.
+    pub node: usize,
+    /// Reference position at t = 0.
+    pub x0: S::V,
+    /// Mass properties at t = 0 (body frame = world frame).
+    pub inertia: BodyInertia<S>,
+    /// Translation axes of the reference node's frame.
+    pub axes: Vec<S::V>,
+    /// Rotation axes of the reference node's frame.
+    pub rot_axes: Vec<S::W>,
+}
+
+/// The boundary conditions of one step, compiled.
+#[derive(Debug, Clone)]
+pub struct Constraints<S: Space> {
+    /// Held directions per particle (orthonormal).
+    pub particle_held: Vec<Vec<S::V>>,
+    /// Held translation axes per body.
+    pub body_held_t: Vec<Vec<S::V>>,
+    /// Held rotation axes per body.
+    pub body_held_r: Vec<Vec<S::W>>,
+    /// Prescribed values: (target, value) applied at the start of a static step.
+    pub prescribed: Vec<(Target<S>, f64)>,
+    /// Bodies whose rotation can change in this step.
+    pub rotating: Vec<bool>,
+    /// Bodies whose centripetal or gyroscopic terms act on a free DOF in this step.
+    pub velocity_terms: Vec<bool>,
+}
+
+impl<S: Space> Constraints<S> {
+    /// Whether any velocity-dependent term acts (dashpots aside).
+    pub fn any_velocity_terms(&self) -> bool {
+        self.velocity_terms.iter().any(|x| *x)
+    }
+}
+
+/// A generalised DOF: a free direction of a particle or a body.
+#[derive(Debug, Clone, Copy)]
+pub enum Target<S: Space> {
+    /// Particle translation along a unit direction.
+    Particle(usize, S::V),
+    /// Body reference translation along a unit direction.
+    Translation(usize, S::V),
+    /// Body rotation about a unit axis.
+    Rotation(usize, S::W),
+}
+
+/// The compiled scene.
+#[derive(Debug, Clone)]
+pub struct Model<S: Space, const FINITE: bool> {
+    /// Particles (free nodes).
+    pub particles: Vec<Particle<S>>,
+    /// Rigid bodies.
+    pub bodies: Vec<Body<S>>,
+    grounded_springs: Vec<Grounded<S>>,
+    grounded_dashpots: Vec<Grounded<S>>,
+    springs: Vec<TwoPoint<S>>,
+    dashpots: Vec<TwoPoint<S>>,
+    contacts: Vec<Contact<S>>,
+    loads: Vec<Load<S>>,
+    /// Penalty stiffness.
+    pub penalty: f64,
+    /// Node → point.
+    pub points: Vec<Point<S>>,
+    _space: PhantomData<S>,
+}
+
+impl<S: Space, const FINITE: bool> Model<S, FINITE> {
+    /// Compile a scene with penalty stiffness `penalty`.
+    pub fn compile(scene: &Scene, penalty: f64) -> Self {
+        let mut particles = Vec::new();
+        let mut bodies: Vec<Body<S>> = Vec::new();
+        let axes = |frame: &nalgebra::Matrix3<f64>| -> Vec<S::V> {
+            (0..S::DIM).map(|i| S::v(&frame.column(i).into_owned())).collect()
+        };
+        let rot_axes = |frame: &nalgebra::Matrix3<f64>| -> Vec<S::W> {
+            (3 - S::ROT..3)
+                .map(|i| S::w(&frame.column(i).into_owned()))
+                .collect()
+        };
+        for (bi, b) in scene.bodies.iter().enumerate() {
+            let node = &scene.nodes[b.reference];
+            bodies.push(Body {
+                index: bi,
+                node: b.reference,
+                x0: S::v(&node.position),
+                inertia: BodyInertia {
+                    mass: b.mass,
+                    centre: S::v(&b.centre_offset),
+                    inertia: S::inertia(&b.inertia),
+                },
+                axes: axes(&node.frame),
+                rot_axes: rot_axes(&node.frame),
+            });
+        }
+        let fixed: Vec<bool> = scene
+            .nodes
+            .iter()
+            .enumerate()
+            .map(|(i, n)| {
+                n.attachment == Attachment::Free
+                    && n.mass == 0.0
+                    && scene.steps.iter().all(|s| {
+                        Dof::all(scene.dimension, false)
+                            .iter()
+                            .all(|d| s.conditions.iter().any(|c| c.node == i && c.dof == *d && c.value.is_none()))
+                    })
+            })
+            .collect();
+        let mut points = Vec::with_capacity(scene.nodes.len());
+        for (i, n) in scene.nodes.iter().enumerate() {
+            let x = S::v(&n.position);
+            points.push(match n.attachment {
+                Attachment::Free if fixed[i] => Point::Ground(x),
+                Attachment::Free => {
+                    particles.push(Particle {
+                        node: i,
+                        mass: n.mass,
+                        x0: x,
+                        axes: axes(&n.frame),
+                    });
+                    Point::Particle(particles.len() - 1)
+                }
+                Attachment::Reference(b) => Point::Body {
+                    body: b,
+                    rho: S::V::zero(),
+                },
+                Attachment::OnBody(b) => Point::Body {
+                    body: b,
+                    rho: x - bodies[b].x0,
+                },
+            });
+        }
+        let x0 = |node: usize| S::v(&scene.nodes[node].position);
+        let grounded = |list: &[crate::scene::Element]| -> Vec<Grounded<S>> {
+            list.iter()
+                .filter_map(|e| match e.connection {
+                    Connection::Grounded { node, dof } => {
+                        let frame = &scene.nodes[node].frame;
+                        let (direction, rotation) = match dof {
+                            Dof::Translation(i) => (Some(S::v(&frame.column(i).into_owned())), None),
+                            Dof::Rotation(i) => {
+                                let Attachment::Reference(b) = scene.nodes[node].attachment else {
+                                    unreachable!("validated: rotations only at reference nodes")
+                                };
+                                (None, Some((b, S::w(&frame.column(i).into_owned()))))
+                            }
+                        };
+                        Some(Grounded {
+                            point: points[node],
+                            direction,
+                            rotation,
+                            x0: x0(node),
+                            c: e.coefficient,
+                        })
+                    }
+                    _ => None,
+                })
+                .collect()
+        };
+        let two_point = |list: &[crate::scene::Element]| -> Vec<TwoPoint<S>> {
+            list.iter()
+                .filter_map(|e| {
+                    let (nodes, direction, axial) = match &e.connection {
+                        Connection::FixedDirection { nodes, direction } => (*nodes, S::v(direction), false),
+                        Connection::Axial { nodes } => {
+                            let d = x0(nodes[1]) - x0(nodes[0]);
+                            (*nodes, d * (1.0 / d.dot(&d).sqrt()), true)
+                        }
+                        Connection::Grounded { .. } => return None,
+                    };
+                    let (a0, b0) = (x0(nodes[0]), x0(nodes[1]));
+                    let l = b0 - a0;
+                    Some(TwoPoint {
+                        a: points[nodes[0]],
+                        b: points[nodes[1]],
+                        direction,
+                        axial,
+                        a0,
+                        b0,
+                        length0: l.dot(&l).sqrt(),
+                        c: e.coefficient,
+                    })
+                })
+                .collect()
+        };
+        let contacts = scene
+            .contacts
+            .iter()
+            .map(|c| {
+                let Point::Particle(particle) = points[c.node] else {
+                    unreachable!("validated: contact nodes are free nodes with mass")
+                };
+                let origin = bodies[c.body].x0;
+                Contact {
+                    particle,
+                    body: c.body,
+                    face: S::v(&c.face_point) - origin,
+                    normal: S::v(&c.face_normal),
+                    arm0: x0(c.node) - origin,
+                }
+            })
+            .collect();
+        let loads = scene
+            .loads
+            .iter()
+            .map(|l| Load {
+                point: points[l.node],
+                force: S::v(&l.force),
+            })
+            .collect();
+        Model {
+            particles,
+            bodies,
+            grounded_springs: grounded(&scene.springs),
+            grounded_dashpots: grounded(&scene.dashpots),
+            springs: two_point(&scene.springs),
+            dashpots: two_point(&scene.dashpots),
+            contacts,
+            loads,
+            penalty,
+            points,
+            _space: PhantomData,
+        }
+    }
+
+    /// Whether the scene has dashpots.
+    pub fn has_dashpots(&self) -> bool {
+        !self.grounded_dashpots.is_empty() || !self.dashpots.is_empty()
+    }
+
+    /// Number of contact pairs.
+    pub fn contact_count(&self) -> usize {
+        self.contacts.len()
+    }
+
+    /// The configuration at t = 0.
+    pub fn initial_config(&self) -> Config<S> {
+        Config {
+            x: self.particles.iter().map(|p| p.x0).collect(),
+            bx: self.bodies.iter().map(|b| b.x0).collect(),
+            br: vec![S::identity(); self.bodies.len()],
+            bth: vec![S::W::zero(); self.bodies.len()],
+        }
+    }
+
+    /// Zero rates shaped like the model.
+    pub fn zero_rates(&self) -> Rates<S> {
+        Rates::zeros(self.particles.len(), self.bodies.len())
+    }
+
+    /// Zero forces shaped like the model.
+    pub fn zero_forces(&self) -> Forces<S> {
+        Forces::zeros(self.particles.len(), self.bodies.len(), self.contacts.len())
+    }
+
+    /// Body-frame offset `rho` as a world arm from the reference node.
+    #[inline]
+    pub fn arm(&self, cfg: &Config<S>, body: usize, rho: &S::V) -> S::V {
+        if FINITE {
+            S::rotate(&cfg.br[body], rho)
+        } else {
+            *rho
+        }
+    }
+
+    /// Current position of a point.
+    #[inline]
+    pub fn position(&self, cfg: &Config<S>, p: &Point<S>) -> S::V {
+        match p {
+            Point::Ground(x) => *x,
+            Point::Particle(i) => cfg.x[*i],
+            Point::Body { body, rho } => {
+                if FINITE {
+                    cfg.bx[*body] + S::rotate(&cfg.br[*body], rho)
+                } else {
+                    cfg.bx[*body] + *rho + S::cross(&cfg.bth[*body], rho)
+                }
+            }
+        }
+    }
+
+    /// Current velocity of a point.
+    #[inline]
+    pub fn velocity(&self, cfg: &Config<S>, vel: &Rates<S>, p: &Point<S>) -> S::V {
+        match p {
+            Point::Ground(_) => S::V::zero(),
+            Point::Particle(i) => vel.p[*i],
+            Point::Body { body, rho } => {
+                vel.b[*body] + S::cross(&vel.w[*body], &self.arm(cfg, *body, rho))
+            }
+        }
+    }
+
+    #[inline]
+    fn apply(&self, cfg: &Config<S>, p: &Point<S>, f: S::V, out: &mut Forces<S>) {
+        match p {
+            Point::Ground(_) => {}
+            Point::Particle(i) => out.p[*i] += f,
+            Point::Body { body, rho } => {
+                out.b[*body] += f;
+                out.m[*body] += S::moment(&self.arm(cfg, *body, rho), &f);
+            }
+        }
+    }
+
+    /// Rotation of a body about a unit axis.
+    pub fn rotation_about(&self, cfg: &Config<S>, body: usize, axis: &S::W) -> f64 {
+        if FINITE {
+            S::twist(&cfg.br[body], axis)
+        } else {
+            cfg.bth[body].dot(axis)
+        }
+    }
+
+    /// Signed gap of a contact pair (negative: penetration) and the current face normal.
+    #[inline]
+    pub fn gap(&self, cfg: &Config<S>, k: usize) -> (f64, S::V) {
+        let c = &self.contacts[k];
+        let x = cfg.x[c.particle];
+        if FINITE {
+            let r = &cfg.br[c.body];
+            let n = S::rotate(r, &c.normal);
+            let p = cfg.bx[c.body] + S::rotate(r, &c.face);
+            (n.dot(&(x - p)), n)
+        } else {
+            let th = &cfg.bth[c.body];
+            let d = c.normal.dot(&(x - cfg.bx[c.body] - c.face)) - c.normal.dot(&S::cross(th, &c.arm0));
+            (d, c.normal)
+        }
+    }
+
+    /// Position-dependent forces: springs, contact, loads. Fills `out` (cleared first).
+    pub fn forces(&self, cfg: &Config<S>, mode: ContactMode, out: &mut Forces<S>, counters: &mut Counters) {
+        out.clear();
+        counters.force_evaluations += 1;
+        let mut elastic = 0.0;
+        for s in &self.grounded_springs {
+            if let Some(d) = s.direction {
+                let u = d.dot(&(self.position(cfg, &s.point) - s.x0));
+                elastic += 0.5 * s.c * u * u;
+                self.apply(cfg, &s.point, d * (-s.c * u), out);
+            }
+            if let Some((b, axis)) = s.rotation {
+                let angle = self.rotation_about(cfg, b, &axis);
+                elastic += 0.5 * s.c * angle * angle;
+                out.m[b] -= axis * (s.c * angle);
+            }
+        }
+        for s in &self.springs {
+            let xa = self.position(cfg, &s.a);
+            let xb = self.position(cfg, &s.b);
+            let (e, dir) = if s.axial && FINITE {
+                let l = xb - xa;
+                let len = l.dot(&l).sqrt();
+                (len - s.length0, l * (1.0 / len))
+            } else {
+                (s.direction.dot(&((xb - s.b0) - (xa - s.a0))), s.direction)
+            };
+            elastic += 0.5 * s.c * e * e;
+            let f = dir * (s.c * e);
+            self.apply(cfg, &s.a, f, out);
+            self.apply(cfg, &s.b, -f, out);
+        }
+        if !self.contacts.is_empty() && !matches!(mode, ContactMode::Off) {
+            for (k, c) in self.contacts.iter().enumerate() {
+                counters.contact_evaluations += 1;
+                let (d, n) = self.gap(cfg, k);
+                let f = match mode {
+                    ContactMode::Unilateral => self.penalty * (-d).max(0.0),
+                    ContactMode::Bilateral => -self.penalty * d,
+                    ContactMode::Given(f) => f[k],
+                    ContactMode::Off => unreachable!(),
+                };
+                if !matches!(mode, ContactMode::Given(_)) {
+                    elastic += 0.5 * f * f / self.penalty;
+                }
+                out.contact[k] = f;
+                out.p[c.particle] += n * f;
+                let arm = if FINITE {
+                    cfg.x[c.particle] - cfg.bx[c.body]
+                } else {
+                    c.arm0
+                };
+                out.b[c.body] -= n * f;
+                out.m[c.body] -= S::moment(&arm, &n) * f;
+            }
+        }
+        for l in &self.loads {
+            self.apply(cfg, &l.point, l.force, out);
+        }
+        out.elastic = elastic;
+    }
+
+    /// Add dashpot forces at velocities `vel` to `out`, and their dissipation power.
+    pub fn damping(&self, cfg: &Config<S>, vel: &Rates<S>, out: &mut Forces<S>, counters: &mut Counters) {
+        counters.damping_evaluations += 1;
+        let mut power = 0.0;
+        for s in &self.grounded_dashpots {
+            if let Some(d) = s.direction {
+                let rate = d.dot(&self.velocity(cfg, vel, &s.point));
+                power += s.c * rate * rate;
+                self.apply(cfg, &s.point, d * (-s.c * rate), out);
+            }
+            if let Some((b, axis)) = s.rotation {
+                let rate = vel.w[b].dot(&axis);
+                power += s.c * rate * rate;
+                out.m[b] -= axis * (s.c * rate);
+            }
+        }
+        for s in &self.dashpots {
+            let dir = if s.axial && FINITE {
+                let l = self.position(cfg, &s.b) - self.position(cfg, &s.a);
+                l * (1.0 / l.dot(&l).sqrt())
+            } else {
+                s.direction
+            };
+            let rate = dir.dot(&(self.velocity(cfg, vel, &s.b) - self.velocity(cfg, vel, &s.a)));
+            power += s.c * rate * rate;
+            let f = dir * (s.c * rate);
+            self.apply(cfg, &s.a, f, out);
+            self.apply(cfg, &s.b, -f, out);
+        }
+        out.dissipation = power;
+    }
+
+    /// Work of the constant loads since configuration `from`.
+    pub fn external_work(&self, cfg: &Config<S>, from: &Config<S>) -> f64 {
+        self.loads
+            .iter()
+            .map(|l| l.force.dot(&(self.position(cfg, &l.point) - self.position(from, &l.point))))
+            .sum()
+    }
+
+    /// Mass properties of a body in world axes at `cfg`.
+    #[inline]
+    pub fn body_inertia(&self, cfg: &Config<S>, b: usize) -> BodyInertia<S> {
+        let i = &self.bodies[b].inertia;
+        if FINITE {
+            let r = &cfg.br[b];
+            BodyInertia {
+                mass: i.mass,
+                centre: S::rotate(r, &i.centre),
+                inertia: S::rotate_inertia(r, &i.inertia),
+            }
+        } else {
+            *i
+        }
+    }
+
+    /// Accelerations from forces, with body angular velocities `omega` for the centripetal and
+    /// gyroscopic terms (finite rotation only), honouring the step's held DOFs.
+    pub fn accelerations(
+        &self,
+        cfg: &Config<S>,
+        forces: &Forces<S>,
+        vel: &Rates<S>,
+        held: &Constraints<S>,
+        out: &mut Rates<S>,
+        counters: &mut Counters,
+    ) {
+        for (i, p) in self.particles.iter().enumerate() {
+            let h = &held.particle_held[i];
+            if h.len() == S::DIM {
+                out.p[i] = S::V::zero();
+                continue;
+            }
+            let mut a = forces.p[i] * (1.0 / p.mass);
+            for d in h {
+                a -= *d * d.dot(&a);
+            }
+            out.p[i] = a;
+        }
+        for b in 0..self.bodies.len() {
+            let inertia = self.body_inertia(cfg, b);
+            let mut f = forces.b[b];
+            let mut m = forces.m[b];
+            if FINITE && held.velocity_terms[b] {
+                let w = vel.w[b];
+                f -= S::cross(&w, &S::cross(&w, &inertia.centre)) * inertia.mass;
+                m -= S::gyroscopic(&w, &inertia.inertia);
+            }
+            counters.body_solves += 1;
+            let (a, alpha) = S::solve_body(&inertia, &held.body_held_t[b], &held.body_held_r[b], &f, &m);
+            out.b[b] = a;
+            out.w[b] = alpha;
+        }
+    }
+
+    /// Kinetic energy at velocities `vel`.
+    pub fn kinetic_energy(&self, cfg: &Config<S>, vel: &Rates<S>) -> f64 {
+        let mut e = 0.0;
+        for (i, p) in self.particles.iter().enumerate() {
+            e += 0.5 * p.mass * vel.p[i].dot(&vel.p[i]);
+        }
+        for b in 0..self.bodies.len() {
+            let (f, m) = self.body_momentum(cfg, b, &vel.b[b], &vel.w[b]);
+            e += 0.5 * (vel.b[b].dot(&f) + vel.w[b].dot(&m));
+        }
+        e
+    }
+
+    /// The body mass matrix applied to `(v, ω)`: `(m v + m ω×c, m c×v + I ω)`.
+    pub fn body_momentum(&self, cfg: &Config<S>, b: usize, v: &S::V, w: &S::W) -> (S::V, S::W) {
+        let i = self.body_inertia(cfg, b);
+        (
+            (*v + S::cross(w, &i.centre)) * i.mass,
+            S::moment(&i.centre, v) * i.mass + S::inertia_apply(&i.inertia, w),
+        )
+    }
+
+    /// Advance positions by `h · vel`, rotating only the bodies that can rotate.
+    pub fn advance(&self, cfg: &mut Config<S>, h: f64, vel: &Rates<S>, held: &Constraints<S>, counters: &mut Counters) {
+        for (x, v) in cfg.x.iter_mut().zip(&vel.p) {
+            *x += *v * h;
+        }
+        for (x, v) in cfg.bx.iter_mut().zip(&vel.b) {
+            *x += *v * h;
+        }
+        for b in 0..self.bodies.len() {
+            if !held.rotating[b] {
+                continue;
+            }
+            counters.rotation_updates += 1;
+            if FINITE {
+                cfg.br[b] = S::advance(&cfg.br[b], &(vel.w[b] * h));
+            } else {
+                cfg.bth[b] += vel.w[b] * h;
+            }
+        }
+    }
+
+    /// Remove velocity components along held directions.
+    pub fn enforce(&self, vel: &mut Rates<S>, held: &Constraints<S>) {
+        for (v, h) in vel.p.iter_mut().zip(&held.particle_held) {
+            for d in h {
+                *v -= *d * d.dot(v);
+            }
+        }
+        for b in 0..self.bodies.len() {
+            for d in &held.body_held_t[b] {
+                let along = d.dot(&vel.b[b]);
+                vel.b[b] -= *d * along;
+            }
+            for g in &held.body_held_r[b] {
+                let along = g.dot(&vel.w[b]);
+                vel.w[b] -= *g * along;
+            }
+        }
+    }
+
+    /// Compile a step's boundary conditions.
+    pub fn constraints(&self, scene: &Scene, step: &Step) -> Constraints<S> {
+        let np = self.particles.len();
+        let nb = self.bodies.len();
+        let mut c = Constraints {
+            particle_held: vec![Vec::new(); np],
+            body_held_t: vec![Vec::new(); nb],
+            body_held_r: vec![Vec::new(); nb],
+            prescribed: Vec::new(),
+            rotating: vec![false; nb],
+            velocity_terms: vec![false; nb],
+        };
+        for bc in &step.conditions {
+            let BoundaryCondition { node, dof, value } = *bc;
+            let target = match (self.points[node], dof) {
+                (Point::Ground(_), _) => continue,
+                (Point::Particle(i), Dof::Translation(k)) => Target::Particle(i, self.particles[i].axes[k.min(S::DIM - 1)]),
+                (Point::Body { body, .. }, Dof::Translation(k)) => Target::Translation(body, self.bodies[body].axes[k.min(S::DIM - 1)]),
+                (Point::Body { body, .. }, Dof::Rotation(k)) => {
+                    Target::Rotation(body, self.bodies[body].rot_axes[k + S::ROT - 3])
+                }
+                (Point::Particle(_), Dof::Rotation(_)) => unreachable!("validated"),
+            };
+            match target {
+                Target::Particle(i, d) => c.particle_held[i].push(d),
+                Target::Translation(b, d) => c.body_held_t[b].push(d),
+                Target::Rotation(b, g) => c.body_held_r[b].push(g),
+            }
+            if let Some(v) = value {
+                c.prescribed.push((target, v));
+            }
+        }
+        let _ = scene;
+        for b in 0..nb {
+            let free_r = S::ROT - c.body_held_r[b].len();
+            let free_t = S::DIM - c.body_held_t[b].len();
+            c.rotating[b] = free_r > 0;
+            let centre = self.bodies[b].inertia.centre;
+            let offset = centre.dot(&centre) > 0.0;
+            c.velocity_terms[b] = FINITE && free_r > 0 && ((offset && free_t > 0) || free_r > 1);
+        }
+        c
+    }
+
+    /// Move a configuration along a generalised DOF by `delta`.
+    pub fn perturb(&self, cfg: &mut Config<S>, target: &Target<S>, delta: f64) {
+        match target {
+            Target::Particle(i, d) => cfg.x[*i] += *d * delta,
+            Target::Translation(b, d) => cfg.bx[*b] += *d * delta,
+            Target::Rotation(b, g) => {
+                if FINITE {
+                    cfg.br[*b] = S::advance(&cfg.br[*b], &(*g * delta));
+                } else {
+                    cfg.bth[*b] += *g * delta;
+                }
+            }
+        }
+    }
+
+    /// The generalised force along a DOF.
+    pub fn project(&self, forces: &Forces<S>, target: &Target<S>) -> f64 {
+        match target {
+            Target::Particle(i, d) => d.dot(&forces.p[*i]),
+            Target::Translation(b, d) => d.dot(&forces.b[*b]),
+            Target::Rotation(b, g) => g.dot(&forces.m[*b]),
+        }
+    }
+
+    /// Unit rates along a DOF.
+    pub fn unit_rate(&self, target: &Target<S>) -> Rates<S> {
+        let mut r = self.zero_rates();
+        match target {
+            Target::Particle(i, d) => r.p[*i] = *d,
+            Target::Translation(b, d) => r.b[*b] = *d,
+            Target::Rotation(b, g) => r.w[*b] = *g,
+        }
+        r
+    }
+
+    /// Generalised mass matrix entry between two DOFs.
+    pub fn mass_entry(&self, cfg: &Config<S>, k: &Target<S>, l: &Target<S>) -> f64 {
+        let ul = self.unit_rate(l);
+        match k {
+            Target::Particle(i, d) => self.particles[*i].mass * d.dot(&ul.p[*i]),
+            Target::Translation(b, d) => {
+                let (f, _) = self.body_momentum(cfg, *b, &ul.b[*b], &ul.w[*b]);
+                d.dot(&f)
+            }
+            Target::Rotation(b, g) => {
+                let (_, m) = self.body_momentum(cfg, *b, &ul.b[*b], &ul.w[*b]);
+                g.dot(&m)
+            }
+        }
+    }
+
+    /// Free generalised DOFs under a step's constraints.
+    pub fn free_dofs(&self, held: &Constraints<S>) -> Vec<Target<S>> {
+        let mut out = Vec::new();
+        let free = |axes: &[S::V], held: &[S::V]| -> Vec<S::V> {
+            axes.iter()
+                .copied()
+                .filter(|a| held.iter().all(|h| h.dot(a).abs() < 0.5))
+                .collect()
+        };
+        for (i, p) in self.particles.iter().enumerate() {
+            for d in free(&p.axes, &held.particle_held[i]) {
+                out.push(Target::Particle(i, d));
+            }
+        }
+        for (b, body) in self.bodies.iter().enumerate() {
+            for d in free(&body.axes, &held.body_held_t[b]) {
+                out.push(Target::Translation(b, d));
+            }
+            for g in &body.rot_axes {
+                if held.body_held_r[b].iter().all(|h| h.dot(g).abs() < 0.5) {
+                    out.push(Target::Rotation(b, *g));
+                }
+            }
+        }
+        out
+    }
+}
+
+impl<S: Space> Forces<S> {
+    /// Copy another force set into this one (same shape).
+    pub fn copy_from(&mut self, other: &Self) {
+        self.p.copy_from_slice(&other.p);
+        self.b.copy_from_slice(&other.b);
+        self.m.copy_from_slice(&other.m);
+        self.contact.copy_from_slice(&other.contact);
+        self.elastic = other.elastic;
+        self.dissipation = other.dissipation;
+    }
+}
+
+impl<S: Space, const FINITE: bool> Model<S, FINITE> {
+    /// Push a contact node into its face so that its gap becomes `-depth`.
+    pub fn set_penetration(&self, cfg: &mut Config<S>, k: usize, depth: f64) {
+        let (d, n) = self.gap(cfg, k);
+        let i = self.contacts[k].particle;
+        cfg.x[i] -= n * (d + depth);
+    }
+
+    /// Second time derivative of a contact pair's gap, exact for the given velocities and
+    /// accelerations (finite: the face point and normal rotate with the body).
+    pub fn gap_acceleration(&self, cfg: &Config<S>, vel: &Rates<S>, acc: &Rates<S>, k: usize) -> f64 {
+        let c = &self.contacts[k];
+        let (i, b) = (c.particle, c.body);
+        if FINITE {
+            let r = &cfg.br[b];
+            let (w, alpha) = (vel.w[b], acc.w[b]);
+            let n = S::rotate(r, &c.normal);
+            let f = S::rotate(r, &c.face);
+            let n_dot = S::cross(&w, &n);
+            let n_ddot = S::cross(&alpha, &n) + S::cross(&w, &n_dot);
+            let p = cfg.bx[b] + f;
+            let p_dot = vel.b[b] + S::cross(&w, &f);
+            let p_ddot = acc.b[b] + S::cross(&alpha, &f) + S::cross(&w, &S::cross(&w, &f));
+            n_ddot.dot(&(cfg.x[i] - p)) + n_dot.dot(&(vel.p[i] - p_dot)) * 2.0 + n.dot(&(acc.p[i] - p_ddot))
+        } else {
+            c.normal.dot(&(acc.p[i] - acc.b[b])) - c.normal.dot(&S::cross(&acc.w[b], &c.arm0))
+        }
+    }
+}

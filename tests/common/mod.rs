@@ -1,0 +1,69 @@
+//! Shared helpers for the integration tests.
+#![allow(dead_code)]
+
+use crosscheck::case;
+use crosscheck::engines::explicit::ExplicitEngine;
+use crosscheck::engines::{Engine, History, RunSettings};
+use crosscheck::scene::{IncrementRule, Scene};
+
+/// Load a shipped case by id.
+pub fn scene(id: &str) -> Scene {
+    case::load(&case::cases_dir().join(format!("{id}.toml"))).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Every shipped case.
+pub fn all_scenes() -> Vec<Scene> {
+    case::discover(&case::cases_dir())
+        .unwrap()
+        .iter()
+        .map(|f| case::load(f).unwrap_or_else(|e| panic!("{e}")))
+        .collect()
+}
+
+/// Run an engine with settings, panicking with the case id on failure.
+pub fn run(engine: &dyn Engine, scene: &Scene, settings: RunSettings) -> History {
+    engine
+        .run(scene, &settings)
+        .unwrap_or_else(|e| panic!("{} / {}: {e}", scene.id, engine.name()))
+        .history
+}
+
+/// Run the finite-rotation explicit engine with a given increment.
+pub fn explicit_at(scene: &Scene, h: f64) -> History {
+    run(
+        &ExplicitEngine::finite(),
+        scene,
+        RunSettings {
+            increment: Some(IncrementRule::Given(h)),
+            ..Default::default()
+        },
+    )
+}
+
+/// A column's values.
+pub fn col(h: &History, name: &str) -> Vec<f64> {
+    h.column(name).unwrap_or_else(|| panic!("no column {name}"))
+}
+
+/// Largest absolute value.
+pub fn peak(x: &[f64]) -> f64 {
+    x.iter().fold(0.0, |m, v| m.max(v.abs()))
+}
+
+/// Largest absolute difference.
+pub fn max_diff(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    a.iter().zip(b).fold(0.0, |m, (x, y)| m.max((x - y).abs()))
+}
+
+/// The contract columns of a scene that are not identically zero.
+pub fn live_columns(scene: &Scene) -> Vec<String> {
+    scene
+        .family
+        .contract_columns()
+        .iter()
+        .zip(&scene.columns)
+        .filter(|(_, c)| !matches!(c.probe, crosscheck::scene::Probe::Zero { .. }))
+        .map(|(n, _)| n.to_string())
+        .collect()
+}

@@ -1,0 +1,175 @@
+//! Order of accuracy, stability limit and energy balance of the explicit engine.
+mod common;
+use common::*;
+use crosscheck::engines::explicit::ExplicitEngine;
+use crosscheck::engines::{Engine, History, RunSettings};
+use crosscheck::scene::{DampingTreatment, IncrementRule, Scene};
+
+fn at(engine: &ExplicitEngine, scene: &Scene, h: f64, damping: DampingTreatment) -> History {
+    run(
+        engine,
+        scene,
+        RunSettings {
+            increment: Some(IncrementRule::Given(h)),
+            damping: Some(damping),
+            ..Default::default()
+        },
+    )
+}
+
+/// Observed order from three runs at h, h/2, h/4: log2(|u_h − u_h/2| / |u_h/2 − u_h/4|),
+/// worst (lowest) over the live contract columns, each difference the max over the run.
+fn observed_order(engine: &ExplicitEngine, scene: &Scene, h: f64, damping: DampingTreatment) -> f64 {
+    let runs: Vec<History> = [h, h / 2.0, h / 4.0].iter().map(|&x| at(engine, scene, x, damping)).collect();
+    live_columns(scene)
+        .iter()
+        .filter_map(|name| {
+            let c: Vec<Vec<f64>> = runs.iter().map(|r| col(r, name)).collect();
+            if c.iter().all(|x| peak(x) == 0.0) {
+                return None; // a held DOF: exactly zero at every increment
+            }
+            let e1 = max_diff(&c[0], &c[1]);
+            let e2 = max_diff(&c[1], &c[2]);
+            let order = (e1 / e2).log2();
+            println!("{} {} {name}: e1 {e1:.3e} e2 {e2:.3e} order {order:.3}", scene.id, engine.name());
+            Some(order)
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Central differences are second order, and the centred damping treatment keeps them so on
+/// the damped cases. The base increment is the case's own (well inside the asymptotic range:
+/// ω·h ≤ 0.004 on the structural modes).
+#[test]
+fn self_convergence_is_second_order_on_every_case() {
+    for scene in all_scenes() {
+        let h = match scene.settings.increment {
+            IncrementRule::Given(h) => h,
+            _ => panic!("{}: shipped cases give their increment", scene.id),
+        };
+        for engine in [ExplicitEngine::finite(), ExplicitEngine::small()] {
+            let order = observed_order(&engine, &scene, h, DampingTreatment::Centred);
+            assert!(
+                (1.8..=2.2).contains(&order),
+                "{} {}: observed order {order:.3} outside [1.8, 2.2]",
+                scene.id,
+                engine.name()
+            );
+        }
+    }
+}
+
+/// The lagged treatment (dashpots see v(n−½)) is first order in the damping term: this is
+/// why it is not the default.
+#[test]
+fn lagged_damping_is_first_order() {
+    let scene = scene("springs_grounded_a");
+    let order = observed_order(&ExplicitEngine::finite(), &scene, 5.0e-5, DampingTreatment::Lagged);
+    assert!((0.8..=1.2).contains(&order), "lagged damping: observed order {order:.3}, expected ~1");
+}
+
+/// Whether a run at increment `h` (forced, unchecked) stays bounded: it finishes with finite
+/// response columns (the contract's) no larger than 10× the largest of a run at a quarter of
+/// the stable increment. (The energy-balance column is an error measure that grows as (ωh)²,
+/// so it is not a boundedness criterion.)
+fn bounded(scene: &Scene, h: f64, reference: f64) -> bool {
+    let out = ExplicitEngine::finite().run(
+        scene,
+        &RunSettings {
+            increment: Some(IncrementRule::Forced(h)),
+            ..Default::default()
+        },
+    );
+    match out {
+        Err(_) => false,
+        Ok(o) => {
+            let last = o.history.rows.last().unwrap();
+            let n = scene.family.contract_columns().len();
+            last[1..=n].iter().all(|x| x.is_finite() && x.abs() <= 10.0 * reference)
+        }
+    }
+}
+
+/// Largest increment D/k (integer k, so output rows fall on steps) whose run stays bounded.
+fn bisect_stable(scene: &Scene, guess: f64) -> f64 {
+    let d = scene.duration();
+    let reference_run = ExplicitEngine::finite()
+        .run(
+            scene,
+            &RunSettings {
+                increment: Some(IncrementRule::Forced(guess / 4.0)),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+    let n = scene.family.contract_columns().len();
+    let reference = reference_run
+        .history
+        .rows
+        .iter()
+        .flat_map(|r| r[1..=n].iter())
+        .fold(0.0f64, |m, x| m.max(x.abs()));
+    let (mut stable_k, mut unstable_k) = ((d / (0.5 * guess)).ceil() as u64, (d / (2.0 * guess)).floor() as u64);
+    assert!(bounded(scene, d / stable_k as f64, reference));
+    assert!(!bounded(scene, d / unstable_k as f64, reference));
+    while stable_k - unstable_k > 1 {
+        let mid = (stable_k + unstable_k) / 2;
+        if bounded(scene, d / mid as f64, reference) {
+            stable_k = mid;
+        } else {
+            unstable_k = mid;
+        }
+    }
+    d / stable_k as f64
+}
+
+/// A scene with long steps and only two output rows, so the bisection can resolve the
+/// increment finely (h = duration / k) and an instability has many steps to grow.
+fn for_bisection(id: &str, duration: f64) -> Scene {
+    let mut s = scene(id);
+    for step in &mut s.steps {
+        if let crosscheck::scene::StepKind::Dynamic { duration: d } = &mut step.kind {
+            *d = duration;
+        }
+    }
+    s.output_rows = 2;
+    s
+}
+
+/// The computed stable increment (highest frequency of the linearised system, penalty
+/// included) matches the largest increment that stays bounded, within 2 %, on a damped
+/// spring case and a contact case.
+#[test]
+fn stable_increment_matches_bisection() {
+    for (id, duration) in [("springs_n2n_b", 20.0), ("rigid2d_pin_lumped", 0.5), ("rigid2d_slide_surface", 0.5)] {
+        let scene = for_bisection(id, duration);
+        let computed = ExplicitEngine::finite()
+            .stable_increment(&scene, &RunSettings::default())
+            .unwrap();
+        let found = bisect_stable(&scene, computed.increment);
+        let ratio = found / computed.increment;
+        println!(
+            "{id}: computed {:.5e} (omega_max {:.1}, zeta {:.4}), bisection {found:.5e}, ratio {ratio:.4}",
+            computed.increment, computed.omega_max, computed.zeta
+        );
+        assert!((ratio - 1.0).abs() <= 0.02, "{id}: bisection/computed = {ratio:.4}");
+    }
+}
+
+/// With the lagged treatment the damped limit (2/ω)(√(1+ζ²) − ζ) is the one bisection finds.
+#[test]
+fn lagged_stable_increment_has_the_damping_reduction() {
+    let mut scene = for_bisection("springs_grounded_a", 20.0);
+    scene.settings.damping = DampingTreatment::Lagged;
+    let computed = ExplicitEngine::finite()
+        .stable_increment(&scene, &RunSettings::default())
+        .unwrap();
+    let found = bisect_stable(&scene, computed.increment);
+    let ratio = found / computed.increment;
+    println!(
+        "lagged: computed {:.5e} (undamped {:.5e}, zeta {:.4}), bisection {found:.5e}, ratio {ratio:.4}",
+        computed.increment, computed.undamped, computed.zeta
+    );
+    assert!(computed.increment < 0.95 * computed.undamped, "the damping reduction applies");
+    assert!((ratio - 1.0).abs() <= 0.02, "lagged: bisection/computed = {ratio:.4}");
+}

@@ -7,4 +7,5 @@
 pub mod case;
 pub mod engines;
 pub mod report;
+pub mod run;
 pub mod scene;

@@ -19,8 +19,16 @@ fn at(engine: &ExplicitEngine, scene: &Scene, h: f64, damping: DampingTreatment)
 
 /// Observed order from three runs at h, h/2, h/4: log2(|u_h − u_h/2| / |u_h/2 − u_h/4|),
 /// worst (lowest) over the live contract columns, each difference the max over the run.
-fn observed_order(engine: &ExplicitEngine, scene: &Scene, h: f64, damping: DampingTreatment) -> f64 {
-    let runs: Vec<History> = [h, h / 2.0, h / 4.0].iter().map(|&x| at(engine, scene, x, damping)).collect();
+fn observed_order(
+    engine: &ExplicitEngine,
+    scene: &Scene,
+    h: f64,
+    damping: DampingTreatment,
+) -> f64 {
+    let runs: Vec<History> = [h, h / 2.0, h / 4.0]
+        .iter()
+        .map(|&x| at(engine, scene, x, damping))
+        .collect();
     live_columns(scene)
         .iter()
         .filter_map(|name| {
@@ -31,7 +39,11 @@ fn observed_order(engine: &ExplicitEngine, scene: &Scene, h: f64, damping: Dampi
             let e1 = max_diff(&c[0], &c[1]);
             let e2 = max_diff(&c[1], &c[2]);
             let order = (e1 / e2).log2();
-            println!("{} {} {name}: e1 {e1:.3e} e2 {e2:.3e} order {order:.3}", scene.id, engine.name());
+            println!(
+                "{} {} {name}: e1 {e1:.3e} e2 {e2:.3e} order {order:.3}",
+                scene.id,
+                engine.name()
+            );
             Some(order)
         })
         .fold(f64::INFINITY, f64::min)
@@ -64,8 +76,16 @@ fn self_convergence_is_second_order_on_every_case() {
 #[test]
 fn lagged_damping_is_first_order() {
     let scene = scene("springs_grounded_a");
-    let order = observed_order(&ExplicitEngine::finite(), &scene, 5.0e-5, DampingTreatment::Lagged);
-    assert!((0.8..=1.2).contains(&order), "lagged damping: observed order {order:.3}, expected ~1");
+    let order = observed_order(
+        &ExplicitEngine::finite(),
+        &scene,
+        5.0e-5,
+        DampingTreatment::Lagged,
+    );
+    assert!(
+        (0.8..=1.2).contains(&order),
+        "lagged damping: observed order {order:.3}, expected ~1"
+    );
 }
 
 /// Whether a run at increment `h` (forced, unchecked) stays bounded: it finishes with finite
@@ -85,7 +105,9 @@ fn bounded(scene: &Scene, h: f64, reference: f64) -> bool {
         Ok(o) => {
             let last = o.history.rows.last().unwrap();
             let n = scene.family.contract_columns().len();
-            last[1..=n].iter().all(|x| x.is_finite() && x.abs() <= 10.0 * reference)
+            last[1..=n]
+                .iter()
+                .all(|x| x.is_finite() && x.abs() <= 10.0 * reference)
         }
     }
 }
@@ -109,7 +131,10 @@ fn bisect_stable(scene: &Scene, guess: f64) -> f64 {
         .iter()
         .flat_map(|r| r[1..=n].iter())
         .fold(0.0f64, |m, x| m.max(x.abs()));
-    let (mut stable_k, mut unstable_k) = ((d / (0.5 * guess)).ceil() as u64, (d / (2.0 * guess)).floor() as u64);
+    let (mut stable_k, mut unstable_k) = (
+        (d / (0.5 * guess)).ceil() as u64,
+        (d / (2.0 * guess)).floor() as u64,
+    );
     assert!(bounded(scene, d / stable_k as f64, reference));
     assert!(!bounded(scene, d / unstable_k as f64, reference));
     while stable_k - unstable_k > 1 {
@@ -141,7 +166,11 @@ fn for_bisection(id: &str, duration: f64) -> Scene {
 /// spring case and a contact case.
 #[test]
 fn stable_increment_matches_bisection() {
-    for (id, duration) in [("springs_n2n_b", 20.0), ("rigid2d_pin_lumped", 0.5), ("rigid2d_slide_surface", 0.5)] {
+    for (id, duration) in [
+        ("springs_n2n_b", 20.0),
+        ("rigid2d_pin_lumped", 0.5),
+        ("rigid2d_slide_surface", 0.5),
+    ] {
         let scene = for_bisection(id, duration);
         let computed = ExplicitEngine::finite()
             .stable_increment(&scene, &RunSettings::default())
@@ -152,7 +181,10 @@ fn stable_increment_matches_bisection() {
             "{id}: computed {:.5e} (omega_max {:.1}, zeta {:.4}), bisection {found:.5e}, ratio {ratio:.4}",
             computed.increment, computed.omega_max, computed.zeta
         );
-        assert!((ratio - 1.0).abs() <= 0.02, "{id}: bisection/computed = {ratio:.4}");
+        assert!(
+            (ratio - 1.0).abs() <= 0.02,
+            "{id}: bisection/computed = {ratio:.4}"
+        );
     }
 }
 
@@ -170,6 +202,12 @@ fn lagged_stable_increment_has_the_damping_reduction() {
         "lagged: computed {:.5e} (undamped {:.5e}, zeta {:.4}), bisection {found:.5e}, ratio {ratio:.4}",
         computed.increment, computed.undamped, computed.zeta
     );
-    assert!(computed.increment < 0.95 * computed.undamped, "the damping reduction applies");
-    assert!((ratio - 1.0).abs() <= 0.02, "lagged: bisection/computed = {ratio:.4}");
+    assert!(
+        computed.increment < 0.95 * computed.undamped,
+        "the damping reduction applies"
+    );
+    assert!(
+        (ratio - 1.0).abs() <= 0.02,
+        "lagged: bisection/computed = {ratio:.4}"
+    );
 }

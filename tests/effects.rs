@@ -5,17 +5,33 @@ use crosscheck::engines::explicit::ExplicitEngine;
 use crosscheck::engines::{Engine, RunSettings};
 
 fn counters(id: &str, engine: ExplicitEngine) -> std::collections::BTreeMap<String, u64> {
-    engine.run(&scene(id), &RunSettings::default()).unwrap().info.counters
+    engine
+        .run(&scene(id), &RunSettings::default())
+        .unwrap()
+        .info
+        .counters
 }
 
 #[test]
 fn spring_only_scene_never_evaluates_contact() {
-    for id in ["springs_grounded_a", "springs_grounded_b", "springs_grounded_c", "springs_n2n_b", "springs_n2n_c"] {
+    for id in [
+        "springs_grounded_a",
+        "springs_grounded_b",
+        "springs_grounded_c",
+        "springs_n2n_b",
+        "springs_n2n_c",
+    ] {
         for engine in [ExplicitEngine::finite(), ExplicitEngine::small()] {
             let c = counters(id, engine);
-            assert!(c["force_evaluations"] > 10_000, "{id}: the run did evaluate forces");
+            assert!(
+                c["force_evaluations"] > 10_000,
+                "{id}: the run did evaluate forces"
+            );
             assert_eq!(c["contact_evaluations"], 0, "{id}: contact code entered");
-            assert_eq!(c["rotation_updates"], 0, "{id}: no body, no rotation update");
+            assert_eq!(
+                c["rotation_updates"], 0,
+                "{id}: no body, no rotation update"
+            );
             assert_eq!(c["body_solves"], 0, "{id}: no body solve");
         }
     }

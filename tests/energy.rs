@@ -20,7 +20,9 @@ fn undamped_energy_balance_is_within_the_schemes_bound() {
             _ => unreachable!(),
         };
         for engine in [ExplicitEngine::finite(), ExplicitEngine::small()] {
-            let stable = engine.stable_increment(&scene, &RunSettings::default()).unwrap();
+            let stable = engine
+                .stable_increment(&scene, &RunSettings::default())
+                .unwrap();
             let worst = |h: f64| {
                 let out = run(
                     &engine,
@@ -45,8 +47,19 @@ fn undamped_energy_balance_is_within_the_schemes_bound() {
                 e1 / scale,
                 e1 / e2
             );
-            assert!(e1 <= bound, "{} {}: balance {e1:e} above the O(h²) bound {bound:e}", scene.id, engine.name());
-            assert!((3.5..=4.5).contains(&(e1 / e2)), "{} {}: balance error is not O(h²): ratio {}", scene.id, engine.name(), e1 / e2);
+            assert!(
+                e1 <= bound,
+                "{} {}: balance {e1:e} above the O(h²) bound {bound:e}",
+                scene.id,
+                engine.name()
+            );
+            assert!(
+                (3.5..=4.5).contains(&(e1 / e2)),
+                "{} {}: balance error is not O(h²): ratio {}",
+                scene.id,
+                engine.name(),
+                e1 / e2
+            );
         }
     }
 }

@@ -19,7 +19,11 @@ fn grounded_a_b_c_agree() {
             let h = run(&e, &scene(other), RunSettings::default());
             let d = max_diff(&ua, &col(&h, "u_end")) / peak(&ua);
             println!("{} A vs {other}: {d:.2e}", e.name());
-            assert!(d <= 1e-12, "{} {other}: u_end differs from A by {d:e} of the peak", e.name());
+            assert!(
+                d <= 1e-12,
+                "{} {other}: u_end differs from A by {d:e} of the peak",
+                e.name()
+            );
         }
     }
 }
@@ -34,7 +38,11 @@ fn node_to_node_b_c_agree() {
             let (x, y) = (col(&b, name), col(&c, name));
             let d = max_diff(&x, &y) / peak(&x);
             println!("{} n2n {name}: {d:.2e}", e.name());
-            assert!(d <= 1e-12, "{}: {name} differs by {d:e} of the peak", e.name());
+            assert!(
+                d <= 1e-12,
+                "{}: {name} differs by {d:e} of the peak",
+                e.name()
+            );
         }
     }
 }
@@ -45,13 +53,25 @@ fn node_to_node_b_c_agree() {
 fn three_d_equals_two_d() {
     for variant in ["pin_lumped", "pin_surface", "slide_lumped", "slide_surface"] {
         for e in engines() {
-            let two = run(&e, &scene(&format!("rigid2d_{variant}")), RunSettings::default());
-            let three = run(&e, &scene(&format!("rigid3d_{variant}")), RunSettings::default());
+            let two = run(
+                &e,
+                &scene(&format!("rigid2d_{variant}")),
+                RunSettings::default(),
+            );
+            let three = run(
+                &e,
+                &scene(&format!("rigid3d_{variant}")),
+                RunSettings::default(),
+            );
             let rz = col(&two, "rz");
             for name in ["rz", "ux", "ux_node"] {
                 let d = max_diff(&col(&two, name), &col(&three, name)) / peak(&rz);
                 println!("{variant} {} {name}: {d:.2e}", e.name());
-                assert!(d <= 1e-9, "{variant} {}: {name} 3D vs 2D differs by {d:e} of the peak rotation", e.name());
+                assert!(
+                    d <= 1e-9,
+                    "{variant} {}: {name} 3D vs 2D differs by {d:e} of the peak rotation",
+                    e.name()
+                );
             }
         }
     }
@@ -63,11 +83,29 @@ fn three_d_equals_two_d() {
 fn pinned_variants_share_the_rotation() {
     for dim in ["2d", "3d"] {
         for e in engines() {
-            let lumped = col(&run(&e, &scene(&format!("rigid{dim}_pin_lumped")), RunSettings::default()), "rz");
-            let surface = col(&run(&e, &scene(&format!("rigid{dim}_pin_surface")), RunSettings::default()), "rz");
+            let lumped = col(
+                &run(
+                    &e,
+                    &scene(&format!("rigid{dim}_pin_lumped")),
+                    RunSettings::default(),
+                ),
+                "rz",
+            );
+            let surface = col(
+                &run(
+                    &e,
+                    &scene(&format!("rigid{dim}_pin_surface")),
+                    RunSettings::default(),
+                ),
+                "rz",
+            );
             let d = max_diff(&lumped, &surface) / peak(&lumped);
             println!("{dim} {}: {d:.2e}", e.name());
-            assert!(d <= 1e-9, "{dim} {}: pinned variants differ by {d:e} of the peak", e.name());
+            assert!(
+                d <= 1e-9,
+                "{dim} {}: pinned variants differ by {d:e} of the peak",
+                e.name()
+            );
         }
     }
 }

@@ -3,6 +3,7 @@
 //! Engines are cheap to run many times with different [`RunSettings`] (increment, penalty
 //! stiffness, damping treatment) and report what the run cost in [`RunInfo`].
 
+pub mod analytic;
 pub mod explicit;
 
 use crate::scene::{ContactStart, DampingTreatment, IncrementRule, PenaltyRule, Scene};
@@ -96,6 +97,7 @@ pub trait Engine: Send + Sync {
 /// Every engine crosscheck has, in report order.
 pub fn all() -> Vec<Box<dyn Engine>> {
     vec![
+        Box::new(analytic::AnalyticEngine),
         Box::new(explicit::ExplicitEngine::finite()),
         Box::new(explicit::ExplicitEngine::small()),
     ]

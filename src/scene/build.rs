@@ -43,7 +43,11 @@ impl<'a> Builder<'a> {
         if v.iter().any(|x| !x.is_finite()) {
             return err(field, "has a non-finite component");
         }
-        Ok(Vector3::new(v[0], v[1], if v.len() == 3 { v[2] } else { 0.0 }))
+        Ok(Vector3::new(
+            v[0],
+            v[1],
+            if v.len() == 3 { v[2] } else { 0.0 },
+        ))
     }
 
     fn unit(&self, field: &str, v: &[f64]) -> Result<Vector3<f64>, SceneError> {
@@ -57,32 +61,51 @@ impl<'a> Builder<'a> {
 
     fn node(&self, field: &str, name: &str) -> Result<NodeId, SceneError> {
         self.node_index.get(name).copied().map_or_else(
-            || err(field, format!("names node `{name}`, which the case does not define")),
+            || {
+                err(
+                    field,
+                    format!("names node `{name}`, which the case does not define"),
+                )
+            },
             Ok,
         )
     }
 
     fn body(&self, field: &str, name: &str) -> Result<BodyId, SceneError> {
         self.body_index.get(name).copied().map_or_else(
-            || err(field, format!("names body `{name}`, which the case does not define")),
+            || {
+                err(
+                    field,
+                    format!("names body `{name}`, which the case does not define"),
+                )
+            },
             Ok,
         )
     }
 
     fn dof(&self, field: &str, name: &str) -> Result<Dof, SceneError> {
         let Some(dof) = Dof::parse(name) else {
-            return err(field, format!("`{name}` is not a DOF; use ux, uy, uz, rx, ry or rz"));
+            return err(
+                field,
+                format!("`{name}` is not a DOF; use ux, uy, uz, rx, ry or rz"),
+            );
         };
         if self.dim == Dimension::Two && !matches!(dof, Dof::Translation(0 | 1) | Dof::Rotation(2))
         {
-            return err(field, format!("`{name}` does not exist in 2D; use ux, uy or rz"));
+            return err(
+                field,
+                format!("`{name}` does not exist in 2D; use ux, uy or rz"),
+            );
         }
         Ok(dof)
     }
 
     fn positive(&self, field: &str, v: f64, what: &str) -> Result<f64, SceneError> {
         if !(v.is_finite() && v > 0.0) {
-            return err(field, format!("{what} must be a finite number > 0, got {v}"));
+            return err(
+                field,
+                format!("{what} must be a finite number > 0, got {v}"),
+            );
         }
         Ok(v)
     }
@@ -121,13 +144,21 @@ impl Scene {
         {
             return err(
                 "id",
-                format!("is `{}` but the file is `{stem}.toml`; they must match", case.id),
+                format!(
+                    "is `{}` but the file is `{stem}.toml`; they must match",
+                    case.id
+                ),
             );
         }
         let family = match case.family.as_str() {
             "rigid_body" => Family::RigidBody,
             "springs" => Family::Springs,
-            other => return err("family", format!("`{other}`: use `rigid_body` or `springs`")),
+            other => {
+                return err(
+                    "family",
+                    format!("`{other}`: use `rigid_body` or `springs`"),
+                );
+            }
         };
         let dim = match case.dimension {
             2 => Dimension::Two,
@@ -141,12 +172,18 @@ impl Scene {
         };
         for (i, n) in case.nodes.iter().enumerate() {
             if b.node_index.insert(n.id.as_str(), i).is_some() {
-                return err(format!("nodes[{i}].id"), format!("`{}` is defined twice", n.id));
+                return err(
+                    format!("nodes[{i}].id"),
+                    format!("`{}` is defined twice", n.id),
+                );
             }
         }
         for (i, body) in case.bodies.iter().enumerate() {
             if b.body_index.insert(body.id.as_str(), i).is_some() {
-                return err(format!("bodies[{i}].id"), format!("`{}` is defined twice", body.id));
+                return err(
+                    format!("bodies[{i}].id"),
+                    format!("`{}` is defined twice", body.id),
+                );
             }
         }
 
@@ -258,7 +295,8 @@ impl Scene {
                     let r = n.position - origin;
                     mass += n.mass;
                     first += n.mass * r;
-                    inertia_o += n.mass * (Matrix3::identity() * r.norm_squared() - r * r.transpose());
+                    inertia_o +=
+                        n.mass * (Matrix3::identity() * r.norm_squared() - r * r.transpose());
                 }
             }
             if mass <= 0.0 {
@@ -304,7 +342,11 @@ impl Scene {
                     if e.nodes.len() != count {
                         return err(
                             format!("{field}.nodes"),
-                            format!("a {} {label} joins {count} node(s), got {}", e.kind, e.nodes.len()),
+                            format!(
+                                "a {} {label} joins {count} node(s), got {}",
+                                e.kind,
+                                e.nodes.len()
+                            ),
                         );
                     }
                     e.nodes
@@ -390,7 +432,10 @@ impl Scene {
             if gap.abs() > 1e-9 * (1.0 + face_point.norm()) {
                 return err(
                     format!("{field}.node"),
-                    format!("node `{}` is {gap:e} from the face at t = 0; it must start on it", c.node),
+                    format!(
+                        "node `{}` is {gap:e} from the face at t = 0; it must start on it",
+                        c.node
+                    ),
                 );
             }
             contacts.push(ContactPair {
@@ -453,21 +498,33 @@ impl Scene {
             let kind = match (s.kind.as_str(), s.duration) {
                 ("static", None) => StepKind::Static,
                 ("static", Some(_)) => {
-                    return err(format!("{field}.duration"), "a static step takes no duration");
+                    return err(
+                        format!("{field}.duration"),
+                        "a static step takes no duration",
+                    );
                 }
                 ("dynamic", Some(d)) => StepKind::Dynamic {
                     duration: b.positive(&format!("{field}.duration"), d, "a duration")?,
                 },
                 ("dynamic", None) => {
-                    return err(format!("{field}.duration"), "a dynamic step needs `duration`");
+                    return err(
+                        format!("{field}.duration"),
+                        "a dynamic step needs `duration`",
+                    );
                 }
                 (other, _) => {
-                    return err(format!("{field}.kind"), format!("`{other}`: use static or dynamic"));
+                    return err(
+                        format!("{field}.kind"),
+                        format!("`{other}`: use static or dynamic"),
+                    );
                 }
             };
             let mut conditions: Vec<BoundaryCondition> = Vec::new();
             let mut add = |c: BoundaryCondition, field: &str| -> Result<(), SceneError> {
-                if let Some(prev) = conditions.iter().find(|p| p.node == c.node && p.dof == c.dof) {
+                if let Some(prev) = conditions
+                    .iter()
+                    .find(|p| p.node == c.node && p.dof == c.dof)
+                {
                     if prev.value != c.value {
                         return err(
                             field,
@@ -507,7 +564,10 @@ impl Scene {
                     ),
                     Attachment::Free if matches!(dof, Dof::Rotation(_)) => err(
                         field,
-                        format!("node `{}` has no rotational DOF (it is not a reference node)", nodes[node].name),
+                        format!(
+                            "node `{}` has no rotational DOF (it is not a reference node)",
+                            nodes[node].name
+                        ),
                     ),
                     _ => Ok(()),
                 }
@@ -561,7 +621,10 @@ impl Scene {
             }
             steps.push(Step { kind, conditions });
         }
-        if !steps.iter().any(|s| matches!(s.kind, StepKind::Dynamic { .. })) {
+        if !steps
+            .iter()
+            .any(|s| matches!(s.kind, StepKind::Dynamic { .. }))
+        {
             return err("steps", "a case needs at least one dynamic step");
         }
 
@@ -614,7 +677,10 @@ impl Scene {
 
         // Output.
         if case.output.rows < 200 {
-            return err("output.rows", format!("is {}; the contract needs at least 200", case.output.rows));
+            return err(
+                "output.rows",
+                format!("is {}; the contract needs at least 200", case.output.rows),
+            );
         }
         let mut columns = Vec::new();
         for (i, c) in case.output.columns.iter().enumerate() {
@@ -638,7 +704,10 @@ impl Scene {
             let direction = |c: &ColumnTable| -> Result<Vector3<f64>, SceneError> {
                 match &c.direction {
                     Some(d) => b.unit(&format!("{field}.direction"), d),
-                    None => err(format!("{field}.direction"), "this column needs `direction`"),
+                    None => err(
+                        format!("{field}.direction"),
+                        "this column needs `direction`",
+                    ),
                 }
             };
             let probe = if let Some(n) = &c.displacement {
@@ -655,7 +724,10 @@ impl Scene {
                 let axis = match (&c.axis, dim) {
                     (None, _) => Vector3::z(),
                     (Some(_), Dimension::Two) => {
-                        return err(format!("{field}.axis"), "a 2D rotation is about z; drop `axis`");
+                        return err(
+                            format!("{field}.axis"),
+                            "a 2D rotation is about z; drop `axis`",
+                        );
                     }
                     (Some(a), Dimension::Three) => b.unit(&format!("{field}.axis"), a)?,
                 };
@@ -701,8 +773,12 @@ impl Scene {
             (Some(_), Some(_)) => {
                 return err("time", "give `increment` or `accuracy`, not both");
             }
-            (Some(h), None) => IncrementRule::Given(b.positive("time.increment", h, "an increment")?),
-            (None, Some(a)) => IncrementRule::Accuracy(b.positive("time.accuracy", a, "an accuracy")?),
+            (Some(h), None) => {
+                IncrementRule::Given(b.positive("time.increment", h, "an increment")?)
+            }
+            (None, Some(a)) => {
+                IncrementRule::Accuracy(b.positive("time.accuracy", a, "an accuracy")?)
+            }
             (None, None) => {
                 let safety = t.safety.unwrap_or(DEFAULT_SAFETY);
                 if !(safety > 0.0 && safety <= 1.0) {
@@ -719,17 +795,27 @@ impl Scene {
         let c = &case.contact;
         let penalty = match (c.penalty_stiffness, c.penalty_ratio) {
             (Some(_), Some(_)) => {
-                return err("contact", "give `penalty_stiffness` or `penalty_ratio`, not both");
+                return err(
+                    "contact",
+                    "give `penalty_stiffness` or `penalty_ratio`, not both",
+                );
             }
-            (Some(k), None) => PenaltyRule::Stiffness(b.positive("contact.penalty_stiffness", k, "k_p")?),
-            (None, Some(r)) => PenaltyRule::Ratio(b.positive("contact.penalty_ratio", r, "a ratio")?),
+            (Some(k), None) => {
+                PenaltyRule::Stiffness(b.positive("contact.penalty_stiffness", k, "k_p")?)
+            }
+            (None, Some(r)) => {
+                PenaltyRule::Ratio(b.positive("contact.penalty_ratio", r, "a ratio")?)
+            }
             (None, None) => PenaltyRule::Ratio(DEFAULT_PENALTY_RATIO),
         };
         let contact_start = match c.start.as_deref() {
             None | Some("consistent") => ContactStart::Consistent,
             Some("touching") => ContactStart::Touching,
             Some(other) => {
-                return err("contact.start", format!("`{other}`: use consistent or touching"));
+                return err(
+                    "contact.start",
+                    format!("`{other}`: use consistent or touching"),
+                );
             }
         };
 

@@ -373,8 +373,10 @@ pub struct SceneSettings {
     pub contact_start: ContactStart,
 }
 
-/// Default penalty ratio: k_p = 1000 × the largest spring stiffness.
-pub const DEFAULT_PENALTY_RATIO: f64 = 1.0e3;
+/// Default penalty ratio: k_p = 10⁴ × the largest spring stiffness. The penalty compliance
+/// error of the rigid cases is about (2–3)/ratio of the peak (measured: 2.4e-4 at 1e4), inside
+/// the 1e-3 the benchmark comparison asks for, and the stable increment stays ~4e-5 s.
+pub const DEFAULT_PENALTY_RATIO: f64 = 1.0e4;
 /// Default fraction of the stable increment.
 pub const DEFAULT_SAFETY: f64 = 0.9;
 
@@ -441,7 +443,10 @@ impl Scene {
 
     /// The largest spring stiffness (the penalty rule's reference).
     pub fn largest_stiffness(&self) -> f64 {
-        self.springs.iter().map(|s| s.coefficient).fold(0.0, f64::max)
+        self.springs
+            .iter()
+            .map(|s| s.coefficient)
+            .fold(0.0, f64::max)
     }
 
     /// Penalty stiffness after the rule.

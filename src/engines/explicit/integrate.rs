@@ -9,10 +9,12 @@
 //! `v(n−½)` (first order, the classic explicit form). Scenes without such forces skip the pass.
 
 use super::linear::{StableIncrement, static_step};
-use super::model::{Config, ContactMode, Constraints, Counters, Forces, Model, Rates};
+use super::model::{Config, Constraints, ContactMode, Counters, Forces, Model, Rates};
 use super::space::{Lin, Space};
 use crate::engines::{EngineError, History};
-use crate::scene::{ContactStart, DampingTreatment, IncrementRule, Probe, Scene, SceneSettings, StepKind};
+use crate::scene::{
+    ContactStart, DampingTreatment, IncrementRule, Probe, Scene, SceneSettings, StepKind,
+};
 use nalgebra::{DMatrix, DVector};
 
 /// The outcome of an explicit run.
@@ -30,7 +32,13 @@ pub struct Integration {
 }
 
 /// Energy columns appended after the case's columns.
-pub const ENERGY_COLUMNS: [&str; 5] = ["e_kinetic", "e_elastic", "e_viscous", "w_external", "e_balance"];
+pub const ENERGY_COLUMNS: [&str; 5] = [
+    "e_kinetic",
+    "e_elastic",
+    "e_viscous",
+    "w_external",
+    "e_balance",
+];
 
 const MAX_DAMPING_ITERATIONS: usize = 100;
 
@@ -67,7 +75,12 @@ pub fn stable_increment<S: Space, const FINITE: bool>(
 
 /// Choose the increment: the rule, never above the stable one, then shortened so that it
 /// divides the output interval exactly (rows fall on steps; no interpolation).
-fn choose_increment(rule: IncrementRule, stable: Option<&StableIncrement>, duration: f64, interval: f64) -> Result<f64, EngineError> {
+fn choose_increment(
+    rule: IncrementRule,
+    stable: Option<&StableIncrement>,
+    duration: f64,
+    interval: f64,
+) -> Result<f64, EngineError> {
     let limit = stable.map_or(f64::INFINITY, |s| s.increment);
     let h = match rule {
         IncrementRule::Given(h) => {
@@ -83,7 +96,10 @@ fn choose_increment(rule: IncrementRule, stable: Option<&StableIncrement>, durat
         IncrementRule::Accuracy(eps) => {
             let cap = crate::scene::DEFAULT_SAFETY * limit;
             match stable {
-                Some(s) if s.omega_structure > 0.0 => (24.0 * eps / (s.omega_structure.powi(3) * duration)).sqrt().min(cap),
+                Some(s) if s.omega_structure > 0.0 => (24.0 * eps
+                    / (s.omega_structure.powi(3) * duration))
+                    .sqrt()
+                    .min(cap),
                 _ => cap.min(interval),
             }
         }
@@ -93,15 +109,17 @@ fn choose_increment(rule: IncrementRule, stable: Option<&StableIncrement>, durat
     Ok(interval / per_interval)
 }
 
-fn consistent_start<S: Space, const FINITE: bool>(
+/// Contact forces that make every gap's second derivative vanish (the rigid model's forces at
+/// this state), the accelerations they give, and B = ∂(gap accelerations)/∂(forces).
+fn consistent_forces<S: Space, const FINITE: bool>(
     model: &Model<S, FINITE>,
-    cfg: &mut Config<S>,
+    cfg: &Config<S>,
     vel: &Rates<S>,
     held: &Constraints<S>,
     counters: &mut Counters,
-) {
+) -> Option<(DVector<f64>, Rates<S>, DMatrix<f64>)> {
     let n = model.contact_count();
-    let gap_acceleration = |cfg: &Config<S>, given: &[f64], counters: &mut Counters| -> DVector<f64> {
+    let response = |given: &[f64], counters: &mut Counters| -> (DVector<f64>, Rates<S>) {
         let mut f = model.zero_forces();
         model.forces(cfg, ContactMode::Given(given), &mut f, counters);
         if model.has_dashpots() {
@@ -109,27 +127,89 @@ fn consistent_start<S: Space, const FINITE: bool>(
         }
         let mut acc = model.zero_rates();
         model.accelerations(cfg, &f, vel, held, &mut acc, counters);
-        DVector::from_fn(n, |k, _| model.gap_acceleration(cfg, vel, &acc, k))
+        (
+            DVector::from_fn(n, |k, _| model.gap_acceleration(cfg, vel, &acc, k)),
+            acc,
+        )
     };
+    let zero = vec![0.0; n];
+    let (a0, _) = response(&zero, counters);
+    let mut b = DMatrix::zeros(n, n);
+    for j in 0..n {
+        let mut unit = zero.clone();
+        unit[j] = 1.0;
+        b.set_column(j, &(response(&unit, counters).0 - &a0));
+    }
+    let f = b.clone().lu().solve(&(-a0))?.map(|x| x.max(0.0));
+    let (_, acc) = response(f.as_slice(), counters);
+    Some((f, acc, b))
+}
+
+/// Start penalty contacts where the rigid model is, so the penalty mode starts nearly
+/// unexcited instead of ringing with amplitudes λ0, λ̇0/ω_p and λ̈0/ω_p².
+///
+/// With the penalty, λ = −k_p d, and the gap obeys d̈ = A + B λ; the rigid model's force
+/// λ_r = −B⁻¹A. Expanding the penalty solution about it gives λ = λ_r − (k_p B)⁻¹ λ̈_r + …, so
+/// the start sets the penetration to carry λ_r(0) − (k_p B)⁻¹ λ̈_r(0) and the gap rate to
+/// −λ̇_r(0)/k_p. λ̇_r and λ̈_r are central differences of the rigid force along the trajectory
+/// extrapolated ±τ (τ = the increment).
+fn consistent_start<S: Space, const FINITE: bool>(
+    model: &Model<S, FINITE>,
+    cfg: &mut Config<S>,
+    vel: &mut Rates<S>,
+    held: &Constraints<S>,
+    tau: f64,
+    counters: &mut Counters,
+) {
     // Two passes: moving the node changes the springs attached to it slightly.
     for _ in 0..2 {
-        let zero = vec![0.0; n];
-        let a0 = gap_acceleration(cfg, &zero, counters);
-        let mut b = DMatrix::zeros(n, n);
-        for j in 0..n {
-            let mut unit = zero.clone();
-            unit[j] = 1.0;
-            b.set_column(j, &(gap_acceleration(cfg, &unit, counters) - &a0));
-        }
-        let Some(f) = b.lu().solve(&(-a0)) else { return };
+        let Some((f, _, _)) = consistent_forces(model, cfg, vel, held, counters) else {
+            return;
+        };
         for (k, fk) in f.iter().enumerate() {
-            model.set_penetration(cfg, k, fk.max(0.0) / model.penalty);
+            model.set_penetration(cfg, k, fk / model.penalty);
         }
     }
+    let Some((f0, acc, b)) = consistent_forces(model, cfg, vel, held, counters) else {
+        return;
+    };
+    // Along the rigid trajectory, extrapolated ±τ. The rigid force depends on velocities
+    // (centripetal and Coriolis terms of the gap under finite rotation), so the velocity must be
+    // extrapolated to second order: the jerk comes from a first pass.
+    let mut at = |s: f64, jerk: &Rates<S>| {
+        let (c, v) = model.extrapolate(cfg, vel, &acc, jerk, s);
+        consistent_forces(model, &c, &v, held, counters)
+    };
+    let zero = model.zero_rates();
+    let (Some((_, acc_ahead, _)), Some((_, acc_behind, _))) = (at(tau, &zero), at(-tau, &zero))
+    else {
+        return;
+    };
+    let jerk = acc_ahead.plus(-1.0, &acc_behind).plus(0.0, &zero);
+    let jerk = zero.plus(0.5 / tau, &jerk);
+    let (Some((ahead, _, _)), Some((behind, _, _))) = (at(tau, &jerk), at(-tau, &jerk)) else {
+        return;
+    };
+    let rate = (&ahead - &behind) / (2.0 * tau);
+    let curvature = (&ahead - &f0 * 2.0 + &behind) / (tau * tau);
+    let correction = (b * model.penalty)
+        .lu()
+        .solve(&curvature)
+        .unwrap_or_else(|| DVector::zeros(f0.len()));
+    for k in 0..model.contact_count() {
+        if f0[k] > 0.0 {
+            model.set_penetration(cfg, k, (f0[k] - correction[k]) / model.penalty);
+            model.set_gap_rate(cfg, vel, k, -rate[k] / model.penalty);
+        }
+    }
+    model.enforce(vel, held);
 }
 
 /// Run a scene through all its steps.
-pub fn integrate<S: Space, const FINITE: bool>(scene: &Scene, settings: &SceneSettings) -> Result<Integration, EngineError> {
+pub fn integrate<S: Space, const FINITE: bool>(
+    scene: &Scene,
+    settings: &SceneSettings,
+) -> Result<Integration, EngineError> {
     let penalty = if scene.contacts.is_empty() {
         0.0
     } else {
@@ -165,10 +245,14 @@ pub fn integrate<S: Space, const FINITE: bool>(scene: &Scene, settings: &SceneSe
     let mut v_n = model.zero_rates();
     let mut v_guess = model.zero_rates();
     let mut v_half = model.zero_rates();
+    let mut carry = model.zero_rates();
 
     for (si, step) in scene.steps.iter().enumerate() {
         let held = model.constraints(scene, step);
-        let StepKind::Dynamic { duration: step_duration } = step.kind else {
+        let StepKind::Dynamic {
+            duration: step_duration,
+        } = step.kind
+        else {
             static_step(&model, &mut cfg, &held, &mut counters)?;
             continue;
         };
@@ -189,7 +273,7 @@ pub fn integrate<S: Space, const FINITE: bool>(scene: &Scene, settings: &SceneSe
         model.enforce(&mut vel, &held);
         if !started {
             if model.contact_count() > 0 && settings.contact_start == ContactStart::Consistent {
-                consistent_start(&model, &mut cfg, &vel, &held, &mut counters);
+                consistent_start(&model, &mut cfg, &mut vel, &held, h, &mut counters);
             }
             cfg_start = cfg.clone();
         }
@@ -198,7 +282,9 @@ pub fn integrate<S: Space, const FINITE: bool>(scene: &Scene, settings: &SceneSe
         let steps_here = (step_duration / h).round() as u64;
         let first = n_global;
         let last_step = si + 1 == scene.steps.len()
-            || scene.steps[si + 1..].iter().all(|s| !matches!(s.kind, StepKind::Dynamic { .. }));
+            || scene.steps[si + 1..]
+                .iter()
+                .all(|s| !matches!(s.kind, StepKind::Dynamic { .. }));
 
         for n in first..=first + steps_here {
             if n == first + steps_here && !last_step {
@@ -244,7 +330,14 @@ pub fn integrate<S: Space, const FINITE: bool>(scene: &Scene, settings: &SceneSe
                                     model.damping(&cfg, &v_guess, &mut total, &mut counters);
                                     power = total.dissipation;
                                 }
-                                model.accelerations(&cfg, &total, &v_guess, &held, &mut acc, &mut counters);
+                                model.accelerations(
+                                    &cfg,
+                                    &total,
+                                    &v_guess,
+                                    &held,
+                                    &mut acc,
+                                    &mut counters,
+                                );
                                 v_n.set_plus(&v_half, 0.5 * h, &acc);
                                 let (change, size) = v_n.max_difference(&v_guess);
                                 std::mem::swap(&mut v_n, &mut v_guess);
@@ -283,15 +376,15 @@ pub fn integrate<S: Space, const FINITE: bool>(scene: &Scene, settings: &SceneSe
                 for (ci, c) in scene.columns.iter().enumerate() {
                     row.push(match &c.probe {
                         Probe::Displacement { node, direction } => {
-                            let x = model.position(&cfg, &model.points[*node]);
-                            S::v(direction).dot(&(x - S::v(&scene.nodes[*node].position)))
+                            S::v(direction).dot(&model.displacement(&cfg, &model.points[*node]))
                         }
                         Probe::Velocity { node, direction } => {
                             S::v(direction).dot(&model.velocity(&cfg, &v_n, &model.points[*node]))
                         }
                         Probe::Rotation { body, axis } => {
                             let raw = model.rotation_about(&cfg, *body, &S::w(axis));
-                            let turns = ((previous_rotation[ci] - raw) / std::f64::consts::TAU).round();
+                            let turns =
+                                ((previous_rotation[ci] - raw) / std::f64::consts::TAU).round();
                             let unwrapped = raw + turns * std::f64::consts::TAU;
                             previous_rotation[ci] = unwrapped;
                             unwrapped
@@ -314,7 +407,7 @@ pub fn integrate<S: Space, const FINITE: bool>(scene: &Scene, settings: &SceneSe
             if n == first + steps_here {
                 break;
             }
-            model.advance(&mut cfg, h, &v_next, &held, &mut counters);
+            model.advance(&mut cfg, &mut carry, h, &v_next, &held, &mut counters);
             v_half = v_next;
             std::mem::swap(&mut acc_prev, &mut acc);
         }

@@ -5,7 +5,7 @@
 //! so they include everything the simulation includes (geometric stiffness of preloaded
 //! springs and of the load under finite rotation, the penalty of closed contacts).
 
-use super::model::{Config, ContactMode, Counters, Constraints, Model, Target};
+use super::model::{Config, Constraints, ContactMode, Counters, Model, Target};
 use super::space::{Lin, Space};
 use crate::engines::EngineError;
 use crate::scene::DampingTreatment;
@@ -65,7 +65,13 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     }
 
     /// Tangent stiffness −∂Q/∂q by central differences, symmetrised.
-    fn stiffness(&self, cfg: &Config<S>, dofs: &[Target<S>], mode: ContactMode, counters: &mut Counters) -> DMatrix<f64> {
+    fn stiffness(
+        &self,
+        cfg: &Config<S>,
+        dofs: &[Target<S>],
+        mode: ContactMode,
+        counters: &mut Counters,
+    ) -> DMatrix<f64> {
         let n = dofs.len();
         let mut k = DMatrix::zeros(n, n);
         for (j, d) in dofs.iter().enumerate() {
@@ -81,11 +87,21 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     }
 
     /// Linearise about `cfg` under `held`, with contacts closed (bilateral) or off.
-    pub fn linearise(&self, cfg: &Config<S>, held: &Constraints<S>, contacts: bool, counters: &mut Counters) -> Linearised<S> {
+    pub fn linearise(
+        &self,
+        cfg: &Config<S>,
+        held: &Constraints<S>,
+        contacts: bool,
+        counters: &mut Counters,
+    ) -> Linearised<S> {
         let dofs = self.free_dofs(held);
         let n = dofs.len();
         let mass = DMatrix::from_fn(n, n, |i, j| self.mass_entry(cfg, &dofs[i], &dofs[j]));
-        let mode = if contacts { ContactMode::Bilateral } else { ContactMode::Off };
+        let mode = if contacts {
+            ContactMode::Bilateral
+        } else {
+            ContactMode::Off
+        };
         let stiffness = self.stiffness(cfg, &dofs, mode, counters);
         let mut damping = DMatrix::zeros(n, n);
         if self.has_dashpots() {
@@ -120,7 +136,10 @@ impl<S: Space> Linearised<S> {
             .cholesky()
             .expect("mass matrix positive definite on free DOFs (validated)")
             .l();
-        let linv = l.clone().try_inverse().expect("triangular factor invertible");
+        let linv = l
+            .clone()
+            .try_inverse()
+            .expect("triangular factor invertible");
         let a = &linv * &self.stiffness * linv.transpose();
         let a = (&a + a.transpose()) * 0.5;
         let eig = a.symmetric_eigen();
@@ -129,7 +148,8 @@ impl<S: Space> Linearised<S> {
                 let omega = eig.eigenvalues[i].max(0.0).sqrt();
                 let phi = linv.transpose() * eig.eigenvectors.column(i);
                 let zeta = if omega > 0.0 {
-                    (phi.transpose() * &self.damping * &phi)[0] / (2.0 * omega * (phi.transpose() * &self.mass * &phi)[0])
+                    (phi.transpose() * &self.damping * &phi)[0]
+                        / (2.0 * omega * (phi.transpose() * &self.mass * &phi)[0])
                 } else {
                     0.0
                 };
@@ -143,7 +163,11 @@ impl<S: Space> Linearised<S> {
 
 impl StableIncrement {
     /// From the modes with contact closed and the modes of the structure alone.
-    pub fn from_modes(modes: &[Mode], structure: &[Mode], treatment: DampingTreatment) -> Option<Self> {
+    pub fn from_modes(
+        modes: &[Mode],
+        structure: &[Mode],
+        treatment: DampingTreatment,
+    ) -> Option<Self> {
         let top = modes.iter().find(|m| m.omega > 0.0)?;
         let undamped = 2.0 / top.omega;
         let lagged = modes
@@ -174,8 +198,8 @@ pub fn static_step<S: Space, const FINITE: bool>(
 ) -> Result<(), EngineError> {
     for (target, value) in &held.prescribed {
         let current = match target {
-            Target::Particle(i, d) => d.dot(&(cfg.x[*i] - model.particles[*i].x0)),
-            Target::Translation(b, d) => d.dot(&(cfg.bx[*b] - model.bodies[*b].x0)),
+            Target::Particle(i, d) => d.dot(&cfg.u[*i]),
+            Target::Translation(b, d) => d.dot(&cfg.bu[*b]),
             Target::Rotation(b, g) => model.rotation_about(cfg, *b, g),
         };
         model.perturb(cfg, target, value - current);
@@ -204,5 +228,7 @@ pub fn static_step<S: Space, const FINITE: bool>(
             model.perturb(cfg, d, *x);
         }
     }
-    Err(EngineError::Failed("static step: Newton did not converge in 50 iterations".into()))
+    Err(EngineError::Failed(
+        "static step: Newton did not converge in 50 iterations".into(),
+    ))
 }

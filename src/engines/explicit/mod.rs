@@ -90,7 +90,11 @@ pub fn merged(scene: &Scene, settings: &RunSettings) -> SceneSettings {
 
 impl ExplicitEngine {
     /// Run and return everything the integration measured (counters, stable increment).
-    pub fn integrate(&self, scene: &Scene, settings: &RunSettings) -> Result<Integration, EngineError> {
+    pub fn integrate(
+        &self,
+        scene: &Scene,
+        settings: &RunSettings,
+    ) -> Result<Integration, EngineError> {
         let s = merged(scene, settings);
         match (scene.dimension, self.kinematics) {
             (Dimension::Two, Kinematics::Finite) => integrate::<Planar, true>(scene, &s),
@@ -101,7 +105,11 @@ impl ExplicitEngine {
     }
 
     /// The stable increment of a scene under these settings, without running it.
-    pub fn stable_increment(&self, scene: &Scene, settings: &RunSettings) -> Option<linear::StableIncrement> {
+    pub fn stable_increment(
+        &self,
+        scene: &Scene,
+        settings: &RunSettings,
+    ) -> Option<linear::StableIncrement> {
         let s = merged(scene, settings);
         match (scene.dimension, self.kinematics) {
             (Dimension::Two, Kinematics::Finite) => stable::<Planar, true>(scene, &s),
@@ -112,7 +120,10 @@ impl ExplicitEngine {
     }
 }
 
-fn stable<S: space::Space, const FINITE: bool>(scene: &Scene, s: &SceneSettings) -> Option<linear::StableIncrement> {
+fn stable<S: space::Space, const FINITE: bool>(
+    scene: &Scene,
+    s: &SceneSettings,
+) -> Option<linear::StableIncrement> {
     let penalty = scene.penalty_stiffness(s.penalty);
     let m = model::Model::<S, FINITE>::compile(scene, penalty);
     let mut cfg = m.initial_config();

@@ -9,6 +9,15 @@ use super::space::{BodyInertia, Lin, Space};
 use crate::scene::{Attachment, BoundaryCondition, Connection, Dof, Scene, Step};
 use std::marker::PhantomData;
 
+/// Kahan summation step: `x += dx`, carrying the rounding error in `carry`.
+#[inline]
+fn compensated_add<T: Lin>(x: &mut T, carry: &mut T, dx: T) {
+    let y = dx - *carry;
+    let t = *x + y;
+    *carry = (t - *x) - y;
+    *x = t;
+}
+
 /// Where an element end or a load acts.
 #[derive(Debug, Clone, Copy)]
 pub enum Point<S: Space> {
@@ -25,13 +34,14 @@ pub enum Point<S: Space> {
     },
 }
 
-/// Positions: particles and bodies (reference node position and orientation).
+/// Configuration, as displacements from t = 0 (so round-off is relative to the motion, not to
+/// the coordinates: the penalty multiplies position errors by k_p).
 #[derive(Debug, Clone)]
 pub struct Config<S: Space> {
-    /// Particle positions.
-    pub x: Vec<S::V>,
-    /// Reference node positions.
-    pub bx: Vec<S::V>,
+    /// Particle displacements.
+    pub u: Vec<S::V>,
+    /// Reference node displacements.
+    pub bu: Vec<S::V>,
     /// Body orientations (finite rotation).
     pub br: Vec<S::R>,
     /// Body rotation vectors (small rotation).
@@ -61,9 +71,24 @@ impl<S: Space> Rates<S> {
     /// `self + s · other`.
     pub fn plus(&self, s: f64, other: &Self) -> Self {
         Self {
-            p: self.p.iter().zip(&other.p).map(|(a, b)| *a + *b * s).collect(),
-            b: self.b.iter().zip(&other.b).map(|(a, b)| *a + *b * s).collect(),
-            w: self.w.iter().zip(&other.w).map(|(a, b)| *a + *b * s).collect(),
+            p: self
+                .p
+                .iter()
+                .zip(&other.p)
+                .map(|(a, b)| *a + *b * s)
+                .collect(),
+            b: self
+                .b
+                .iter()
+                .zip(&other.b)
+                .map(|(a, b)| *a + *b * s)
+                .collect(),
+            w: self
+                .w
+                .iter()
+                .zip(&other.w)
+                .map(|(a, b)| *a + *b * s)
+                .collect(),
         }
     }
     /// In place: `self = a + s · b`.
@@ -82,7 +107,12 @@ impl<S: Space> Rates<S> {
     pub fn max_difference(&self, other: &Self) -> (f64, f64) {
         let mut d: f64 = 0.0;
         let mut m: f64 = 0.0;
-        for (a, b) in self.p.iter().zip(&other.p).chain(self.b.iter().zip(&other.b)) {
+        for (a, b) in self
+            .p
+            .iter()
+            .zip(&other.p)
+            .chain(self.b.iter().zip(&other.b))
+        {
             let e = *a - *b;
             d = d.max(e.dot(&e).sqrt());
             m = m.max(a.dot(a).sqrt());
@@ -171,7 +201,6 @@ struct Grounded<S: Space> {
     direction: Option<S::V>,
     /// Rotation axis and body (rotational DOF at a reference node).
     rotation: Option<(usize, S::W)>,
-    x0: S::V,
     c: f64,
 }
 
@@ -182,8 +211,8 @@ struct TwoPoint<S: Space> {
     /// Fixed direction, or for axial elements the initial unit direction.
     direction: S::V,
     axial: bool,
-    a0: S::V,
-    b0: S::V,
+    /// From end a to end b at t = 0.
+    span0: S::V,
     length0: f64,
     c: f64,
 }
@@ -198,6 +227,8 @@ struct Contact<S: Space> {
     normal: S::V,
     /// The contact node's offset from the reference node at t = 0 (small-rotation arm).
     arm0: S::V,
+    /// Gap at t = 0 (small rotation: the constant part of the linearised gap).
+    gap0: f64,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -297,7 +328,9 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         let mut particles = Vec::new();
         let mut bodies: Vec<Body<S>> = Vec::new();
         let axes = |frame: &nalgebra::Matrix3<f64>| -> Vec<S::V> {
-            (0..S::DIM).map(|i| S::v(&frame.column(i).into_owned())).collect()
+            (0..S::DIM)
+                .map(|i| S::v(&frame.column(i).into_owned()))
+                .collect()
         };
         let rot_axes = |frame: &nalgebra::Matrix3<f64>| -> Vec<S::W> {
             (3 - S::ROT..3)
@@ -327,9 +360,11 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 n.attachment == Attachment::Free
                     && n.mass == 0.0
                     && scene.steps.iter().all(|s| {
-                        Dof::all(scene.dimension, false)
-                            .iter()
-                            .all(|d| s.conditions.iter().any(|c| c.node == i && c.dof == *d && c.value.is_none()))
+                        Dof::all(scene.dimension, false).iter().all(|d| {
+                            s.conditions
+                                .iter()
+                                .any(|c| c.node == i && c.dof == *d && c.value.is_none())
+                        })
                     })
             })
             .collect();
@@ -364,7 +399,9 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                     Connection::Grounded { node, dof } => {
                         let frame = &scene.nodes[node].frame;
                         let (direction, rotation) = match dof {
-                            Dof::Translation(i) => (Some(S::v(&frame.column(i).into_owned())), None),
+                            Dof::Translation(i) => {
+                                (Some(S::v(&frame.column(i).into_owned())), None)
+                            }
                             Dof::Rotation(i) => {
                                 let Attachment::Reference(b) = scene.nodes[node].attachment else {
                                     unreachable!("validated: rotations only at reference nodes")
@@ -376,7 +413,6 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                             point: points[node],
                             direction,
                             rotation,
-                            x0: x0(node),
                             c: e.coefficient,
                         })
                     }
@@ -388,23 +424,23 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             list.iter()
                 .filter_map(|e| {
                     let (nodes, direction, axial) = match &e.connection {
-                        Connection::FixedDirection { nodes, direction } => (*nodes, S::v(direction), false),
+                        Connection::FixedDirection { nodes, direction } => {
+                            (*nodes, S::v(direction), false)
+                        }
                         Connection::Axial { nodes } => {
                             let d = x0(nodes[1]) - x0(nodes[0]);
                             (*nodes, d * (1.0 / d.dot(&d).sqrt()), true)
                         }
                         Connection::Grounded { .. } => return None,
                     };
-                    let (a0, b0) = (x0(nodes[0]), x0(nodes[1]));
-                    let l = b0 - a0;
+                    let span0 = x0(nodes[1]) - x0(nodes[0]);
                     Some(TwoPoint {
                         a: points[nodes[0]],
                         b: points[nodes[1]],
                         direction,
                         axial,
-                        a0,
-                        b0,
-                        length0: l.dot(&l).sqrt(),
+                        span0,
+                        length0: span0.dot(&span0).sqrt(),
                         c: e.coefficient,
                     })
                 })
@@ -418,12 +454,18 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                     unreachable!("validated: contact nodes are free nodes with mass")
                 };
                 let origin = bodies[c.body].x0;
+                let (face, normal, arm0) = (
+                    S::v(&c.face_point) - origin,
+                    S::v(&c.face_normal),
+                    x0(c.node) - origin,
+                );
                 Contact {
                     particle,
                     body: c.body,
-                    face: S::v(&c.face_point) - origin,
-                    normal: S::v(&c.face_normal),
-                    arm0: x0(c.node) - origin,
+                    face,
+                    normal,
+                    arm0,
+                    gap0: normal.dot(&(arm0 - face)),
                 }
             })
             .collect();
@@ -463,8 +505,8 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// The configuration at t = 0.
     pub fn initial_config(&self) -> Config<S> {
         Config {
-            x: self.particles.iter().map(|p| p.x0).collect(),
-            bx: self.bodies.iter().map(|b| b.x0).collect(),
+            u: vec![S::V::zero(); self.particles.len()],
+            bu: vec![S::V::zero(); self.bodies.len()],
             br: vec![S::identity(); self.bodies.len()],
             bth: vec![S::W::zero(); self.bodies.len()],
         }
@@ -490,17 +532,17 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         }
     }
 
-    /// Current position of a point.
+    /// Current displacement of a point from its position at t = 0.
     #[inline]
-    pub fn position(&self, cfg: &Config<S>, p: &Point<S>) -> S::V {
+    pub fn displacement(&self, cfg: &Config<S>, p: &Point<S>) -> S::V {
         match p {
-            Point::Ground(x) => *x,
-            Point::Particle(i) => cfg.x[*i],
+            Point::Ground(_) => S::V::zero(),
+            Point::Particle(i) => cfg.u[*i],
             Point::Body { body, rho } => {
                 if FINITE {
-                    cfg.bx[*body] + S::rotate(&cfg.br[*body], rho)
+                    cfg.bu[*body] + (S::rotate(&cfg.br[*body], rho) - *rho)
                 } else {
-                    cfg.bx[*body] + *rho + S::cross(&cfg.bth[*body], rho)
+                    cfg.bu[*body] + S::cross(&cfg.bth[*body], rho)
                 }
             }
         }
@@ -543,27 +585,39 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     #[inline]
     pub fn gap(&self, cfg: &Config<S>, k: usize) -> (f64, S::V) {
         let c = &self.contacts[k];
-        let x = cfg.x[c.particle];
+        let relative = cfg.u[c.particle] - cfg.bu[c.body];
         if FINITE {
             let r = &cfg.br[c.body];
             let n = S::rotate(r, &c.normal);
-            let p = cfg.bx[c.body] + S::rotate(r, &c.face);
-            (n.dot(&(x - p)), n)
+            (n.dot(&(self.face_to_node(cfg, k))), n)
         } else {
             let th = &cfg.bth[c.body];
-            let d = c.normal.dot(&(x - cfg.bx[c.body] - c.face)) - c.normal.dot(&S::cross(th, &c.arm0));
+            let d = c.gap0 + c.normal.dot(&relative) - c.normal.dot(&S::cross(th, &c.arm0));
             (d, c.normal)
         }
     }
 
+    /// From the contact pair's face point to its node (finite rotation).
+    #[inline]
+    fn face_to_node(&self, cfg: &Config<S>, k: usize) -> S::V {
+        let c = &self.contacts[k];
+        c.arm0 + (cfg.u[c.particle] - cfg.bu[c.body]) - S::rotate(&cfg.br[c.body], &c.face)
+    }
+
     /// Position-dependent forces: springs, contact, loads. Fills `out` (cleared first).
-    pub fn forces(&self, cfg: &Config<S>, mode: ContactMode, out: &mut Forces<S>, counters: &mut Counters) {
+    pub fn forces(
+        &self,
+        cfg: &Config<S>,
+        mode: ContactMode,
+        out: &mut Forces<S>,
+        counters: &mut Counters,
+    ) {
         out.clear();
         counters.force_evaluations += 1;
         let mut elastic = 0.0;
         for s in &self.grounded_springs {
             if let Some(d) = s.direction {
-                let u = d.dot(&(self.position(cfg, &s.point) - s.x0));
+                let u = d.dot(&self.displacement(cfg, &s.point));
                 elastic += 0.5 * s.c * u * u;
                 self.apply(cfg, &s.point, d * (-s.c * u), out);
             }
@@ -574,14 +628,13 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             }
         }
         for s in &self.springs {
-            let xa = self.position(cfg, &s.a);
-            let xb = self.position(cfg, &s.b);
+            let stretch = self.displacement(cfg, &s.b) - self.displacement(cfg, &s.a);
             let (e, dir) = if s.axial && FINITE {
-                let l = xb - xa;
+                let l = s.span0 + stretch;
                 let len = l.dot(&l).sqrt();
                 (len - s.length0, l * (1.0 / len))
             } else {
-                (s.direction.dot(&((xb - s.b0) - (xa - s.a0))), s.direction)
+                (s.direction.dot(&stretch), s.direction)
             };
             elastic += 0.5 * s.c * e * e;
             let f = dir * (s.c * e);
@@ -604,7 +657,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 out.contact[k] = f;
                 out.p[c.particle] += n * f;
                 let arm = if FINITE {
-                    cfg.x[c.particle] - cfg.bx[c.body]
+                    c.arm0 + (cfg.u[c.particle] - cfg.bu[c.body])
                 } else {
                     c.arm0
                 };
@@ -619,7 +672,13 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     }
 
     /// Add dashpot forces at velocities `vel` to `out`, and their dissipation power.
-    pub fn damping(&self, cfg: &Config<S>, vel: &Rates<S>, out: &mut Forces<S>, counters: &mut Counters) {
+    pub fn damping(
+        &self,
+        cfg: &Config<S>,
+        vel: &Rates<S>,
+        out: &mut Forces<S>,
+        counters: &mut Counters,
+    ) {
         counters.damping_evaluations += 1;
         let mut power = 0.0;
         for s in &self.grounded_dashpots {
@@ -636,7 +695,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         }
         for s in &self.dashpots {
             let dir = if s.axial && FINITE {
-                let l = self.position(cfg, &s.b) - self.position(cfg, &s.a);
+                let l = s.span0 + (self.displacement(cfg, &s.b) - self.displacement(cfg, &s.a));
                 l * (1.0 / l.dot(&l).sqrt())
             } else {
                 s.direction
@@ -654,7 +713,10 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     pub fn external_work(&self, cfg: &Config<S>, from: &Config<S>) -> f64 {
         self.loads
             .iter()
-            .map(|l| l.force.dot(&(self.position(cfg, &l.point) - self.position(from, &l.point))))
+            .map(|l| {
+                l.force
+                    .dot(&(self.displacement(cfg, &l.point) - self.displacement(from, &l.point)))
+            })
             .sum()
     }
 
@@ -707,7 +769,8 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 m -= S::gyroscopic(&w, &inertia.inertia);
             }
             counters.body_solves += 1;
-            let (a, alpha) = S::solve_body(&inertia, &held.body_held_t[b], &held.body_held_r[b], &f, &m);
+            let (a, alpha) =
+                S::solve_body(&inertia, &held.body_held_t[b], &held.body_held_r[b], &f, &m);
             out.b[b] = a;
             out.w[b] = alpha;
         }
@@ -736,12 +799,24 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     }
 
     /// Advance positions by `h · vel`, rotating only the bodies that can rotate.
-    pub fn advance(&self, cfg: &mut Config<S>, h: f64, vel: &Rates<S>, held: &Constraints<S>, counters: &mut Counters) {
-        for (x, v) in cfg.x.iter_mut().zip(&vel.p) {
-            *x += *v * h;
+    ///
+    /// Translations (and small rotations) are summed with Kahan compensation kept in `carry`:
+    /// the rounding of `x + h·v` then stays O(ε|x|) instead of growing as ε|x|√N, which matters
+    /// because the penalty multiplies position errors by k_p.
+    pub fn advance(
+        &self,
+        cfg: &mut Config<S>,
+        carry: &mut Rates<S>,
+        h: f64,
+        vel: &Rates<S>,
+        held: &Constraints<S>,
+        counters: &mut Counters,
+    ) {
+        for ((x, c), v) in cfg.u.iter_mut().zip(carry.p.iter_mut()).zip(&vel.p) {
+            compensated_add(x, c, *v * h);
         }
-        for (x, v) in cfg.bx.iter_mut().zip(&vel.b) {
-            *x += *v * h;
+        for ((x, c), v) in cfg.bu.iter_mut().zip(carry.b.iter_mut()).zip(&vel.b) {
+            compensated_add(x, c, *v * h);
         }
         for b in 0..self.bodies.len() {
             if !held.rotating[b] {
@@ -751,7 +826,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             if FINITE {
                 cfg.br[b] = S::advance(&cfg.br[b], &(vel.w[b] * h));
             } else {
-                cfg.bth[b] += vel.w[b] * h;
+                compensated_add(&mut cfg.bth[b], &mut carry.w[b], vel.w[b] * h);
             }
         }
     }
@@ -791,8 +866,12 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             let BoundaryCondition { node, dof, value } = *bc;
             let target = match (self.points[node], dof) {
                 (Point::Ground(_), _) => continue,
-                (Point::Particle(i), Dof::Translation(k)) => Target::Particle(i, self.particles[i].axes[k.min(S::DIM - 1)]),
-                (Point::Body { body, .. }, Dof::Translation(k)) => Target::Translation(body, self.bodies[body].axes[k.min(S::DIM - 1)]),
+                (Point::Particle(i), Dof::Translation(k)) => {
+                    Target::Particle(i, self.particles[i].axes[k.min(S::DIM - 1)])
+                }
+                (Point::Body { body, .. }, Dof::Translation(k)) => {
+                    Target::Translation(body, self.bodies[body].axes[k.min(S::DIM - 1)])
+                }
                 (Point::Body { body, .. }, Dof::Rotation(k)) => {
                     Target::Rotation(body, self.bodies[body].rot_axes[k + S::ROT - 3])
                 }
@@ -822,8 +901,8 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// Move a configuration along a generalised DOF by `delta`.
     pub fn perturb(&self, cfg: &mut Config<S>, target: &Target<S>, delta: f64) {
         match target {
-            Target::Particle(i, d) => cfg.x[*i] += *d * delta,
-            Target::Translation(b, d) => cfg.bx[*b] += *d * delta,
+            Target::Particle(i, d) => cfg.u[*i] += *d * delta,
+            Target::Translation(b, d) => cfg.bu[*b] += *d * delta,
             Target::Rotation(b, g) => {
                 if FINITE {
                     cfg.br[*b] = S::advance(&cfg.br[*b], &(*g * delta));
@@ -915,12 +994,74 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     pub fn set_penetration(&self, cfg: &mut Config<S>, k: usize, depth: f64) {
         let (d, n) = self.gap(cfg, k);
         let i = self.contacts[k].particle;
-        cfg.x[i] -= n * (d + depth);
+        cfg.u[i] -= n * (d + depth);
+    }
+
+    /// State reached from `(cfg, vel)` after `s` seconds with acceleration `acc` and jerk
+    /// `jerk` (third-order Taylor expansion; rotations through the exponential of the
+    /// expanded rotation vector).
+    pub fn extrapolate(
+        &self,
+        cfg: &Config<S>,
+        vel: &Rates<S>,
+        acc: &Rates<S>,
+        jerk: &Rates<S>,
+        s: f64,
+    ) -> (Config<S>, Rates<S>) {
+        let (s2, s3) = (0.5 * s * s, s * s * s / 6.0);
+        let turn = |b: usize| vel.w[b] * s + acc.w[b] * s2 + jerk.w[b] * s3;
+        let cfg = Config {
+            u: (0..cfg.u.len())
+                .map(|i| cfg.u[i] + vel.p[i] * s + acc.p[i] * s2 + jerk.p[i] * s3)
+                .collect(),
+            bu: (0..cfg.bu.len())
+                .map(|b| cfg.bu[b] + vel.b[b] * s + acc.b[b] * s2 + jerk.b[b] * s3)
+                .collect(),
+            br: (0..cfg.br.len())
+                .map(|b| {
+                    if FINITE {
+                        S::advance(&cfg.br[b], &turn(b))
+                    } else {
+                        cfg.br[b]
+                    }
+                })
+                .collect(),
+            bth: (0..cfg.bth.len()).map(|b| cfg.bth[b] + turn(b)).collect(),
+        };
+        (cfg, vel.plus(s, acc).plus(s2, jerk))
+    }
+
+    /// Time derivative of a contact pair's gap.
+    pub fn gap_rate(&self, cfg: &Config<S>, vel: &Rates<S>, k: usize) -> f64 {
+        let c = &self.contacts[k];
+        let (i, b) = (c.particle, c.body);
+        if FINITE {
+            let r = &cfg.br[b];
+            let n = S::rotate(r, &c.normal);
+            let f = S::rotate(r, &c.face);
+            let p_dot = vel.b[b] + S::cross(&vel.w[b], &f);
+            S::cross(&vel.w[b], &n).dot(&self.face_to_node(cfg, k)) + n.dot(&(vel.p[i] - p_dot))
+        } else {
+            c.normal.dot(&(vel.p[i] - vel.b[b])) - c.normal.dot(&S::cross(&vel.w[b], &c.arm0))
+        }
+    }
+
+    /// Change the contact node's velocity along the face normal so the gap rate becomes `rate`.
+    pub fn set_gap_rate(&self, cfg: &Config<S>, vel: &mut Rates<S>, k: usize, rate: f64) {
+        let current = self.gap_rate(cfg, vel, k);
+        let (_, n) = self.gap(cfg, k);
+        vel.p[self.contacts[k].particle] += n * (rate - current);
     }
 
     /// Second time derivative of a contact pair's gap, exact for the given velocities and
     /// accelerations (finite: the face point and normal rotate with the body).
-    pub fn gap_acceleration(&self, cfg: &Config<S>, vel: &Rates<S>, acc: &Rates<S>, k: usize) -> f64 {
+    pub fn gap_acceleration(
+        &self,
+        cfg: &Config<S>,
+        vel: &Rates<S>,
+        acc: &Rates<S>,
+        k: usize,
+    ) -> f64 {
         let c = &self.contacts[k];
         let (i, b) = (c.particle, c.body);
         if FINITE {
@@ -930,10 +1071,11 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             let f = S::rotate(r, &c.face);
             let n_dot = S::cross(&w, &n);
             let n_ddot = S::cross(&alpha, &n) + S::cross(&w, &n_dot);
-            let p = cfg.bx[b] + f;
             let p_dot = vel.b[b] + S::cross(&w, &f);
             let p_ddot = acc.b[b] + S::cross(&alpha, &f) + S::cross(&w, &S::cross(&w, &f));
-            n_ddot.dot(&(cfg.x[i] - p)) + n_dot.dot(&(vel.p[i] - p_dot)) * 2.0 + n.dot(&(acc.p[i] - p_ddot))
+            n_ddot.dot(&self.face_to_node(cfg, k))
+                + n_dot.dot(&(vel.p[i] - p_dot)) * 2.0
+                + n.dot(&(acc.p[i] - p_ddot))
         } else {
             c.normal.dot(&(acc.p[i] - acc.b[b])) - c.normal.dot(&S::cross(&acc.w[b], &c.arm0))
         }

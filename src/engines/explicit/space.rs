@@ -324,8 +324,8 @@ impl Space for Spatial {
         t.fixed_view_mut::<3, 3>(0, 0).copy_from(&tb);
         t.fixed_view_mut::<3, 3>(3, 3).copy_from(&rb);
         let mut a = t.transpose() * full * t;
-        let mut rhs = t.transpose()
-            * Vector6::new(force.x, force.y, force.z, moment.x, moment.y, moment.z);
+        let mut rhs =
+            t.transpose() * Vector6::new(force.x, force.y, force.z, moment.x, moment.y, moment.z);
         let held: Vec<usize> = (0..held_translations.len())
             .chain((0..held_rotations.len()).map(|k| 3 + k))
             .collect();

@@ -1,0 +1,89 @@
+//! The `crosscheck` binary: listing cases and refusing bad input before running anything.
+
+use std::process::Command;
+
+const CASE_IDS: [&str; 13] = [
+    "rigid2d_pin_lumped",
+    "rigid2d_pin_surface",
+    "rigid2d_slide_lumped",
+    "rigid2d_slide_surface",
+    "rigid3d_pin_lumped",
+    "rigid3d_pin_surface",
+    "rigid3d_slide_lumped",
+    "rigid3d_slide_surface",
+    "springs_grounded_a",
+    "springs_grounded_b",
+    "springs_grounded_c",
+    "springs_n2n_b",
+    "springs_n2n_c",
+];
+
+fn crosscheck(args: &[&str], dir: &std::path::Path) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_crosscheck"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run crosscheck")
+}
+
+#[test]
+fn list_prints_one_line_per_case() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = crosscheck(&["list"], dir.path());
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "status {:?}\n{stderr}", out.status);
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert_eq!(lines.len(), 13, "{stdout}");
+    for id in CASE_IDS {
+        let hits = lines
+            .iter()
+            .filter(|l| l.split_whitespace().next() == Some(id))
+            .count();
+        assert_eq!(
+            hits, 1,
+            "case `{id}` should head exactly one line:\n{stdout}"
+        );
+    }
+    for l in &lines {
+        let dim = l.split_whitespace().nth(2);
+        assert!(matches!(dim, Some("2D" | "3D")), "{l}");
+    }
+}
+
+#[test]
+fn run_refuses_an_unknown_case_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = crosscheck(&["run", "no_such_case", "--out", "somewhere"], dir.path());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("no case `no_such_case`"), "{stderr}");
+    assert!(!dir.path().join("somewhere").exists());
+}
+
+#[test]
+fn run_refuses_an_invalid_case_file_naming_file_line_and_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let src =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/springs_grounded_a.toml");
+    let text = std::fs::read_to_string(&src).expect("the shipped case");
+    let bad = dir.path().join("springs_grounded_a.toml");
+    std::fs::write(&bad, text.replacen("dimension = 2", "dimension = 4", 1)).unwrap();
+    let out = crosscheck(&["run", bad.to_str().unwrap(), "--out", "o"], dir.path());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("springs_grounded_a.toml:"), "{stderr}");
+    assert!(stderr.contains("dimension"), "{stderr}");
+    assert!(!dir.path().join("o").exists());
+}
+
+#[test]
+fn run_refuses_an_unknown_engine_listing_valid_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = crosscheck(&["run", "--engines", "explicit,warp"], dir.path());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("unknown engine `warp`"), "{stderr}");
+    assert!(stderr.contains("explicit_small"), "{stderr}");
+    assert!(!dir.path().join("report").exists());
+}

@@ -5,6 +5,7 @@
 //! [`engines`] turn a scene into time histories, and [`report`] writes them out.
 
 pub mod case;
+pub mod comparison;
 pub mod engines;
 pub mod report;
 pub mod run;

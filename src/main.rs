@@ -194,6 +194,22 @@ fn run_command(args: RunArgs) -> ExitCode {
     };
     let outcome = run::execute(&plan, !args.quiet);
     print!("{}", outcome.table());
+    match crosscheck::report::write(&plan, &outcome) {
+        Ok(summary) => {
+            let checks = summary.tolerance_checks();
+            let met = checks.iter().filter(|c| c.4).count();
+            println!(
+                "report: {} and {} ({met} of {} tolerances met)",
+                crosscheck::report::report_path(&plan.out).display(),
+                crosscheck::report::summary_path(&plan.out).display(),
+                checks.len()
+            );
+        }
+        Err(e) => {
+            eprintln!("error: cannot write the report: {e}");
+            return ExitCode::FAILURE;
+        }
+    }
     let written = outcome.jobs.len() - outcome.failures();
     println!(
         "{} job(s): {} written under {}, {} failed",

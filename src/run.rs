@@ -52,6 +52,8 @@ pub struct JobSuccess {
     pub info: RunInfo,
     /// The CSV written.
     pub csv: PathBuf,
+    /// The history itself (for the comparison and the report).
+    pub history: History,
 }
 
 /// The result of one (case, engine) job.
@@ -198,6 +200,7 @@ fn run_job(scene: &Scene, engine: &dyn Engine, settings: &RunSettings, out: &Pat
             Ok(JobSuccess {
                 info: output.info,
                 csv,
+                history: output.history,
             })
         })
         .map_err(|e| {

@@ -115,6 +115,31 @@ pub fn write_history_to(path: &Path, history: &History) -> Result<(), DataError>
     result
 }
 
+/// Write `contents` to `path` atomically (temporary sibling, synced, renamed into place),
+/// creating the parent directory. On error any previous `path` is left untouched.
+pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<(), DataError> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let io = |p: &Path| {
+        let p = p.to_path_buf();
+        move |source| DataError::Io { path: p, source }
+    };
+    fs::create_dir_all(&dir).map_err(io(&dir))?;
+    let tmp = temporary_sibling(path, &dir);
+    let result = (|| {
+        let mut f = File::create(&tmp).map_err(io(&tmp))?;
+        std::io::Write::write_all(&mut f, contents).map_err(io(&tmp))?;
+        f.sync_all().map_err(io(&tmp))?;
+        fs::rename(&tmp, path).map_err(io(path))
+    })();
+    if result.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    result
+}
+
 /// A fresh name for a temporary file next to `path` (unique per process and call).
 fn temporary_sibling(path: &Path, dir: &Path) -> PathBuf {
     static COUNTER: AtomicU64 = AtomicU64::new(0);

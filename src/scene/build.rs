@@ -819,6 +819,13 @@ impl Scene {
             }
         };
 
+        let mut tolerances = std::collections::BTreeMap::new();
+        for (engine, value) in &case.tolerances {
+            let field = format!("tolerances.{engine}");
+            let v = number(&field, value)?;
+            tolerances.insert(engine.clone(), b.positive(&field, v, "a tolerance")?);
+        }
+
         Ok(Scene {
             id: case.id.clone(),
             title: case.title.clone(),
@@ -840,7 +847,7 @@ impl Scene {
                 penalty,
                 contact_start,
             },
-            tolerances: case.tolerances.clone(),
+            tolerances,
         })
     }
 }

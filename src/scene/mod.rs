@@ -413,8 +413,9 @@ pub struct Scene {
     pub columns: Vec<Column>,
     /// Solver settings.
     pub settings: SceneSettings,
-    /// Raw `[tolerances]` table, read by the comparison.
-    pub tolerances: toml::Table,
+    /// Tolerance per engine name: the largest error against `analytic` allowed, as a fraction
+    /// of each column's peak (`[tolerances]` in the case file).
+    pub tolerances: std::collections::BTreeMap<String, f64>,
 }
 
 impl Scene {

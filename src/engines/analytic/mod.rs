@@ -10,6 +10,7 @@
 //!   dashpots, masses, small-rotation bodies); the seed cases keep their hand-derived forms so
 //!   the two cross-check each other.
 
+pub mod linear;
 pub mod rigid;
 pub mod springs;
 

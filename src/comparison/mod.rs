@@ -1,0 +1,135 @@
+//! Comparison: every engine's history measured against the closed form.
+//!
+//! One module owns the metrics, so the report and the tests compute them the same way. Per
+//! contract column, over the rows where the closed form is valid:
+//! - `max`: the largest absolute error divided by the peak of the analytic column;
+//! - `rms`: the root-mean-square error divided by the same peak;
+//! - `end`: the error at the last valid row divided by the same peak.
+//!
+//! A column whose analytic peak is zero (a held DOF) is compared in absolute terms. The energy
+//! balance error of an engine that writes `e_balance` is its largest magnitude divided by the
+//! largest kinetic + elastic energy of the run.
+
+use crate::engines::History;
+use crate::engines::analytic::VALID_COLUMN;
+use crate::scene::Scene;
+use serde::{Deserialize, Serialize};
+
+/// The engine every other is measured against.
+pub const REFERENCE_ENGINE: &str = "analytic";
+
+/// Errors of one column.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ColumnError {
+    /// Column name.
+    pub column: String,
+    /// Peak |value| of the analytic column.
+    pub peak: f64,
+    /// Max |error| / peak (absolute when the peak is 0).
+    pub max: f64,
+    /// RMS error / peak (absolute when the peak is 0).
+    pub rms: f64,
+    /// Error at the last valid row / peak (absolute when the peak is 0).
+    pub end: f64,
+    /// Whether the errors are relative to the peak (false: absolute, the peak being 0).
+    pub relative: bool,
+}
+
+/// One engine's history against the analytic one, for one case.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Comparison {
+    /// Per contract column.
+    pub columns: Vec<ColumnError>,
+    /// The largest `max` over the columns (the figure tolerances apply to).
+    pub worst_max: f64,
+    /// Rows compared (where the analytic solution is valid).
+    pub rows: usize,
+    /// Energy balance error, for engines that keep energies.
+    pub energy_balance: Option<f64>,
+}
+
+/// What the closed form says about its own validity (rigid-contact cases).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ContactValidity {
+    /// Contact force at t = 0.
+    pub initial_force: f64,
+    /// Smallest compressive contact force over the valid rows divided by the largest.
+    pub margin: f64,
+    /// Time the contact force first turns tensile (the end of validity), if it does.
+    pub valid_until: Option<f64>,
+}
+
+fn valid_rows(reference: &History) -> usize {
+    match reference.column(VALID_COLUMN) {
+        Some(v) => v.iter().position(|x| *x == 0.0).unwrap_or(v.len()),
+        None => reference.rows.len(),
+    }
+}
+
+/// Measure `candidate` against the analytic `reference` on the scene's contract columns.
+pub fn compare(scene: &Scene, reference: &History, candidate: &History) -> Comparison {
+    let n = valid_rows(reference).min(candidate.rows.len());
+    let columns: Vec<ColumnError> = scene
+        .family
+        .contract_columns()
+        .iter()
+        .filter_map(|name| {
+            let a = reference.column(name)?;
+            let b = candidate.column(name)?;
+            let (a, b) = (&a[..n], &b[..n]);
+            let peak = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            let scale = if peak > 0.0 { peak } else { 1.0 };
+            let errors: Vec<f64> = a.iter().zip(b).map(|(x, y)| (y - x).abs()).collect();
+            let max = errors.iter().fold(0.0f64, |m, e| m.max(*e));
+            let rms = (errors.iter().map(|e| e * e).sum::<f64>() / n.max(1) as f64).sqrt();
+            Some(ColumnError {
+                column: name.to_string(),
+                peak,
+                max: max / scale,
+                rms: rms / scale,
+                end: errors.last().copied().unwrap_or(0.0) / scale,
+                relative: peak > 0.0,
+            })
+        })
+        .collect();
+    let worst_max = columns.iter().fold(0.0f64, |m, c| m.max(c.max));
+    Comparison {
+        worst_max,
+        rows: n,
+        energy_balance: energy_balance(candidate),
+        columns,
+    }
+}
+
+/// Largest |e_balance| divided by the largest kinetic + elastic energy.
+pub fn energy_balance(h: &History) -> Option<f64> {
+    let balance = h.column("e_balance")?;
+    let kinetic = h.column("e_kinetic")?;
+    let elastic = h.column("e_elastic")?;
+    let scale = kinetic
+        .iter()
+        .zip(&elastic)
+        .fold(0.0f64, |m, (k, e)| m.max(k + e));
+    let worst = balance.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    Some(if scale > 0.0 { worst / scale } else { worst })
+}
+
+/// Contact validity of an analytic rigid-contact history (None without a contact column).
+pub fn contact_validity(reference: &History) -> Option<ContactValidity> {
+    let force = reference.column("contact_force")?;
+    let t = reference.column("t")?;
+    let n = valid_rows(reference);
+    let valid = &force[..n];
+    let max = valid.iter().fold(0.0f64, |m, x| m.max(*x));
+    let min = valid.iter().fold(f64::INFINITY, |m, x| m.min(*x));
+    Some(ContactValidity {
+        initial_force: force[0],
+        margin: if max > 0.0 { min / max } else { 0.0 },
+        valid_until: (n < force.len()).then(|| t[n]),
+    })
+}
+
+/// The tolerance a case declares for an engine: `[tolerances] <engine> = <max error / peak>`.
+pub fn tolerance(scene: &Scene, engine: &str) -> Option<f64> {
+    scene.tolerances.get(engine).copied()
+}

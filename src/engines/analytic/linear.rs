@@ -129,7 +129,8 @@ impl<'a> Layout<'a> {
     fn index(&self, node: NodeId, dof: Dof) -> Option<usize> {
         let s = self.start[node]?;
         Some(match dof {
-            Dof::Translation(i) => s + i,
+            Dof::Translation(i) if i < self.translations => s + i,
+            Dof::Translation(_) => return None,
             Dof::Rotation(a) => {
                 // Only a body's reference node has rotations.
                 if !matches!(self.scene.nodes[node].attachment, Attachment::Reference(_)) {
@@ -220,6 +221,9 @@ impl<'a> Layout<'a> {
         format!("{dof} of node `{}`", self.scene.nodes[node].name)
     }
 }
+
+/// A probe as a linear map: (J or R, the direction it is read along, whether it reads q̇).
+type ProbeMap = (DMatrix<f64>, Vector3<f64>, bool);
 
 /// Free, massless and held (or prescribed to 0) in every translation in every step.
 fn is_ground(scene: &Scene, node: NodeId) -> bool {
@@ -463,7 +467,7 @@ pub fn solve(scene: &Scene) -> Result<History, EngineError> {
     }
 
     // Probes.
-    let maps: Vec<Option<(DMatrix<f64>, Vector3<f64>, bool)>> = scene
+    let maps: Vec<Option<ProbeMap>> = scene
         .columns
         .iter()
         .map(|c| match &c.probe {

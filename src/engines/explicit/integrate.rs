@@ -292,8 +292,16 @@ pub fn integrate<S: Space, const FINITE: bool>(
             }
             model.forces(&cfg, ContactMode::Unilateral, &mut forces, &mut counters);
             let mut power = 0.0;
-            if !started {
-                // t = 0: v(0) is known; define v(−½) so the common update gives v(½) = v(0) + (h/2)·a(0).
+            // At t = 0 and at every step boundary v(n) is known (at a boundary: the previous
+            // step completed, v(n−½) + (h/2)·a(n−1), then the new constraints applied), so the
+            // half-step sequence restarts: v(n+½) = v(n) + (h/2)·a(n). Kicking a released DOF
+            // by a full h·a(n) instead would make the scheme first order.
+            let restart = !started || n == first;
+            if restart {
+                if started {
+                    vel = v_half.plus(0.5 * h, &acc_prev);
+                    model.enforce(&mut vel, &held);
+                }
                 total.copy_from(&forces);
                 if model.has_dashpots() {
                     model.damping(&cfg, &vel, &mut total, &mut counters);
@@ -303,11 +311,8 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 v_n = vel.clone();
                 v_half = vel.plus(-0.5 * h, &acc);
                 started = true;
-            } else if n == first {
-                // A step boundary: the new constraints act on the half-step velocity.
-                model.enforce(&mut v_half, &held);
             }
-            if n > 0 {
+            if !restart {
                 if !velocity_pass {
                     model.accelerations(&cfg, &forces, &v_half, &held, &mut acc, &mut counters);
                 } else {
@@ -356,9 +361,9 @@ pub fn integrate<S: Space, const FINITE: bool>(
                         }
                     }
                 }
-                if n > first || first > 0 {
-                    dissipated += 0.5 * h * (last_power + power);
-                }
+            }
+            if n > 0 {
+                dissipated += 0.5 * h * (last_power + power);
             }
             let v_next = v_half.plus(h, &acc);
             if n % stride == 0 {

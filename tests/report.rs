@@ -1,0 +1,105 @@
+//! A run writes summary.json and REPORT.md whose numbers agree with each other and with the
+//! CSVs they were computed from.
+use crosscheck::case;
+use crosscheck::comparison;
+use crosscheck::report::data::read_history;
+use crosscheck::report::markdown::sci;
+use crosscheck::report::summary::Summary;
+use std::process::Command;
+
+#[test]
+fn summary_and_report_agree() {
+    let out = tempfile::tempdir().unwrap();
+    let status = Command::new(env!("CARGO_BIN_EXE_crosscheck"))
+        .args(["run", "--quiet", "--out"])
+        .arg(out.path())
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let summary: Summary =
+        serde_json::from_str(&std::fs::read_to_string(out.path().join("summary.json")).unwrap())
+            .unwrap();
+    let report = std::fs::read_to_string(out.path().join("REPORT.md")).unwrap();
+    assert_eq!(summary.cases.len(), 13);
+
+    let mut checked = 0;
+    for c in &summary.cases {
+        let scene = case::load(&case::cases_dir().join(format!("{}.toml", c.id))).unwrap();
+        let reference =
+            read_history(&out.path().join("data").join(&c.id).join("analytic.csv")).unwrap();
+        for r in &c.runs {
+            let Some(a) = &r.against_analytic else {
+                continue;
+            };
+            // The metrics recomputed from the CSVs on disk are the summary's, bit for bit
+            // (the CSVs store shortest round-trip decimals).
+            let h = read_history(
+                &out.path()
+                    .join("data")
+                    .join(&c.id)
+                    .join(format!("{}.csv", r.engine)),
+            )
+            .unwrap();
+            assert_eq!(
+                &comparison::compare(&scene, &reference, &h),
+                a,
+                "{} {}",
+                c.id,
+                r.engine
+            );
+            // REPORT.md's accuracy row shows the same worst error, increment and steps.
+            let row = report
+                .lines()
+                .find(|l| {
+                    l.starts_with(&format!(
+                        "| {} | {} | {} (",
+                        c.id,
+                        r.engine,
+                        sci(a.worst_max)
+                    ))
+                })
+                .unwrap_or_else(|| {
+                    panic!(
+                        "no report row for {} {} with {}",
+                        c.id,
+                        r.engine,
+                        sci(a.worst_max)
+                    )
+                });
+            assert!(row.contains(&sci(r.increment.unwrap())), "{row}");
+            assert!(row.contains(&format!("| {} |", r.steps.unwrap())), "{row}");
+            // ...and its tolerance line the same verdict.
+            let tol = r.tolerance.unwrap();
+            let verdict = if r.meets_tolerance.unwrap() {
+                "meets"
+            } else {
+                "**FAILS**"
+            };
+            let line = format!(
+                "| {} | {} | {} | {} | {verdict} |",
+                c.id,
+                r.engine,
+                sci(tol),
+                sci(a.worst_max)
+            );
+            assert!(report.contains(&line), "missing: {line}");
+            checked += 1;
+        }
+        if let Some(m) = &c.contact {
+            assert!(
+                report.contains(&format!("starts at {}", sci(m.initial_force))),
+                "{}",
+                c.id
+            );
+        }
+    }
+    assert_eq!(
+        checked, 26,
+        "every explicit run of every case is in the report"
+    );
+    assert!(report.contains(&format!(
+        "{} of {} declared tolerances met",
+        summary.tolerance_checks().iter().filter(|c| c.4).count(),
+        summary.tolerance_checks().len()
+    )));
+}

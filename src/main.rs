@@ -28,6 +28,12 @@ enum Command {
     List,
     /// Run cases through engines and write `OUT/data/<case>/<engine>.csv`.
     Run(RunArgs),
+    /// Validate case files without running them (the same validation every `run` does first).
+    Check {
+        /// Case files (default: every case in cases/).
+        #[arg(value_name = "FILE")]
+        files: Vec<PathBuf>,
+    },
 }
 
 #[derive(Debug, Args, Default)]
@@ -116,12 +122,46 @@ fn main() -> ExitCode {
         }),
         Some(Command::List) => list(),
         Some(Command::Run(args)) => run_command(args),
+        Some(Command::Check { files }) => check(files),
+    }
+}
+
+fn check(files: Vec<PathBuf>) -> ExitCode {
+    let files = if files.is_empty() {
+        match case::discover(&case::cases_dir()) {
+            Ok(f) => f,
+            Err(e) => {
+                eprintln!("error: cannot list cases: {e}");
+                return ExitCode::from(2);
+            }
+        }
+    } else {
+        files
+    };
+    let mut invalid = 0;
+    for f in &files {
+        match case::load_checked(f, &run::check_increment) {
+            Ok(scene) => println!("ok: {} ({})", f.display(), scene.id),
+            Err(e) => {
+                invalid += 1;
+                eprint!("{}", e.render());
+            }
+        }
+    }
+    if invalid == 0 {
+        ExitCode::SUCCESS
+    } else {
+        eprintln!("{invalid} of {} case file(s) invalid", files.len());
+        ExitCode::from(2)
     }
 }
 
 fn report_load_errors(errors: &[LoadError]) {
     for e in errors {
-        eprintln!("error: {e}");
+        match e {
+            LoadError::Case(c) => eprint!("{}", c.render()),
+            other => eprintln!("error: {other}"),
+        }
     }
 }
 

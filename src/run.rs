@@ -16,9 +16,10 @@
 //! ```
 
 use crate::case::{self, CaseError};
+use crate::engines::explicit::ExplicitEngine;
 use crate::engines::{self, Engine, History, RunInfo, RunSettings};
 use crate::report::data;
-use crate::scene::Scene;
+use crate::scene::{IncrementRule, Scene, SceneError};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use std::io::IsTerminal;
@@ -274,6 +275,29 @@ pub fn check_contract(scene: &Scene, history: &History) -> Result<(), String> {
     Ok(())
 }
 
+/// A case's given time increment must not exceed the stable increment of either explicit
+/// kinematics (finite rotation adds geometric stiffness, so the two can differ).
+pub fn check_increment(scene: &Scene) -> Result<(), SceneError> {
+    let IncrementRule::Given(h) = scene.settings.increment else {
+        return Ok(());
+    };
+    let settings = RunSettings::default();
+    let stable = [ExplicitEngine::finite(), ExplicitEngine::small()]
+        .iter()
+        .filter_map(|e| e.stable_increment(scene, &settings))
+        .min_by(|a, b| a.increment.total_cmp(&b.increment));
+    match stable {
+        Some(s) if h > s.increment * (1.0 + 1e-12) => Err(SceneError {
+            field: "time.increment".into(),
+            message: format!(
+                "{h:e} is above this scene's stable increment {:e} (highest frequency {:.4e} rad/s, penalty included); use at most that, or give `safety` instead",
+                s.increment, s.omega_max
+            ),
+        }),
+        _ => Ok(()),
+    }
+}
+
 /// An engine name that matches no engine.
 #[derive(Debug, Clone, thiserror::Error)]
 #[error("unknown engine `{name}`; valid engines: {}", .valid.join(", "))]
@@ -376,7 +400,7 @@ pub fn load_cases(args: &[String], dir: &Path) -> Result<Vec<Scene>, Vec<LoadErr
                 continue;
             }
         };
-        let scene = match case::load(&path) {
+        let scene = match case::load_checked(&path, &check_increment) {
             Ok(s) => s,
             Err(e) => {
                 errors.push(e.into());

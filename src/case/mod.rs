@@ -1,42 +1,81 @@
 //! Case files: finding them, reading them, and turning them into validated scenes.
 
+pub mod diagnostic;
 pub mod file;
 
 use crate::scene::{Scene, SceneError};
 use std::path::{Path, PathBuf};
 
 /// A case file that could not be read or is not a valid scene.
+///
+/// `Display` gives one line, `file:line:column: key: message`; [`CaseError::render`] adds the
+/// offending text of the file, underlined.
 #[derive(Debug, thiserror::Error)]
 pub enum CaseError {
     /// The file could not be read.
-    #[error("{path}: cannot read: {source}")]
+    #[error("{}: cannot read: {source}", path.display())]
     Io {
         /// File.
         path: PathBuf,
         /// Cause.
         source: std::io::Error,
     },
-    /// TOML syntax or schema error (toml reports line, column and key).
-    #[error("{path}: {message}")]
+    /// TOML syntax or schema error (unknown key, wrong type, missing field).
+    #[error("{}:{line}:{column}: {}: {message}", path.display(), key.as_deref().unwrap_or("syntax"))]
     Syntax {
         /// File.
         path: PathBuf,
-        /// The parser's message, with line and column.
+        /// 1-based line.
+        line: usize,
+        /// 1-based column.
+        column: usize,
+        /// Key path where the parser stopped, when it is inside a key.
+        key: Option<String>,
+        /// The parser's message.
         message: String,
+        /// The message with the offending text.
+        rendered: String,
     },
     /// The file parses but is not a valid scene.
-    #[error("{path}:{line}: {source}")]
+    #[error("{}:{line}:{column}: {key}: {message}", path.display())]
     Invalid {
         /// File.
         path: PathBuf,
-        /// 1-based line of the offending field (best effort: the line of its table or key).
+        /// 1-based line of the offending field.
         line: usize,
-        /// Field and message.
-        source: SceneError,
+        /// 1-based column of the offending field.
+        column: usize,
+        /// Key path of the offending field, e.g. `springs[2].stiffness`.
+        key: String,
+        /// What is wrong and what would be valid.
+        message: String,
+        /// The message with the offending text.
+        rendered: String,
     },
     /// A case id or path that matches no file.
     #[error("no case `{0}`: give an id from cases/ or a path to a .toml file")]
     NotFound(String),
+}
+
+impl CaseError {
+    /// The error with the offending text of the file shown and underlined.
+    pub fn render(&self) -> String {
+        match self {
+            CaseError::Syntax { rendered, .. } | CaseError::Invalid { rendered, .. } => {
+                format!("error: {self}\n{rendered}")
+            }
+            _ => format!("error: {self}\n"),
+        }
+    }
+
+    /// The key path the error is about, if any.
+    pub fn key(&self) -> Option<&str> {
+        match self {
+            CaseError::Syntax { key, .. } => key.as_deref(),
+            CaseError::Invalid { key, .. } => Some(key),
+            _ => None,
+        }
+    }
 }
 
 /// The directory holding the shipped cases.
@@ -69,69 +108,62 @@ pub fn resolve(arg: &str, dir: &Path) -> Result<PathBuf, CaseError> {
 
 /// Read and validate a case file.
 pub fn load(path: &Path) -> Result<Scene, CaseError> {
+    load_checked(path, &|_| Ok(()))
+}
+
+/// Read and validate a case file, then apply a further check (for example one that needs an
+/// engine, such as the stable increment); its error is located in the file like the others.
+pub fn load_checked(
+    path: &Path,
+    check: &dyn Fn(&Scene) -> Result<(), SceneError>,
+) -> Result<Scene, CaseError> {
     let text = std::fs::read_to_string(path).map_err(|source| CaseError::Io {
         path: path.to_path_buf(),
         source,
     })?;
-    parse(&text, path)
+    let scene = parse(&text, path)?;
+    check(&scene).map_err(|e| invalid(&text, path, e))?;
+    Ok(scene)
 }
 
 /// Validate case text (as if read from `path`).
 pub fn parse(text: &str, path: &Path) -> Result<Scene, CaseError> {
-    let case: file::CaseFile = toml::from_str(text).map_err(|e| CaseError::Syntax {
-        path: path.to_path_buf(),
-        message: e.to_string().trim_end().to_string(),
+    let name = path.display().to_string();
+    let case: file::CaseFile = toml::from_str(text).map_err(|e| {
+        let span = e.span().unwrap_or(0..0);
+        let (line, column) = diagnostic::line_column(text, span.start);
+        let key = diagnostic::key_at(text, span.start);
+        let message = e.message().trim_end().to_string();
+        CaseError::Syntax {
+            rendered: diagnostic::render(&name, text, span, &message, "here", None),
+            path: path.to_path_buf(),
+            line,
+            column,
+            key,
+            message,
+        }
     })?;
     let stem = path.file_stem().and_then(|s| s.to_str());
-    Scene::from_case(&case, stem).map_err(|source| CaseError::Invalid {
-        path: path.to_path_buf(),
-        line: line_of(text, &source.field),
-        source,
-    })
+    Scene::from_case(&case, stem).map_err(|e| invalid(text, path, e))
 }
 
-/// Best-effort line of a key path such as `springs[2].stiffness`: the line of the
-/// (n+1)-th `[[springs]]` header, then of the key within that table.
-fn line_of(text: &str, field: &str) -> usize {
-    let lines: Vec<&str> = text.lines().collect();
-    let mut start = 0usize;
-    let mut end = lines.len();
-    let mut key = field;
-    // First path component, possibly indexed.
-    let head = field.split('.').next().unwrap_or(field);
-    if let Some((table, rest)) = head.split_once('[') {
-        let idx: usize = rest.trim_end_matches(']').parse().unwrap_or(0);
-        let header = format!("[[{table}]]");
-        let mut seen = 0;
-        for (i, l) in lines.iter().enumerate() {
-            if l.trim() == header {
-                if seen == idx {
-                    start = i;
-                    end = lines[i + 1..]
-                        .iter()
-                        .position(|l| l.trim_start().starts_with('['))
-                        .map_or(lines.len(), |p| i + 1 + p);
-                    break;
-                }
-                seen += 1;
-            }
-        }
-        key = field.split('.').nth(1).unwrap_or("");
-    } else if let Some((table, k)) = field.split_once('.') {
-        let header = format!("[{table}]");
-        if let Some(i) = lines.iter().position(|l| l.trim() == header) {
-            start = i;
-        }
-        key = k;
+/// A scene error located in the text of its case file.
+pub fn invalid(text: &str, path: &Path, e: SceneError) -> CaseError {
+    let span = diagnostic::span_of(text, &e.field).unwrap_or(0..0);
+    let (line, column) = diagnostic::line_column(text, span.start);
+    CaseError::Invalid {
+        rendered: diagnostic::render(
+            &path.display().to_string(),
+            text,
+            span,
+            &e.message,
+            &e.field,
+            None,
+        ),
+        path: path.to_path_buf(),
+        line,
+        column,
+        key: e.field,
+        message: e.message,
     }
-    let key = key.split('[').next().unwrap_or(key);
-    if !key.is_empty() {
-        for (i, l) in lines.iter().enumerate().take(end).skip(start) {
-            let t = l.trim_start();
-            if t.starts_with(key) && t[key.len()..].trim_start().starts_with('=') {
-                return i + 1;
-            }
-        }
-    }
-    start + 1
 }

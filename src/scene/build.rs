@@ -675,6 +675,44 @@ impl Scene {
             }
         }
 
+        // A load must act on some free DOF in some dynamic step, or it does nothing.
+        for (li, load) in loads.iter().enumerate() {
+            let node = &nodes[load.node];
+            let (anchor, arm, translations_of) = match node.attachment {
+                Attachment::Free => (load.node, Vector3::zeros(), load.node),
+                Attachment::Reference(b) | Attachment::OnBody(b) => {
+                    let r = bodies[b].reference;
+                    (r, node.position - nodes[r].position, r)
+                }
+            };
+            let moment = arm.cross(&load.force);
+            let rotations = !matches!(node.attachment, Attachment::Free);
+            let works = steps.iter().any(|step| {
+                matches!(step.kind, StepKind::Dynamic { .. })
+                    && Dof::all(dim, rotations).into_iter().any(|dof| {
+                        let held = step
+                            .conditions
+                            .iter()
+                            .any(|c| c.node == anchor && c.dof == dof);
+                        let axis = nodes[translations_of].frame.column(dof.axis()).into_owned();
+                        let along = match dof {
+                            Dof::Translation(_) => load.force.dot(&axis),
+                            Dof::Rotation(_) => moment.dot(&axis),
+                        };
+                        !held && along.abs() > 0.0
+                    })
+            });
+            if !works {
+                return err(
+                    format!("loads[{li}].force"),
+                    format!(
+                        "acts on node `{}` only along held DOFs in every dynamic step, so it does nothing; free a DOF it acts on or remove it",
+                        node.name
+                    ),
+                );
+            }
+        }
+
         // Output.
         if case.output.rows < 200 {
             return err(

@@ -70,10 +70,10 @@ pub fn key_at(text: &str, offset: usize) -> Option<String> {
             } else {
                 format!("{prefix}.{}", k.get_ref())
             };
-            if k.span().contains(&offset) || v.span().contains(&offset) {
-                if best.as_ref().is_none_or(|b| path.len() > b.len()) {
-                    *best = Some(path.clone());
-                }
+            if (k.span().contains(&offset) || v.span().contains(&offset))
+                && best.as_ref().is_none_or(|b| path.len() > b.len())
+            {
+                *best = Some(path.clone());
             }
             match v.get_ref() {
                 DeValue::Table(inner) => walk(inner, &path, offset, best),

@@ -6,6 +6,7 @@
 use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand, ValueEnum};
 use crosscheck::case;
 use crosscheck::engines::RunSettings;
+use crosscheck::report::{self, staging};
 use crosscheck::run::{self, LoadError, Plan};
 use crosscheck::scene::{ContactStart, DampingTreatment, Dimension, IncrementRule, PenaltyRule};
 use std::path::PathBuf;
@@ -115,6 +116,7 @@ fn main() -> ExitCode {
         })
     });
     let cli = Cli::from_arg_matches(&command.get_matches()).unwrap_or_else(|e| e.exit());
+    staging::install_signal_cleanup();
     match cli.command {
         None => run_command(RunArgs {
             out: PathBuf::from("report"),
@@ -140,7 +142,7 @@ fn check(files: Vec<PathBuf>) -> ExitCode {
     };
     let mut invalid = 0;
     for f in &files {
-        match case::load_checked(f, &run::check_increment) {
+        match case::load_checked(f, &run::check_scene) {
             Ok(scene) => println!("ok: {} ({})", f.display(), scene.id),
             Err(e) => {
                 invalid += 1;
@@ -226,37 +228,43 @@ fn run_command(args: RunArgs) -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    let staging = match staging::Staging::begin(&args.out) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!(
+                "error: cannot prepare the report beside {}: {e}",
+                args.out.display()
+            );
+            return ExitCode::FAILURE;
+        }
+    };
     let plan = Plan {
         cases,
         engines,
         settings: args.settings(),
-        out: args.out,
+        out: staging.path().to_path_buf(),
     };
     let outcome = run::execute(&plan, !args.quiet);
     print!("{}", outcome.table());
-    match crosscheck::report::write(&plan, &outcome) {
-        Ok(summary) => {
-            let checks = summary.tolerance_checks();
-            let met = checks.iter().filter(|c| c.4).count();
-            println!(
-                "report: {} and {} ({met} of {} tolerances met)",
-                crosscheck::report::report_path(&plan.out).display(),
-                crosscheck::report::summary_path(&plan.out).display(),
-                checks.len()
-            );
-        }
+    let summary = match report::write(&plan, &outcome, staging.target()) {
+        Ok(s) => s,
         Err(e) => {
-            eprintln!("error: cannot write the report: {e}");
+            eprintln!("error: cannot write the report (the previous one is unchanged): {e}");
             return ExitCode::FAILURE;
         }
+    };
+    if let Err(e) = staging.commit() {
+        eprintln!("error: cannot put the report in place (the previous one is unchanged): {e}");
+        return ExitCode::FAILURE;
     }
-    let written = outcome.jobs.len() - outcome.failures();
+    let checks = summary.tolerance_checks();
     println!(
-        "{} job(s): {} written under {}, {} failed",
+        "{} job(s), {} failed; report: {} ({} of {} tolerances met)",
         outcome.jobs.len(),
-        written,
-        plan.out.join("data").display(),
-        outcome.failures()
+        outcome.failures(),
+        report::report_path(&args.out).display(),
+        checks.iter().filter(|c| c.4).count(),
+        checks.len()
     );
     if outcome.all_ok() {
         ExitCode::SUCCESS

@@ -275,6 +275,24 @@ pub fn check_contract(scene: &Scene, history: &History) -> Result<(), String> {
     Ok(())
 }
 
+/// Checks that need the engines: tolerance names must be engine names, and a given increment
+/// must not exceed the stable one.
+pub fn check_scene(scene: &Scene) -> Result<(), SceneError> {
+    let names = engine_names();
+    for engine in scene.tolerances.keys() {
+        if !names.contains(engine) {
+            return Err(SceneError {
+                field: format!("tolerances.{engine}"),
+                message: format!(
+                    "`{engine}` is not an engine; valid names: {}",
+                    names.join(", ")
+                ),
+            });
+        }
+    }
+    check_increment(scene)
+}
+
 /// A case's given time increment must not exceed the stable increment of either explicit
 /// kinematics (finite rotation adds geometric stiffness, so the two can differ).
 pub fn check_increment(scene: &Scene) -> Result<(), SceneError> {
@@ -400,7 +418,7 @@ pub fn load_cases(args: &[String], dir: &Path) -> Result<Vec<Scene>, Vec<LoadErr
                 continue;
             }
         };
-        let scene = match case::load_checked(&path, &check_increment) {
+        let scene = match case::load_checked(&path, &check_scene) {
             Ok(s) => s,
             Err(e) => {
                 errors.push(e.into());

@@ -132,8 +132,17 @@ pub fn parse(text: &str, path: &Path) -> Result<Scene, CaseError> {
     let case: file::CaseFile = toml::from_str(text).map_err(|e| {
         let span = e.span().unwrap_or(0..0);
         let (line, column) = diagnostic::line_column(text, span.start);
-        let key = diagnostic::key_at(text, span.start);
-        let message = e.message().trim_end().to_string();
+        let key = diagnostic::key_at(text, span.start).or_else(|| {
+            e.message()
+                .starts_with("missing field")
+                .then(|| "(top level)".to_string())
+        });
+        let message = e
+            .message()
+            .trim_end()
+            .replace("expected f64", "expected a number")
+            .replace("expected usize", "expected a whole number ≥ 0")
+            .replace("expected u8", "expected a whole number");
         CaseError::Syntax {
             rendered: diagnostic::render(&name, text, span, &message, "here", None),
             path: path.to_path_buf(),

@@ -1,5 +1,6 @@
 //! `REPORT.md`, rendered from a [`Summary`]: every number in it is one of the summary's.
 
+use super::Timings;
 use super::summary::{CaseSummary, EngineSummary, Summary};
 use std::fmt::Write;
 
@@ -20,7 +21,7 @@ fn worst(r: &EngineSummary) -> Option<(&str, f64, f64, f64)> {
 }
 
 /// Render the report.
-pub fn render(s: &Summary) -> String {
+pub fn render(s: &Summary, timings: &Timings) -> String {
     let mut o = String::new();
     let w = &mut o;
     let _ = writeln!(w, "# crosscheck report\n");
@@ -29,8 +30,8 @@ pub fn render(s: &Summary) -> String {
         "crosscheck runs classic explicit-dynamics verification problems whose exact answer is known \
          and asks of each engine: how close does it get, what does that accuracy cost in time, and \
          does it stay stable. Every number below was measured by the run that wrote this file \
-         (`cargo run --release`, {}) and is also in `summary.json`; the time histories are in \
-         `data/<case>/<engine>.csv`.\n",
+         (`cargo run --release`, {}) and is also in `summary.json` (wall times in `timings.json`); \
+         the time histories are in `data/<case>/<engine>.csv`.\n",
         s.generator
     );
     let _ = writeln!(
@@ -99,8 +100,9 @@ pub fn render(s: &Summary) -> String {
                 None => ("reference".into(), "–".into(), "–".into()),
             };
             let balance = opt(r.against_analytic.as_ref().and_then(|a| a.energy_balance));
-            let wall = r
-                .wall_seconds
+            let wall = timings
+                .get(&c.id)
+                .and_then(|t| t.get(&r.engine))
                 .map_or("–".into(), |x| format!("{:.1}", x * 1e3));
             let steps = match (r.steps, r.increment) {
                 (Some(n), Some(h)) if h > 0.0 => n.to_string(),

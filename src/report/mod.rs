@@ -1,31 +1,64 @@
 //! Writing results: the files other tools and people read.
 //!
 //! - [`data`]: the time histories, one CSV per case and engine (the spec's output contract);
-//! - [`summary`]: `summary.json`, every metric per case and engine;
-//! - [`markdown`]: `REPORT.md`, rendered from the same summary.
+//! - [`summary`]: `summary.json`, every metric per case and engine (deterministic: the same
+//!   inputs give the same bytes);
+//! - `timings.json`: wall-clock seconds per case and engine (the one thing that varies);
+//! - [`markdown`]: `REPORT.md`, rendered from the summary and the timings;
+//! - [`staging`]: how a report is assembled beside its target and swapped into place.
 
 pub mod data;
 pub mod markdown;
+pub mod staging;
 pub mod summary;
 
 use crate::run::{Outcome, Plan};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use summary::Summary;
 
-/// Write `summary.json` and `REPORT.md` for a run into `plan.out`; returns the summary.
-pub fn write(plan: &Plan, outcome: &Outcome) -> Result<Summary, data::DataError> {
-    let summary = Summary::build(plan, outcome);
+/// Wall-clock seconds per case and engine.
+pub type Timings = BTreeMap<String, BTreeMap<String, f64>>;
+
+/// Write `summary.json`, `timings.json` and `REPORT.md` for a run into `plan.out` (the staging
+/// directory), keeping what the `previous` report had for cases and engines this run did not
+/// include. Returns the summary.
+pub fn write(plan: &Plan, outcome: &Outcome, previous: &Path) -> Result<Summary, data::DataError> {
+    let mut summary = Summary::build(plan, outcome);
+    let mut timings: Timings = read_json(&timings_path(previous)).unwrap_or_default();
+    if let Some(old) = read_json::<Summary>(&summary_path(previous)) {
+        summary.merge_previous(old);
+    }
+    for job in &outcome.jobs {
+        if let Ok(s) = &job.result {
+            timings
+                .entry(job.case.clone())
+                .or_default()
+                .insert(job.engine.clone(), s.info.wall_seconds);
+        }
+    }
     data::write_atomic(&summary_path(&plan.out), summary.to_json().as_bytes())?;
+    let json = serde_json::to_string_pretty(&timings).expect("timings serialise") + "\n";
+    data::write_atomic(&timings_path(&plan.out), json.as_bytes())?;
     data::write_atomic(
         &report_path(&plan.out),
-        markdown::render(&summary).as_bytes(),
+        markdown::render(&summary, &timings).as_bytes(),
     )?;
     Ok(summary)
+}
+
+fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Option<T> {
+    serde_json::from_str(&std::fs::read_to_string(path).ok()?).ok()
 }
 
 /// `out/summary.json`.
 pub fn summary_path(out: &Path) -> PathBuf {
     out.join("summary.json")
+}
+
+/// `out/timings.json`.
+pub fn timings_path(out: &Path) -> PathBuf {
+    out.join("timings.json")
 }
 
 /// `out/REPORT.md`.

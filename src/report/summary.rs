@@ -3,6 +3,7 @@
 
 use crate::comparison::{self, Comparison, ContactValidity, REFERENCE_ENGINE};
 use crate::engines::History;
+use crate::report::data::{csv_path, read_history};
 use crate::run::{Outcome, Plan};
 use crate::scene::{Dimension, Scene};
 use serde::{Deserialize, Serialize};
@@ -56,8 +57,6 @@ pub struct EngineSummary {
     pub stable_increment: Option<f64>,
     /// Penalty stiffness used.
     pub penalty_stiffness: Option<f64>,
-    /// Wall-clock seconds of the engine run.
-    pub wall_seconds: Option<f64>,
     /// Work counters.
     pub counters: BTreeMap<String, u64>,
     /// Errors against the closed form.
@@ -70,20 +69,26 @@ pub struct EngineSummary {
 
 impl Summary {
     /// Build from a run's plan and outcome.
+    ///
+    /// Histories of engines this run did not include are read from the CSVs already in
+    /// `plan.out` (a run of some engines still compares against the analytic answer on disk).
     pub fn build(plan: &Plan, outcome: &Outcome) -> Summary {
-        let history = |case: &str, engine: &str| -> Option<&History> {
-            outcome
+        let history = |case: &str, engine: &str| -> Option<History> {
+            match outcome
                 .jobs
                 .iter()
                 .find(|j| j.case == case && j.engine == engine)
-                .and_then(|j| j.result.as_ref().ok())
-                .map(|s| &s.history)
+            {
+                Some(j) => j.result.as_ref().ok().map(|s| s.history.clone()),
+                None => read_history(&csv_path(&plan.out, case, engine)).ok(),
+            }
         };
         let cases = plan
             .cases
             .iter()
             .map(|scene| {
                 let reference = history(&scene.id, REFERENCE_ENGINE);
+                let reference = reference.as_ref();
                 let runs = outcome
                     .jobs
                     .iter()
@@ -105,7 +110,7 @@ impl Summary {
                         history(&scene.id, "explicit"),
                     ) {
                         (Some(small), Some(finite)) => {
-                            Some(comparison::compare(scene, small, finite))
+                            Some(comparison::compare(scene, &small, &finite))
                         }
                         _ => None,
                     },
@@ -117,6 +122,47 @@ impl Summary {
             generator: format!("crosscheck {}", env!("CARGO_PKG_VERSION")),
             engines: plan.engines.iter().map(|e| e.name().to_string()).collect(),
             cases,
+        }
+    }
+
+    /// Keep what `previous` had for cases and engines this summary lacks (a run of some cases or
+    /// engines must not lose the others' results).
+    pub fn merge_previous(&mut self, previous: Summary) {
+        for old_case in previous.cases {
+            match self.cases.iter_mut().find(|c| c.id == old_case.id) {
+                None => self.cases.push(old_case),
+                Some(case) => {
+                    for old_run in old_case.runs {
+                        if !case.runs.iter().any(|r| r.engine == old_run.engine) {
+                            case.runs.push(old_run);
+                        }
+                    }
+                    if case.finite_vs_small.is_none() {
+                        case.finite_vs_small = old_case.finite_vs_small;
+                    }
+                }
+            }
+        }
+        for e in previous.engines {
+            if !self.engines.contains(&e) {
+                self.engines.push(e);
+            }
+        }
+        // Report order: cases by id, engines as `engines::all()` lists them.
+        let canonical: Vec<String> = crate::engines::all()
+            .iter()
+            .map(|e| e.name().to_string())
+            .collect();
+        let order = |name: &str| {
+            canonical
+                .iter()
+                .position(|e| e == name)
+                .unwrap_or(usize::MAX)
+        };
+        self.engines.sort_by_key(|e| order(e));
+        self.cases.sort_by(|a, b| a.id.cmp(&b.id));
+        for c in &mut self.cases {
+            c.runs.sort_by_key(|r| order(&r.engine));
         }
     }
 
@@ -159,7 +205,6 @@ fn engine_summary(
             steps: None,
             stable_increment: None,
             penalty_stiffness: None,
-            wall_seconds: None,
             counters: BTreeMap::new(),
             against_analytic: None,
             tolerance,
@@ -180,7 +225,6 @@ fn engine_summary(
                 steps: Some(s.info.steps),
                 stable_increment: s.info.stable_increment,
                 penalty_stiffness: s.info.penalty_stiffness,
-                wall_seconds: Some(s.info.wall_seconds),
                 counters: s.info.counters.clone(),
                 against_analytic: against,
                 tolerance,

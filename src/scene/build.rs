@@ -213,7 +213,15 @@ impl Scene {
                     return err(format!("{field}.y_axis"), "a 3D frame needs y_axis");
                 }
             };
-            frames.insert(f.id.as_str(), Matrix3::from_columns(&[x, y, z]));
+            if frames
+                .insert(f.id.as_str(), Matrix3::from_columns(&[x, y, z]))
+                .is_some()
+            {
+                return err(
+                    format!("{field}.id"),
+                    format!("`{}` is defined twice", f.id),
+                );
+            }
         }
 
         // Nodes.
@@ -354,6 +362,24 @@ impl Scene {
                         .map(|n| b.node(&format!("{field}.nodes"), n))
                         .collect()
                 };
+                let stray = match e.kind.as_str() {
+                    "grounded" => e.direction.as_ref().map(|_| "direction"),
+                    "fixed_direction" | "axial" => e.dof.as_ref().map(|_| "dof"),
+                    _ => None,
+                }
+                .or_else(|| (e.kind == "axial" && e.direction.is_some()).then_some("direction"));
+                if let Some(key) = stray {
+                    return err(
+                        format!("{field}.{key}"),
+                        format!("does not apply to a {} {label}; remove it", e.kind),
+                    );
+                }
+                if e.nodes.len() == 2 && e.nodes[0] == e.nodes[1] {
+                    return err(
+                        format!("{field}.nodes"),
+                        "joins a node to itself; give two different nodes",
+                    );
+                }
                 let connection = match e.kind.as_str() {
                     "grounded" => {
                         let n = nodes_of(1)?[0];
@@ -438,6 +464,12 @@ impl Scene {
                     ),
                 );
             }
+            if contacts.iter().any(|p: &ContactPair| p.name == c.id) {
+                return err(
+                    format!("{field}.id"),
+                    format!("`{}` is defined twice", c.id),
+                );
+            }
             contacts.push(ContactPair {
                 name: c.id.clone(),
                 node,
@@ -481,6 +513,15 @@ impl Scene {
                 }
                 None => Vector3::zeros(),
             };
+            if initial_velocities
+                .iter()
+                .any(|v: &InitialVelocity| v.node == node)
+            {
+                return err(
+                    format!("{field}.node"),
+                    format!("node `{}` already has an initial velocity", v.node),
+                );
+            }
             initial_velocities.push(InitialVelocity {
                 node,
                 velocity,
@@ -576,7 +617,18 @@ impl Scene {
                 let hf = format!("{field}.hold[{j}]");
                 let node = b.node(&format!("{hf}.node"), &h.node)?;
                 let rotations = matches!(nodes[node].attachment, Attachment::Reference(_));
-                let dofs = if h.dofs.iter().any(|d| d == "all") {
+                let dofs = if h.dofs.is_empty() {
+                    return err(
+                        format!("{hf}.dofs"),
+                        "is empty: name the held DOFs (ux, uy, uz, rx, ry, rz) or [\"all\"]",
+                    );
+                } else if h.dofs.iter().any(|d| d == "all") {
+                    if h.dofs.len() > 1 {
+                        return err(
+                            format!("{hf}.dofs"),
+                            "\"all\" already holds every DOF; give it alone",
+                        );
+                    }
                     Dof::all(dim, rotations)
                 } else {
                     h.dofs
@@ -665,9 +717,36 @@ impl Scene {
                         return err(
                             format!("bodies[{bi}].inertia"),
                             format!(
-                                "rotation r{} of body `{}` is free in step {si} but its inertia about that axis is 0",
+                                "rotation r{} of body `{}` is free in steps[{si}] but its inertia about that axis is 0: give `inertia`, put point masses on the body, or hold r{}",
                                 ["x", "y", "z"][axis],
-                                body.name
+                                body.name,
+                                ["x", "y", "z"][axis]
+                            ),
+                        );
+                    }
+                }
+            }
+        }
+
+        // Initial velocities act at the first dynamic step: not along a DOF held there.
+        if let Some(first) = steps
+            .iter()
+            .find(|s| matches!(s.kind, StepKind::Dynamic { .. }))
+        {
+            for (vi, iv) in initial_velocities.iter().enumerate() {
+                let frame = &nodes[iv.node].frame;
+                for c in first.conditions.iter().filter(|c| c.node == iv.node) {
+                    let axis = frame.column(c.dof.axis()).into_owned();
+                    let (along, key) = match c.dof {
+                        Dof::Translation(_) => (iv.velocity.dot(&axis), "velocity"),
+                        Dof::Rotation(_) => (iv.angular.dot(&axis), "angular"),
+                    };
+                    if along != 0.0 {
+                        return err(
+                            format!("initial_velocities[{vi}].{key}"),
+                            format!(
+                                "moves node `{}` along {}, which the first dynamic step holds; make that component 0",
+                                nodes[iv.node].name, c.dof
                             ),
                         );
                     }
@@ -677,6 +756,12 @@ impl Scene {
 
         // A load must act on some free DOF in some dynamic step, or it does nothing.
         for (li, load) in loads.iter().enumerate() {
+            if load.force == Vector3::zeros() {
+                return err(
+                    format!("loads[{li}].force"),
+                    "is zero; give a non-zero force or remove the load",
+                );
+            }
             let node = &nodes[load.node];
             let (anchor, arm, translations_of) = match node.attachment {
                 Attachment::Free => (load.node, Vector3::zeros(), load.node),
@@ -786,6 +871,12 @@ impl Scene {
                     reason: c.zero.clone().unwrap_or_default(),
                 }
             };
+            if columns.iter().any(|x: &Column| x.name == c.name) {
+                return err(
+                    format!("{field}.name"),
+                    format!("`{}` is already a column", c.name),
+                );
+            }
             columns.push(Column {
                 name: c.name.clone(),
                 probe,
@@ -793,11 +884,14 @@ impl Scene {
         }
         let contract = family.contract_columns();
         for (i, name) in contract.iter().enumerate() {
-            if columns.get(i).map(|c| c.name.as_str()) != Some(*name) {
+            let got = columns.get(i).map(|c| c.name.as_str());
+            if got != Some(*name) {
                 return err(
-                    "output.columns",
+                    format!("output.columns[{i}]"),
                     format!(
-                        "a {} case's columns must start with {}",
+                        "is {}, but column {} of a {} case must be `{name}` (the contract: {})",
+                        got.map_or("missing".to_string(), |g| format!("`{g}`")),
+                        i + 1,
                         family.name(),
                         contract.join(", ")
                     ),
@@ -807,6 +901,12 @@ impl Scene {
 
         // Settings.
         let t = &case.time;
+        if t.safety.is_some() && (t.increment.is_some() || t.accuracy.is_some()) {
+            return err(
+                "time.safety",
+                "applies only when neither `increment` nor `accuracy` is given; remove one",
+            );
+        }
         let increment = match (t.increment, t.accuracy) {
             (Some(_), Some(_)) => {
                 return err("time", "give `increment` or `accuracy`, not both");

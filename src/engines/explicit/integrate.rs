@@ -400,10 +400,25 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 }
                 let balance = kinetic + forces.elastic + dissipated - work - energy0;
                 row.extend([kinetic, forces.elastic, dissipated, work, balance]);
-                if row.iter().any(|x| !x.is_finite()) {
-                    return Err(EngineError::Failed(format!(
-                        "the state became non-finite by t = {:e} (increment {h:e})",
+                let unstable = |what: &str| {
+                    let limit = stable.map_or("none computed".to_string(), |s| {
+                        format!("{:e}", s.increment)
+                    });
+                    EngineError::Failed(format!(
+                        "{what} by t = {:e}: the run is unstable at increment {h:e} (stable increment: {limit})",
                         row[0]
+                    ))
+                };
+                if row.iter().any(|x| !x.is_finite()) {
+                    return Err(unstable("the state became non-finite"));
+                }
+                // What the run may hold is what it started with plus the work done on it; a
+                // stable run stays at or below that (dissipation only removes energy).
+                let budget = energy0 + work.abs();
+                if kinetic + forces.elastic > 100.0 * budget + f64::MIN_POSITIVE {
+                    return Err(unstable(&format!(
+                        "energy blew up to {:e}, over 100× the initial energy plus the work of the loads ({budget:e})",
+                        kinetic + forces.elastic
                     )));
                 }
                 rows.push(row);

@@ -1,0 +1,196 @@
+//! Runtime guards, interrupted runs and determinism.
+mod common;
+use common::*;
+use crosscheck::engines::explicit::ExplicitEngine;
+use crosscheck::engines::{self, Engine, RunSettings};
+use crosscheck::run::{self, Plan};
+use crosscheck::scene::IncrementRule;
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::process::Command;
+use std::time::Duration;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_crosscheck"))
+}
+
+/// Every file under `dir`, relative path → bytes.
+fn snapshot(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    fn walk(root: &Path, dir: &Path, out: &mut BTreeMap<String, Vec<u8>>) {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                walk(root, &p, out);
+            } else {
+                out.insert(
+                    p.strip_prefix(root).unwrap().display().to_string(),
+                    std::fs::read(&p).unwrap(),
+                );
+            }
+        }
+    }
+    let mut out = BTreeMap::new();
+    walk(dir, dir, &mut out);
+    out
+}
+
+/// A run above the stable increment stops with a diagnosis instead of producing garbage.
+#[test]
+fn an_unstable_run_stops_with_a_diagnosis() {
+    let scene = scene("rigid2d_pin_lumped");
+    let stable = ExplicitEngine::finite()
+        .stable_increment(&scene, &RunSettings::default())
+        .unwrap();
+    let err = ExplicitEngine::finite()
+        .run(
+            &scene,
+            &RunSettings {
+                increment: Some(IncrementRule::Forced(stable.increment * 1.5)),
+                ..Default::default()
+            },
+        )
+        .unwrap_err()
+        .to_string();
+    println!("{err}");
+    assert!(
+        err.contains("unstable") && err.contains(&format!("{:e}", stable.increment)),
+        "{err}"
+    );
+}
+
+/// One case failing does not stop the others; the report marks it.
+#[test]
+fn a_failed_case_does_not_stop_the_others() {
+    let out = tempfile::tempdir().unwrap();
+    let mut bad = scene("rigid2d_pin_lumped");
+    bad.settings.increment = IncrementRule::Forced(1e-3);
+    let plan = Plan {
+        cases: vec![bad, scene("springs_n2n_b")],
+        engines: engines::all(),
+        settings: RunSettings::default(),
+        out: out.path().to_path_buf(),
+    };
+    let outcome = run::execute(&plan, false);
+    // The closed form of the bad case still runs; both explicit runs of it fail.
+    assert_eq!(outcome.failures(), 2);
+    assert!(
+        outcome
+            .jobs
+            .iter()
+            .filter(|j| j.case == "springs_n2n_b")
+            .all(|j| j.is_ok())
+    );
+    let summary = crosscheck::report::write(&plan, &outcome, &out.path().join("none")).unwrap();
+    let bad_runs = &summary
+        .cases
+        .iter()
+        .find(|c| c.id == "rigid2d_pin_lumped")
+        .unwrap()
+        .runs;
+    assert!(
+        bad_runs
+            .iter()
+            .filter(|r| r.engine != "analytic")
+            .all(|r| r.error.as_deref().is_some_and(|e| e.contains("unstable")))
+    );
+    let md = std::fs::read_to_string(out.path().join("REPORT.md")).unwrap();
+    assert!(md.contains("Failed runs") && md.contains("rigid2d_pin_lumped / explicit"));
+}
+
+/// Kill a run of the whole report mid-way (slow: a tiny increment) with `signal`; the previous
+/// report must be left byte for byte.
+fn interrupt(signal: i32) -> (tempfile::TempDir, BTreeMap<String, Vec<u8>>) {
+    let root = tempfile::tempdir().unwrap();
+    let out = root.path().join("report");
+    assert!(
+        bin()
+            .args(["run", "-q", "--out"])
+            .arg(&out)
+            .status()
+            .unwrap()
+            .success()
+    );
+    let before = snapshot(&out);
+    let mut child = bin()
+        .args(["run", "-q", "--increment", "2e-7", "--out"])
+        .arg(&out)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(700));
+    // SAFETY: sending a signal to our own child process.
+    unsafe { libc::kill(child.id() as i32, signal) };
+    let status = child.wait().unwrap();
+    assert!(!status.success(), "the run was interrupted");
+    assert_eq!(
+        snapshot(&out),
+        before,
+        "the previous report is intact, byte for byte"
+    );
+    (root, before)
+}
+
+#[test]
+fn sigkill_leaves_the_previous_report_whole() {
+    let (root, before) = interrupt(libc::SIGKILL);
+    // The staging directory a SIGKILL leaves behind is removed by the next run.
+    let out = root.path().join("report");
+    assert!(
+        bin()
+            .args(["run", "-q", "springs_grounded_a", "--out"])
+            .arg(&out)
+            .status()
+            .unwrap()
+            .success()
+    );
+    let names: Vec<String> = std::fs::read_dir(root.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, vec!["report".to_string()], "no stray files");
+    assert_eq!(
+        snapshot(&out).len(),
+        before.len(),
+        "the other cases' data is kept"
+    );
+}
+
+#[test]
+fn sigterm_and_sigint_leave_no_stray_files() {
+    for signal in [libc::SIGTERM, libc::SIGINT] {
+        let (root, _) = interrupt(signal);
+        let names: Vec<String> = std::fs::read_dir(root.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(
+            names,
+            vec!["report".to_string()],
+            "signal {signal}: no stray files"
+        );
+    }
+}
+
+/// Two runs give byte-identical CSVs and summaries whatever the thread count (wall times are
+/// kept apart in timings.json, and REPORT.md shows them).
+#[test]
+fn runs_are_deterministic_across_thread_counts() {
+    let root = tempfile::tempdir().unwrap();
+    let mut snaps = Vec::new();
+    for threads in ["1", "2"] {
+        let out = root.path().join(format!("t{threads}"));
+        let ok = bin()
+            .env("RAYON_NUM_THREADS", threads)
+            .args(["run", "-q", "--out"])
+            .arg(&out)
+            .status()
+            .unwrap();
+        assert!(ok.success());
+        let mut s = snapshot(&out);
+        s.retain(|k, _| k.ends_with(".csv") || k == "summary.json");
+        snaps.push(s);
+    }
+    assert_eq!(snaps[0].len(), 13 * 3 + 1);
+    assert_eq!(snaps[0], snaps[1]);
+}

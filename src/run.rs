@@ -531,6 +531,7 @@ hold = [{ node = "end", dofs = ["uy"] }]
                     penalty_stiffness: None,
                     wall_seconds: 0.0,
                     counters: BTreeMap::new(),
+                    measures: BTreeMap::new(),
                 },
             })
         }

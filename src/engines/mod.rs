@@ -5,6 +5,7 @@
 
 pub mod analytic;
 pub mod explicit;
+pub mod rapier;
 
 use crate::scene::{ContactStart, DampingTreatment, IncrementRule, PenaltyRule, Scene};
 use std::collections::BTreeMap;
@@ -54,6 +55,9 @@ pub struct RunInfo {
     pub wall_seconds: f64,
     /// Work counters (force evaluations, contact evaluations, ...).
     pub counters: BTreeMap<String, u64>,
+    /// Measured quantities an engine reports about its own run (for example the mean contact
+    /// penetration), by name.
+    pub measures: BTreeMap<String, f64>,
 }
 
 /// An engine's answer for one scene.
@@ -100,6 +104,14 @@ pub fn all() -> Vec<Box<dyn Engine>> {
         Box::new(analytic::AnalyticEngine),
         Box::new(explicit::ExplicitEngine::finite()),
         Box::new(explicit::ExplicitEngine::small()),
+        Box::new(rapier::RapierEngine::matched(rapier::Precision::F64)),
+        Box::new(rapier::RapierEngine::matched(rapier::Precision::F32)),
+        Box::new(rapier::RapierEngine::default_configuration(
+            rapier::Precision::F64,
+        )),
+        Box::new(rapier::RapierEngine::default_configuration(
+            rapier::Precision::F32,
+        )),
     ]
 }
 

@@ -20,6 +20,30 @@ pub struct Summary {
     pub cases: Vec<CaseSummary>,
 }
 
+/// Pairs of engines compared with each other, (candidate, reference):
+/// - `explicit` against `explicit_small`: finite against small rotation, same integrator: the
+///   model-form gap, free of solver error;
+/// - `rapier_f64` against `explicit`: the independent engine against ours;
+/// - `rapier_f32` against `rapier_f64`: single-precision round-off;
+/// - `rapier_f64_default` against `rapier_f64`: what default settings cost.
+pub const CROSS_CHECKS: [(&str, &str); 4] = [
+    ("explicit", "explicit_small"),
+    ("rapier_f64", "explicit"),
+    ("rapier_f32", "rapier_f64"),
+    ("rapier_f64_default", "rapier_f64"),
+];
+
+/// One engine measured against another on one case.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CrossCheck {
+    /// The engine measured.
+    pub candidate: String,
+    /// The engine it is measured against.
+    pub reference: String,
+    /// The metrics, relative to the reference's peaks.
+    pub comparison: Comparison,
+}
+
 /// One case.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CaseSummary {
@@ -35,9 +59,9 @@ pub struct CaseSummary {
     pub duration: f64,
     /// What the closed form says about contact (rigid-contact cases).
     pub contact: Option<ContactValidity>,
-    /// `explicit` (finite rotation) measured against `explicit_small` (the closed form's
-    /// small-rotation model, same integrator): the model-form gap, free of solver error.
-    pub finite_vs_small: Option<Comparison>,
+    /// Engines measured against each other (see [`CROSS_CHECKS`]).
+    #[serde(default)]
+    pub cross: Vec<CrossCheck>,
     /// Per engine, in report order.
     pub runs: Vec<EngineSummary>,
 }
@@ -59,6 +83,9 @@ pub struct EngineSummary {
     pub penalty_stiffness: Option<f64>,
     /// Work counters.
     pub counters: BTreeMap<String, u64>,
+    /// Quantities the engine measured about its own run (e.g. contact penetration).
+    #[serde(default)]
+    pub measures: BTreeMap<String, f64>,
     /// Errors against the closed form.
     pub against_analytic: Option<Comparison>,
     /// The tolerance the case declares for this engine.
@@ -105,15 +132,18 @@ impl Summary {
                     },
                     duration: scene.duration(),
                     contact: reference.and_then(comparison::contact_validity),
-                    finite_vs_small: match (
-                        history(&scene.id, "explicit_small"),
-                        history(&scene.id, "explicit"),
-                    ) {
-                        (Some(small), Some(finite)) => {
-                            Some(comparison::compare(scene, &small, &finite))
-                        }
-                        _ => None,
-                    },
+                    cross: CROSS_CHECKS
+                        .iter()
+                        .filter_map(|(candidate, reference)| {
+                            let c = history(&scene.id, candidate)?;
+                            let r = history(&scene.id, reference)?;
+                            Some(CrossCheck {
+                                candidate: candidate.to_string(),
+                                reference: reference.to_string(),
+                                comparison: comparison::compare(scene, &r, &c),
+                            })
+                        })
+                        .collect(),
                     runs,
                 }
             })
@@ -137,8 +167,14 @@ impl Summary {
                             case.runs.push(old_run);
                         }
                     }
-                    if case.finite_vs_small.is_none() {
-                        case.finite_vs_small = old_case.finite_vs_small;
+                    for old in old_case.cross {
+                        if !case
+                            .cross
+                            .iter()
+                            .any(|c| c.candidate == old.candidate && c.reference == old.reference)
+                        {
+                            case.cross.push(old);
+                        }
                     }
                 }
             }
@@ -164,6 +200,18 @@ impl Summary {
         for c in &mut self.cases {
             c.runs.sort_by_key(|r| order(&r.engine));
         }
+    }
+
+    /// A case's cross-check of `candidate` against `reference`, if both ran.
+    pub fn cross<'a>(
+        case: &'a CaseSummary,
+        candidate: &str,
+        reference: &str,
+    ) -> Option<&'a Comparison> {
+        case.cross
+            .iter()
+            .find(|c| c.candidate == candidate && c.reference == reference)
+            .map(|c| &c.comparison)
     }
 
     /// Pretty JSON.
@@ -206,6 +254,7 @@ fn engine_summary(
             stable_increment: None,
             penalty_stiffness: None,
             counters: BTreeMap::new(),
+            measures: BTreeMap::new(),
             against_analytic: None,
             tolerance,
             meets_tolerance: tolerance.map(|_| false),
@@ -226,6 +275,7 @@ fn engine_summary(
                 stable_increment: s.info.stable_increment,
                 penalty_stiffness: s.info.penalty_stiffness,
                 counters: s.info.counters.clone(),
+                measures: s.info.measures.clone(),
                 against_analytic: against,
                 tolerance,
                 meets_tolerance: meets,

@@ -48,6 +48,7 @@ impl Engine for AnalyticEngine {
                 penalty_stiffness: None,
                 wall_seconds: start.elapsed().as_secs_f64(),
                 counters: BTreeMap::new(),
+                measures: BTreeMap::new(),
             },
         })
     }

@@ -72,6 +72,7 @@ impl Engine for ExplicitEngine {
                     .then(|| scene.penalty_stiffness(merged(scene, settings).penalty)),
                 wall_seconds,
                 counters,
+                measures: BTreeMap::new(),
             },
         })
     }

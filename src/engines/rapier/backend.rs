@@ -1,0 +1,418 @@
+//! Build and step a rapier world from a [`Plan`](super::plan::Plan): written once as a macro, instantiated for
+//! `rapier2d`, `rapier2d-f64`, `rapier3d` and `rapier3d-f64`.
+//!
+//! Per step: every dynamic body's user forces are reset and each point load is added at its
+//! material point's current world position (constant direction, so the load moves with the
+//! body); the world steps; the state of every body and the normal impulse of every contact pair
+//! are read back in f64. The collision detection runs once before the first step so that the
+//! contact pairs exist from it on. Between dynamic steps the step's ground joints are replaced and the
+//! velocity components it holds are zeroed.
+
+use super::MatchedSettings;
+use super::plan::BodyState;
+
+/// rapier's default `num_solver_iterations` (substeps).
+pub const DEFAULT_SOLVER_ITERATIONS: usize = 4;
+/// rapier's default `num_internal_pgs_iterations`.
+pub const DEFAULT_PGS_ITERATIONS: usize = 1;
+
+/// How to run.
+#[derive(Debug, Clone, Copy)]
+pub struct Run {
+    /// Time increment.
+    pub dt: f64,
+    /// Matched settings, or `None` for rapier's defaults.
+    pub matched: Option<MatchedSettings>,
+}
+
+/// The state after a step (or at the start of a dynamic step).
+#[derive(Debug, Clone)]
+pub struct Record {
+    /// Time.
+    pub time: f64,
+    /// Per plan body (the ground included).
+    pub bodies: Vec<BodyState>,
+    /// Per contact pair: normal impulse of the step ending here over its length (`None` at the
+    /// start of a dynamic step).
+    pub contact_force: Option<Vec<f64>>,
+}
+
+/// Everything a run recorded.
+#[derive(Debug, Clone)]
+pub struct Trace {
+    /// Records in time order (a step boundary appears twice: end of one step, start of the
+    /// next).
+    pub records: Vec<Record>,
+    /// Steps taken.
+    pub steps: u64,
+    /// Colliders in the world.
+    pub colliders: usize,
+    /// Joints in the world (the last dynamic step's).
+    pub joints: usize,
+    /// Bodies in the world (the ground included).
+    pub bodies: usize,
+}
+
+macro_rules! dimension_helpers {
+    (2) => {
+        fn vector(v: &Vector3<f64>) -> rp::math::Vector {
+            rp::math::Vector::new(v.x as Real, v.y as Real)
+        }
+        fn unvector(v: rp::math::Vector) -> Vector3<f64> {
+            Vector3::new(v.x as f64, v.y as f64, 0.0)
+        }
+        fn angular(w: &Vector3<f64>) -> rp::math::AngVector {
+            w.z as Real
+        }
+        fn unangular(w: rp::math::AngVector) -> Vector3<f64> {
+            Vector3::new(0.0, 0.0, w as f64)
+        }
+        fn rotation(q: &UnitQuaternion<f64>) -> rp::math::Rotation {
+            rp::math::Rotation::new((2.0 * q.k.atan2(q.w)) as Real)
+        }
+        fn unrotation(r: &rp::math::Rotation) -> UnitQuaternion<f64> {
+            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), r.angle() as f64)
+        }
+        fn axis(i: usize) -> Result<(JointAxesMask, JointAxis), EngineError> {
+            Ok(match i {
+                0 => (JointAxesMask::LIN_X, JointAxis::LinX),
+                1 => (JointAxesMask::LIN_Y, JointAxis::LinY),
+                5 => (JointAxesMask::ANG_X, JointAxis::AngX),
+                _ => {
+                    return Err(EngineError::Unsupported(format!(
+                        "rapier: joint axis {i} does not exist in 2D"
+                    )));
+                }
+            })
+        }
+        fn cuboid(half: &Vector3<f64>) -> ColliderBuilder {
+            ColliderBuilder::cuboid(half.x as Real, half.y as Real)
+        }
+        fn mass_properties(
+            com: &Vector3<f64>,
+            mass: f64,
+            inertia: &nalgebra::Matrix3<f64>,
+        ) -> MassProperties {
+            MassProperties::new(vector(com), mass as Real, inertia[(2, 2)] as Real)
+        }
+    };
+    (3) => {
+        fn vector(v: &Vector3<f64>) -> rp::math::Vector {
+            rp::math::Vector::new(v.x as Real, v.y as Real, v.z as Real)
+        }
+        fn unvector(v: rp::math::Vector) -> Vector3<f64> {
+            Vector3::new(v.x as f64, v.y as f64, v.z as f64)
+        }
+        fn angular(w: &Vector3<f64>) -> rp::math::AngVector {
+            vector(w)
+        }
+        fn unangular(w: rp::math::AngVector) -> Vector3<f64> {
+            unvector(w)
+        }
+        fn rotation(q: &UnitQuaternion<f64>) -> rp::math::Rotation {
+            rp::math::Rotation::from_xyzw(q.i as Real, q.j as Real, q.k as Real, q.w as Real)
+                .normalize()
+        }
+        fn unrotation(r: &rp::math::Rotation) -> UnitQuaternion<f64> {
+            UnitQuaternion::new_normalize(nalgebra::Quaternion::new(
+                r.w as f64, r.x as f64, r.y as f64, r.z as f64,
+            ))
+        }
+        fn axis(i: usize) -> Result<(JointAxesMask, JointAxis), EngineError> {
+            Ok(match i {
+                0 => (JointAxesMask::LIN_X, JointAxis::LinX),
+                1 => (JointAxesMask::LIN_Y, JointAxis::LinY),
+                2 => (JointAxesMask::LIN_Z, JointAxis::LinZ),
+                3 => (JointAxesMask::ANG_X, JointAxis::AngX),
+                4 => (JointAxesMask::ANG_Y, JointAxis::AngY),
+                5 => (JointAxesMask::ANG_Z, JointAxis::AngZ),
+                _ => unreachable!("joint axes are 0..6"),
+            })
+        }
+        fn cuboid(half: &Vector3<f64>) -> ColliderBuilder {
+            ColliderBuilder::cuboid(half.x as Real, half.y as Real, half.z as Real)
+        }
+        fn mass_properties(
+            com: &Vector3<f64>,
+            mass: f64,
+            inertia: &nalgebra::Matrix3<f64>,
+        ) -> MassProperties {
+            let column = |j: usize| {
+                vector(&Vector3::new(
+                    inertia[(0, j)],
+                    inertia[(1, j)],
+                    inertia[(2, j)],
+                ))
+            };
+            MassProperties::with_inertia_matrix(
+                vector(com),
+                mass as Real,
+                rp::math::Matrix::from_cols(column(0), column(1), column(2)),
+            )
+        }
+    };
+}
+
+macro_rules! backend {
+    ($module:ident, $krate:ident, $dim:tt) => {
+        /// The backend on one rapier crate.
+        pub mod $module {
+            use super::{Record, Run, Trace};
+            use crate::engines::EngineError;
+            use crate::engines::rapier::plan::{
+                BodyKind, BodyState, Frame, JointKind, JointSpec, Plan, Shape,
+            };
+            use nalgebra::{UnitQuaternion, Vector3};
+            use rp::dynamics::{
+                GenericJoint, GenericJointBuilder, ImpulseJointHandle, IntegrationParameters,
+                JointAxesMask, JointAxis, MassProperties, MotorModel, RigidBodyBuilder,
+                RigidBodyHandle, SpringCoefficients, SpringJointBuilder,
+            };
+            use rp::geometry::{ColliderBuilder, ColliderHandle};
+            use rp::math::Real;
+            use rp::pipeline::PhysicsWorld;
+            use $krate as rp;
+
+            dimension_helpers!($dim);
+
+            fn pose(frame: &Frame) -> rp::math::Pose {
+                rp::math::Pose::from_parts(vector(&frame.origin), rotation(&frame.rotation))
+            }
+
+            fn joint(spec: &JointSpec) -> Result<GenericJoint, EngineError> {
+                Ok(match &spec.kind {
+                    JointKind::Generic { locked, motors } => {
+                        let mut mask = JointAxesMask::empty();
+                        for (i, _) in locked.iter().enumerate().filter(|(_, l)| **l) {
+                            mask |= axis(i)?.0;
+                        }
+                        let mut b = GenericJointBuilder::new(mask)
+                            .local_frame1(pose(&spec.frame1))
+                            .local_frame2(pose(&spec.frame2));
+                        for m in motors {
+                            let a = axis(m.axis)?.1;
+                            b = b
+                                .motor_position(a, 0.0, m.stiffness as Real, m.damping as Real)
+                                .motor_model(a, MotorModel::ForceBased);
+                        }
+                        b.build()
+                    }
+                    JointKind::Spring {
+                        rest,
+                        stiffness,
+                        damping,
+                    } => {
+                        SpringJointBuilder::new(*rest as Real, *stiffness as Real, *damping as Real)
+                            .spring_model(MotorModel::ForceBased)
+                            .local_anchor1(vector(&spec.frame1.origin))
+                            .local_anchor2(vector(&spec.frame2.origin))
+                            .build()
+                            .into()
+                    }
+                })
+            }
+
+            fn state(rb: &rp::dynamics::RigidBody) -> BodyState {
+                BodyState {
+                    position: unvector(rb.translation()),
+                    rotation: unrotation(rb.rotation()),
+                    linvel: unvector(rb.linvel()),
+                    angvel: unangular(rb.angvel()),
+                }
+            }
+
+            /// Integration parameters of a run.
+            pub fn parameters(run: &Run) -> IntegrationParameters {
+                let mut p = IntegrationParameters::default();
+                p.dt = run.dt as Real;
+                if let Some(m) = run.matched {
+                    p.num_solver_iterations = m.solver_iterations;
+                    p.num_internal_pgs_iterations = m.pgs_iterations;
+                    let softness = SpringCoefficients::new(
+                        m.contact_frequency as Real,
+                        m.contact_damping_ratio as Real,
+                    );
+                    p.contact_softness = softness;
+                    p.static_contact_softness = softness;
+                    p.normalized_allowed_linear_error = m.allowed_linear_error as Real;
+                    p.normalized_prediction_distance = m.prediction_distance as Real;
+                    p.contact_recycling = m.contact_recycling;
+                }
+                p
+            }
+
+            /// Build the world and step it through every dynamic step.
+            pub fn simulate(plan: &Plan, run: &Run) -> Result<Trace, EngineError> {
+                let mut world = PhysicsWorld::default();
+                world.gravity = rp::math::Vector::ZERO;
+                world.integration_parameters = parameters(run);
+
+                let handles: Vec<RigidBodyHandle> = plan
+                    .bodies
+                    .iter()
+                    .map(|b| {
+                        let at =
+                            rp::math::Pose::from_parts(vector(&b.position), rotation(&b.rotation));
+                        let builder = match b.kind {
+                            BodyKind::Ground => RigidBodyBuilder::fixed().pose(at),
+                            BodyKind::Particle => RigidBodyBuilder::dynamic()
+                                .pose(at)
+                                .lock_rotations()
+                                .additional_mass(b.mass as Real)
+                                .linvel(vector(&b.linvel))
+                                .can_sleep(false),
+                            BodyKind::Rigid => RigidBodyBuilder::dynamic()
+                                .pose(at)
+                                .additional_mass_properties(mass_properties(
+                                    &b.com, b.mass, &b.inertia,
+                                ))
+                                .linvel(vector(&b.linvel))
+                                .angvel(angular(&b.angvel))
+                                .can_sleep(false),
+                        };
+                        world.insert_body(builder)
+                    })
+                    .collect();
+
+                let colliders: Vec<ColliderHandle> = plan
+                    .colliders
+                    .iter()
+                    .map(|c| {
+                        let builder = match c.shape {
+                            Shape::Ball(r) => ColliderBuilder::ball(r as Real),
+                            Shape::Cuboid(half) => cuboid(&half),
+                        }
+                        .position(pose(&c.frame))
+                        .density(0.0)
+                        .friction(0.0)
+                        .restitution(0.0);
+                        world.colliders.insert_with_parent(
+                            builder,
+                            handles[c.body],
+                            &mut world.bodies,
+                        )
+                    })
+                    .collect();
+
+                for j in &plan.permanent {
+                    let data = joint(j)?;
+                    world
+                        .impulse_joints
+                        .insert(handles[j.body1], handles[j.body2], data, true);
+                }
+
+                // Register the contact pairs before the first step: otherwise rapier only finds
+                // a new pair during step 1, and that step has no contact constraint.
+                world.detect_collisions(&(), &());
+
+                let read = |world: &PhysicsWorld| -> Vec<BodyState> {
+                    handles.iter().map(|h| state(&world.bodies[*h])).collect()
+                };
+
+                let mut records = Vec::new();
+                let mut step_joints: Vec<ImpulseJointHandle> = Vec::new();
+                let mut steps = 0u64;
+                let mut t0 = 0.0;
+                let dt = run.dt;
+                for step in &plan.steps {
+                    for h in step_joints.drain(..) {
+                        world.impulse_joints.remove(h, true);
+                    }
+                    for j in &step.joints {
+                        let data = joint(j)?;
+                        step_joints.push(world.impulse_joints.insert(
+                            handles[j.body1],
+                            handles[j.body2],
+                            data,
+                            true,
+                        ));
+                    }
+                    // Zero what the step holds.
+                    for (b, spec) in plan.bodies.iter().enumerate() {
+                        if spec.kind == BodyKind::Ground {
+                            continue;
+                        }
+                        let rb = &mut world.bodies[handles[b]];
+                        let mut s = state(rb);
+                        s.hold(&spec.com, &step.held, b);
+                        rb.set_linvel(vector(&s.linvel), true);
+                        if spec.kind == BodyKind::Rigid {
+                            rb.set_angvel(angular(&s.angvel), true);
+                        }
+                    }
+                    records.push(Record {
+                        time: t0,
+                        bodies: read(&world),
+                        contact_force: None,
+                    });
+
+                    let n = ((step.duration / dt) - 1e-9).ceil().max(1.0) as u64;
+                    for k in 1..=n {
+                        let (h, t) = if k == n {
+                            (step.duration - (n - 1) as f64 * dt, t0 + step.duration)
+                        } else {
+                            (dt, t0 + k as f64 * dt)
+                        };
+                        world.integration_parameters.dt = h as Real;
+                        for (b, spec) in plan.bodies.iter().enumerate() {
+                            if spec.kind != BodyKind::Ground {
+                                // `reset_forces` clears the force only: the torque that
+                                // `add_force_at_point` adds needs its own reset.
+                                let rb = &mut world.bodies[handles[b]];
+                                rb.reset_forces(false);
+                                rb.reset_torques(false);
+                            }
+                        }
+                        for l in &plan.loads {
+                            let rb = &mut world.bodies[handles[l.body]];
+                            let at = state(rb).point(&l.local);
+                            rb.add_force_at_point(vector(&l.force), vector(&at), false);
+                        }
+                        world.step();
+                        steps += 1;
+                        let bodies = read(&world);
+                        let forces: Vec<f64> = plan
+                            .contacts
+                            .iter()
+                            .map(|c| {
+                                world
+                                    .narrow_phase
+                                    .contact_pair(colliders[c.ball], colliders[c.slab])
+                                    .map_or(0.0, |p| p.total_impulse_magnitude() as f64)
+                                    / h
+                            })
+                            .collect();
+                        let finite = bodies.iter().all(|s| {
+                            s.position.iter().all(|x| x.is_finite())
+                                && s.linvel.iter().all(|x| x.is_finite())
+                                && s.angvel.iter().all(|x| x.is_finite())
+                        }) && forces.iter().all(|f| f.is_finite());
+                        if !finite || !world.quarantine().is_empty() {
+                            return Err(EngineError::Failed(format!(
+                                "rapier: the state became non-finite by t = {t:e} (dt = {dt:e})"
+                            )));
+                        }
+                        records.push(Record {
+                            time: t,
+                            bodies,
+                            contact_force: Some(forces),
+                        });
+                    }
+                    t0 += step.duration;
+                }
+                Ok(Trace {
+                    records,
+                    steps,
+                    colliders: world.colliders.len(),
+                    joints: world.impulse_joints.len(),
+                    bodies: world.bodies.len(),
+                })
+            }
+        }
+    };
+}
+
+backend!(r2_f32, rapier2d, 2);
+backend!(r2_f64, rapier2d_f64, 2);
+backend!(r3_f32, rapier3d, 3);
+backend!(r3_f64, rapier3d_f64, 3);

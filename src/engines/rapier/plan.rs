@@ -1,0 +1,996 @@
+//! The scene translated into what a rapier world is made of, once, for every rapier crate.
+//!
+//! A [`Plan`] is dimension- and precision-independent (f64, 3-vectors; in 2D every z component
+//! is zero and rotations are about z): the rapier backends ([`super::backend`]) only turn it
+//! into rapier objects. Everything the mapping decides is decided here.
+//!
+//! # Bodies
+//!
+//! Body 0 is the ground: one fixed rigid body at the origin with the identity pose, carrying
+//! every ground node (free, massless and held in every translation in every step) at its
+//! position. Every other free node with mass is a *particle*: a dynamic body with that mass
+//! whose rotations are locked, with its origin at the node. Every scene body is a dynamic body
+//! whose origin is its reference node O and whose local axes are the world axes at t = 0, with
+//! the scene's mass properties exactly: mass, local centre of mass = `centre_offset`, inertia
+//! about the centre of mass I_G = I_O − m(|c|²1 − c cᵀ) (2D: I_G = I_O,zz − m|c|²). Colliders
+//! never contribute mass (density 0).
+//!
+//! # Joints
+//!
+//! Per dynamic step, every node that is held or carries a grounded spring or dashpot gets a
+//! *ground joint*: body 1 the ground, body 2 the node's body, both joint frames with the node's
+//! frame axes, anchored at the node. It locks exactly the DOFs the step holds (a pinned
+//! reference node gives a revolute joint, a sliding one a joint freeing x and rz), and carries a
+//! force-based motor on each free DOF with grounded elements (target 0 at the undeformed
+//! geometry: the ground frame's origin is the node's position at t = 0, moved along the held
+//! axes by whatever displacement the static steps left there, so a held DOF is held where it
+//! is).
+//!
+//! Fixed-direction elements become a motor on a joint whose first frame is fixed to the ground
+//! (or to a particle, which never rotates) with its x axis along the direction and its origin at
+//! the other end's undeformed position, so the joint's x coordinate is the elongation
+//! d·(u_B − u_A) and position 0 is unstretched; nothing else is locked. Axial elements become
+//! rapier `SpringJoint`s (rest length = undeformed length). Springs and dashpots on the same DOF
+//! or between the same nodes share one motor (stiffness = Σk, damping = Σc).
+//!
+//! # Contact
+//!
+//! Only where the scene has a contact pair: a cuboid on the body whose outer face is the
+//! contact face (a slab `size` thick behind it, in-plane half-extent `size`, where `size` is
+//! twice the spread of the body's nodes and the contact node) and a ball of radius
+//! r = 1e-3 `size` on the node's body, centred on the node, the slab moved back by r so the
+//! two touch exactly at t = 0. Friction 0; restitution 0 (the benchmark's contact is persistent:
+//! node and face move together from t = 0 with no impact, so there is nothing to bounce).
+//!
+//! # Steps
+//!
+//! Static steps (before the first dynamic one) apply their prescribed displacements to the
+//! initial positions; a DOF they leave free must carry no force there, or the scene is
+//! unsupported (rapier has no static solve). At the start of every dynamic step the velocity
+//! components along the DOFs it holds are zeroed (the first one after the scene's initial
+//! velocities are applied, converted to centre-of-mass velocities v_G = v_O + ω × (R c)).
+
+use crate::engines::EngineError;
+use crate::scene::{Attachment, BodyId, Connection, Dimension, Dof, NodeId, Scene, StepKind};
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+
+/// Which kind of rapier body.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BodyKind {
+    /// The fixed ground.
+    Ground,
+    /// A free node with mass: translations only.
+    Particle,
+    /// A scene body.
+    Rigid,
+}
+
+/// A rapier body.
+#[derive(Debug, Clone)]
+pub struct BodySpec {
+    /// Kind.
+    pub kind: BodyKind,
+    /// Mass.
+    pub mass: f64,
+    /// Centre of mass in body coordinates.
+    pub com: Vector3<f64>,
+    /// Inertia about the centre of mass, body axes.
+    pub inertia: Matrix3<f64>,
+    /// Origin at the start of the first dynamic step.
+    pub position: Vector3<f64>,
+    /// Orientation at the start of the first dynamic step.
+    pub rotation: UnitQuaternion<f64>,
+    /// Velocity of the centre of mass at the start of the first dynamic step.
+    pub linvel: Vector3<f64>,
+    /// Angular velocity at the start of the first dynamic step.
+    pub angvel: Vector3<f64>,
+}
+
+/// Where a scene node lives: a body and a point in its coordinates.
+#[derive(Debug, Clone, Copy)]
+pub struct NodeRef {
+    /// Body index in [`Plan::bodies`].
+    pub body: usize,
+    /// Point in body coordinates.
+    pub local: Vector3<f64>,
+}
+
+/// A frame attached to a body, in its coordinates.
+#[derive(Debug, Clone, Copy)]
+pub struct Frame {
+    /// Origin.
+    pub origin: Vector3<f64>,
+    /// Axes.
+    pub rotation: UnitQuaternion<f64>,
+}
+
+/// A motor on one joint axis: index 0–2 translations, 3–5 rotations about the frame axes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Motor {
+    /// Joint axis.
+    pub axis: usize,
+    /// Stiffness (target position 0).
+    pub stiffness: f64,
+    /// Damping (target velocity 0).
+    pub damping: f64,
+}
+
+/// What a joint does.
+#[derive(Debug, Clone, PartialEq)]
+pub enum JointKind {
+    /// A generic joint: locked axes (0–2 translations, 3–5 rotations) and force-based motors.
+    Generic {
+        /// Locked axes.
+        locked: [bool; 6],
+        /// Motors.
+        motors: Vec<Motor>,
+    },
+    /// A rapier `SpringJoint` between the two frame origins.
+    Spring {
+        /// Rest length.
+        rest: f64,
+        /// Stiffness.
+        stiffness: f64,
+        /// Damping.
+        damping: f64,
+    },
+}
+
+/// A joint between two bodies.
+#[derive(Debug, Clone)]
+pub struct JointSpec {
+    /// First body (the ground, or a body that does not rotate, where it matters).
+    pub body1: usize,
+    /// Second body.
+    pub body2: usize,
+    /// Frame on body 1.
+    pub frame1: Frame,
+    /// Frame on body 2.
+    pub frame2: Frame,
+    /// Kind.
+    pub kind: JointKind,
+}
+
+/// A velocity component a dynamic step holds (zeroed at its start).
+#[derive(Debug, Clone, Copy)]
+pub enum HeldVelocity {
+    /// Translation of a body point along a world direction.
+    Translation {
+        /// Body.
+        body: usize,
+        /// Point in body coordinates.
+        local: Vector3<f64>,
+        /// World direction.
+        direction: Vector3<f64>,
+    },
+    /// Rotation of a body about a world axis.
+    Rotation {
+        /// Body.
+        body: usize,
+        /// World axis.
+        axis: Vector3<f64>,
+    },
+}
+
+/// A dynamic step.
+#[derive(Debug, Clone)]
+pub struct StepSpec {
+    /// Duration.
+    pub duration: f64,
+    /// The ground joints of this step.
+    pub joints: Vec<JointSpec>,
+    /// Held velocity components, zeroed at the start.
+    pub held: Vec<HeldVelocity>,
+}
+
+/// A collider shape.
+#[derive(Debug, Clone, Copy)]
+pub enum Shape {
+    /// Ball of a radius.
+    Ball(f64),
+    /// Cuboid with half extents along its frame axes (2D: z unused).
+    Cuboid(Vector3<f64>),
+}
+
+/// A collider.
+#[derive(Debug, Clone, Copy)]
+pub struct ColliderSpec {
+    /// Body.
+    pub body: usize,
+    /// Shape.
+    pub shape: Shape,
+    /// Pose on the body.
+    pub frame: Frame,
+}
+
+/// A contact pair's colliders and geometry.
+#[derive(Debug, Clone, Copy)]
+pub struct ContactSpec {
+    /// Index of the ball (on the node's body) in [`Plan::colliders`].
+    pub ball: usize,
+    /// Index of the slab (on the face's body).
+    pub slab: usize,
+    /// The node.
+    pub node: NodeId,
+    /// The face's body.
+    pub body: usize,
+    /// Face point in the face body's coordinates.
+    pub face_point: Vector3<f64>,
+    /// Face normal in the face body's coordinates.
+    pub face_normal: Vector3<f64>,
+}
+
+/// A point load.
+#[derive(Debug, Clone, Copy)]
+pub struct LoadSpec {
+    /// Body.
+    pub body: usize,
+    /// Point in body coordinates.
+    pub local: Vector3<f64>,
+    /// Force (world, constant).
+    pub force: Vector3<f64>,
+}
+
+/// Everything a rapier world is built from.
+#[derive(Debug, Clone)]
+pub struct Plan {
+    /// 2D or 3D.
+    pub dimension: Dimension,
+    /// Bodies; 0 is the ground.
+    pub bodies: Vec<BodySpec>,
+    /// Per scene node.
+    pub nodes: Vec<NodeRef>,
+    /// Joints present in every dynamic step (fixed-direction and axial elements).
+    pub permanent: Vec<JointSpec>,
+    /// Dynamic steps in order.
+    pub steps: Vec<StepSpec>,
+    /// Colliders.
+    pub colliders: Vec<ColliderSpec>,
+    /// Per scene contact pair.
+    pub contacts: Vec<ContactSpec>,
+    /// Loads.
+    pub loads: Vec<LoadSpec>,
+}
+
+/// The state of a body at an instant (f64 whatever the rapier precision).
+#[derive(Debug, Clone, Copy)]
+pub struct BodyState {
+    /// Origin.
+    pub position: Vector3<f64>,
+    /// Orientation.
+    pub rotation: UnitQuaternion<f64>,
+    /// Velocity of the centre of mass.
+    pub linvel: Vector3<f64>,
+    /// Angular velocity.
+    pub angvel: Vector3<f64>,
+}
+
+impl BodyState {
+    /// A body point in world coordinates.
+    pub fn point(&self, local: &Vector3<f64>) -> Vector3<f64> {
+        self.position + self.rotation * local
+    }
+
+    /// Velocity of a body point.
+    pub fn velocity(&self, com: &Vector3<f64>, local: &Vector3<f64>) -> Vector3<f64> {
+        self.linvel + self.angvel.cross(&(self.rotation * (local - com)))
+    }
+
+    /// Linear interpolation (rotations by slerp), s in [0, 1] from `self` to `other`.
+    pub fn lerp(&self, other: &BodyState, s: f64) -> BodyState {
+        BodyState {
+            position: self.position.lerp(&other.position, s),
+            rotation: self
+                .rotation
+                .try_slerp(&other.rotation, s, 1e-12)
+                .unwrap_or(other.rotation),
+            linvel: self.linvel.lerp(&other.linvel, s),
+            angvel: self.angvel.lerp(&other.angvel, s),
+        }
+    }
+
+    /// Zero the velocity components a step holds (for this body).
+    pub fn hold(&mut self, com: &Vector3<f64>, held: &[HeldVelocity], me: usize) {
+        let g = self.position + self.rotation * com;
+        for h in held {
+            match *h {
+                HeldVelocity::Rotation { body, axis } if body == me => {
+                    // Keep the velocity of the centre of mass: a held rotation of a body whose
+                    // translations are held too is handled by the translation terms below.
+                    self.angvel -= axis * axis.dot(&self.angvel);
+                }
+                _ => {}
+            }
+        }
+        for h in held {
+            if let HeldVelocity::Translation {
+                body,
+                local,
+                direction,
+            } = *h
+                && body == me
+            {
+                let r = self.rotation * local - (g - self.position);
+                let vp = self.linvel + self.angvel.cross(&r);
+                self.linvel -= direction * direction.dot(&vp);
+            }
+        }
+    }
+}
+
+/// Rotation taking +x to `d` (2D: about z).
+pub fn x_to(d: &Vector3<f64>, dimension: Dimension) -> UnitQuaternion<f64> {
+    match dimension {
+        Dimension::Two => UnitQuaternion::from_axis_angle(&Vector3::z_axis(), d.y.atan2(d.x)),
+        Dimension::Three => {
+            UnitQuaternion::rotation_between(&Vector3::x(), d).unwrap_or_else(|| {
+                UnitQuaternion::from_axis_angle(&Vector3::z_axis(), std::f64::consts::PI)
+            })
+        }
+    }
+}
+
+/// A node frame (orthonormal, right-handed columns) as a rotation.
+pub fn frame_rotation(frame: &Matrix3<f64>) -> UnitQuaternion<f64> {
+    UnitQuaternion::from_rotation_matrix(&nalgebra::Rotation3::from_matrix_unchecked(*frame))
+}
+
+/// Twist of a rotation about a unit axis, in (−π, π].
+pub fn twist(q: &UnitQuaternion<f64>, axis: &Vector3<f64>) -> f64 {
+    2.0 * q.vector().dot(axis).atan2(q.w)
+}
+
+/// Joint axis index of a DOF.
+fn joint_axis(dof: Dof) -> usize {
+    match dof {
+        Dof::Translation(i) => i,
+        Dof::Rotation(i) => 3 + i,
+    }
+}
+
+fn unsupported<T>(message: impl Into<String>) -> Result<T, EngineError> {
+    Err(EngineError::Unsupported(format!(
+        "rapier: {}",
+        message.into()
+    )))
+}
+
+/// Free, massless and held in every translation in every step.
+pub fn is_ground(scene: &Scene, node: NodeId) -> bool {
+    scene.nodes[node].attachment == Attachment::Free
+        && scene.nodes[node].mass == 0.0
+        && scene.steps.iter().all(|s| {
+            Dof::all(scene.dimension, false).iter().all(|d| {
+                s.conditions
+                    .iter()
+                    .any(|c| c.node == node && c.dof == *d && c.value.is_none())
+            })
+        })
+}
+
+/// A spring or dashpot group: the stiffness and damping summed over elements that act alike.
+#[derive(Debug, Clone)]
+struct Group {
+    connection: Connection,
+    stiffness: f64,
+    damping: f64,
+}
+
+fn same_direction(a: &Vector3<f64>, b: &Vector3<f64>) -> bool {
+    (a - b).norm() <= 1e-12 || (a + b).norm() <= 1e-12
+}
+
+fn same_action(a: &Connection, b: &Connection) -> bool {
+    match (a, b) {
+        (
+            Connection::Grounded { node: n1, dof: d1 },
+            Connection::Grounded { node: n2, dof: d2 },
+        ) => n1 == n2 && d1 == d2,
+        (
+            Connection::FixedDirection {
+                nodes: a,
+                direction: da,
+            },
+            Connection::FixedDirection {
+                nodes: b,
+                direction: db,
+            },
+        ) => {
+            ((a[0] == b[0] && a[1] == b[1]) || (a[0] == b[1] && a[1] == b[0]))
+                && same_direction(da, db)
+        }
+        (Connection::Axial { nodes: a }, Connection::Axial { nodes: b }) => {
+            (a[0] == b[0] && a[1] == b[1]) || (a[0] == b[1] && a[1] == b[0])
+        }
+        _ => false,
+    }
+}
+
+fn groups(scene: &Scene) -> Vec<Group> {
+    let mut out: Vec<Group> = Vec::new();
+    for (list, spring) in [(&scene.springs, true), (&scene.dashpots, false)] {
+        for e in list {
+            let g = match out
+                .iter_mut()
+                .position(|g| same_action(&g.connection, &e.connection))
+            {
+                Some(i) => &mut out[i],
+                None => {
+                    out.push(Group {
+                        connection: e.connection.clone(),
+                        stiffness: 0.0,
+                        damping: 0.0,
+                    });
+                    out.last_mut().expect("just pushed")
+                }
+            };
+            if spring {
+                g.stiffness += e.coefficient;
+            } else {
+                g.damping += e.coefficient;
+            }
+        }
+    }
+    out
+}
+
+/// Displacement state during the static steps: per plan body, origin and orientation.
+struct Placement {
+    position: Vec<Vector3<f64>>,
+    rotation: Vec<UnitQuaternion<f64>>,
+}
+
+impl Placement {
+    fn point(&self, r: &NodeRef) -> Vector3<f64> {
+        self.position[r.body] + self.rotation[r.body] * r.local
+    }
+}
+
+/// Build the plan of a scene.
+pub fn plan(scene: &Scene) -> Result<Plan, EngineError> {
+    let dim = scene.dimension;
+    let first_dynamic = scene
+        .steps
+        .iter()
+        .position(|s| matches!(s.kind, StepKind::Dynamic { .. }))
+        .ok_or_else(|| EngineError::Unsupported("rapier: the scene has no dynamic step".into()))?;
+    if scene.steps[first_dynamic..]
+        .iter()
+        .any(|s| s.kind == StepKind::Static)
+    {
+        return unsupported(
+            "a static step after a dynamic one (rapier has no static solve to restart from)",
+        );
+    }
+
+    // Bodies and where each node lives.
+    let mut bodies = vec![BodySpec {
+        kind: BodyKind::Ground,
+        mass: 0.0,
+        com: Vector3::zeros(),
+        inertia: Matrix3::zeros(),
+        position: Vector3::zeros(),
+        rotation: UnitQuaternion::identity(),
+        linvel: Vector3::zeros(),
+        angvel: Vector3::zeros(),
+    }];
+    let mut body_of_scene_body: Vec<usize> = Vec::with_capacity(scene.bodies.len());
+    for b in &scene.bodies {
+        let c = b.centre_offset;
+        let parallel = match dim {
+            Dimension::Two => {
+                let mut m = Matrix3::zeros();
+                m[(2, 2)] = b.mass * (c.x * c.x + c.y * c.y);
+                m
+            }
+            Dimension::Three => {
+                b.mass * (Matrix3::identity() * c.norm_squared() - c * c.transpose())
+            }
+        };
+        let inertia = b.inertia - parallel;
+        let check = match dim {
+            Dimension::Two => inertia[(2, 2)] > 0.0,
+            Dimension::Three => inertia
+                .symmetric_eigenvalues()
+                .iter()
+                .all(|&e| e > -1e-12 * inertia.norm()),
+        };
+        if b.mass <= 0.0 || !check {
+            return unsupported(format!(
+                "body `{}`: mass {} and inertia about the centre of mass {} are not a rigid body's",
+                b.name, b.mass, inertia
+            ));
+        }
+        body_of_scene_body.push(bodies.len());
+        bodies.push(BodySpec {
+            kind: BodyKind::Rigid,
+            mass: b.mass,
+            com: c,
+            inertia,
+            position: scene.nodes[b.reference].position,
+            rotation: UnitQuaternion::identity(),
+            linvel: Vector3::zeros(),
+            angvel: Vector3::zeros(),
+        });
+    }
+    let mut nodes = Vec::with_capacity(scene.nodes.len());
+    for (id, n) in scene.nodes.iter().enumerate() {
+        nodes.push(match n.attachment {
+            Attachment::Free if is_ground(scene, id) => NodeRef {
+                body: 0,
+                local: n.position,
+            },
+            Attachment::Free if n.mass > 0.0 => {
+                bodies.push(BodySpec {
+                    kind: BodyKind::Particle,
+                    mass: n.mass,
+                    com: Vector3::zeros(),
+                    inertia: Matrix3::zeros(),
+                    position: n.position,
+                    rotation: UnitQuaternion::identity(),
+                    linvel: Vector3::zeros(),
+                    angvel: Vector3::zeros(),
+                });
+                NodeRef {
+                    body: bodies.len() - 1,
+                    local: Vector3::zeros(),
+                }
+            }
+            Attachment::Free => {
+                return unsupported(format!(
+                    "node `{}` has no mass and is not held in every translation in every step (a rapier body needs mass)",
+                    n.name
+                ));
+            }
+            Attachment::Reference(b) | Attachment::OnBody(b) => NodeRef {
+                body: body_of_scene_body[b],
+                local: n.position - scene.nodes[scene.bodies[b].reference].position,
+            },
+        });
+    }
+    let reference_of = |body: usize| -> Option<(BodyId, NodeId)> {
+        scene
+            .bodies
+            .iter()
+            .enumerate()
+            .find(|(b, _)| body_of_scene_body[*b] == body)
+            .map(|(b, sb)| (b, sb.reference))
+    };
+
+    let element_groups = groups(scene);
+
+    // Static steps: prescribed displacements, then the force check on the DOFs left free.
+    let mut placement = Placement {
+        position: bodies.iter().map(|b| b.position).collect(),
+        rotation: bodies.iter().map(|b| b.rotation).collect(),
+    };
+    for step in &scene.steps[..first_dynamic] {
+        for c in &step.conditions {
+            let Some(v) = c.value else { continue };
+            let node = &scene.nodes[c.node];
+            let r = nodes[c.node];
+            if r.body == 0 {
+                if v != 0.0 {
+                    return unsupported(format!(
+                        "node `{}` is prescribed a displacement but is ground",
+                        node.name
+                    ));
+                }
+                continue;
+            }
+            match c.dof {
+                Dof::Translation(i) => {
+                    let e: Vector3<f64> = node.frame.column(i).into_owned();
+                    let x0 = node.position;
+                    let current = (placement.point(&r) - x0).dot(&e);
+                    placement.position[r.body] += e * (v - current);
+                }
+                Dof::Rotation(i) => {
+                    let a: Vector3<f64> = node.frame.column(i).into_owned();
+                    let q = placement.rotation[r.body];
+                    let change = UnitQuaternion::from_scaled_axis(a * (v - twist(&q, &a)));
+                    placement.rotation[r.body] = change * q;
+                }
+            }
+        }
+        static_check(
+            scene,
+            step,
+            &nodes,
+            &placement,
+            &element_groups,
+            &reference_of,
+        )?;
+    }
+    for (b, body) in bodies.iter_mut().enumerate() {
+        body.position = placement.position[b];
+        body.rotation = placement.rotation[b];
+    }
+
+    // Initial velocities (centre-of-mass velocities for rigid bodies).
+    for iv in &scene.initial_velocities {
+        let r = nodes[iv.node];
+        if r.body == 0 {
+            continue;
+        }
+        let body = &mut bodies[r.body];
+        match body.kind {
+            BodyKind::Particle => body.linvel = iv.velocity,
+            BodyKind::Rigid => {
+                let arm = body.rotation * (body.com - r.local);
+                body.linvel = iv.velocity + iv.angular.cross(&arm);
+                body.angvel = iv.angular;
+            }
+            BodyKind::Ground => {}
+        }
+    }
+
+    // Fixed-direction and axial elements: permanent joints.
+    let mut permanent = Vec::new();
+    for g in &element_groups {
+        match &g.connection {
+            Connection::Grounded { .. } => {}
+            Connection::FixedDirection {
+                nodes: pair,
+                direction,
+            } => {
+                let (ra, rb) = (nodes[pair[0]], nodes[pair[1]]);
+                if ra.body == rb.body {
+                    continue;
+                }
+                let steady = |r: &NodeRef| bodies[r.body].kind != BodyKind::Rigid;
+                // Body 1 must not rotate: the ground, or a particle.
+                let (a, b) = if ra.body == 0 || (rb.body != 0 && steady(&ra)) {
+                    (pair[0], pair[1])
+                } else if steady(&rb) {
+                    (pair[1], pair[0])
+                } else {
+                    return unsupported(format!(
+                        "a fixed-direction element between nodes `{}` and `{}` of two rotating bodies (its direction needs a non-rotating frame)",
+                        scene.nodes[pair[0]].name, scene.nodes[pair[1]].name
+                    ));
+                };
+                let (ra, rb) = (nodes[a], nodes[b]);
+                let (xa, xb) = (scene.nodes[a].position, scene.nodes[b].position);
+                let rotation = x_to(direction, dim);
+                permanent.push(JointSpec {
+                    body1: ra.body,
+                    body2: rb.body,
+                    frame1: Frame {
+                        origin: ra.local + (xb - xa),
+                        rotation,
+                    },
+                    frame2: Frame {
+                        origin: rb.local,
+                        rotation,
+                    },
+                    kind: JointKind::Generic {
+                        locked: [false; 6],
+                        motors: vec![Motor {
+                            axis: 0,
+                            stiffness: g.stiffness,
+                            damping: g.damping,
+                        }],
+                    },
+                });
+            }
+            Connection::Axial { nodes: pair } => {
+                let (mut a, mut b) = (pair[0], pair[1]);
+                if nodes[b].body == 0 {
+                    std::mem::swap(&mut a, &mut b);
+                }
+                let (ra, rb) = (nodes[a], nodes[b]);
+                if ra.body == rb.body {
+                    continue;
+                }
+                let rest = (scene.nodes[b].position - scene.nodes[a].position).norm();
+                if rest <= 0.0 {
+                    return unsupported(format!(
+                        "axial element between coincident nodes `{}` and `{}`",
+                        scene.nodes[a].name, scene.nodes[b].name
+                    ));
+                }
+                permanent.push(JointSpec {
+                    body1: ra.body,
+                    body2: rb.body,
+                    frame1: Frame {
+                        origin: ra.local,
+                        rotation: UnitQuaternion::identity(),
+                    },
+                    frame2: Frame {
+                        origin: rb.local,
+                        rotation: UnitQuaternion::identity(),
+                    },
+                    kind: JointKind::Spring {
+                        rest,
+                        stiffness: g.stiffness,
+                        damping: g.damping,
+                    },
+                });
+            }
+        }
+    }
+
+    // Dynamic steps: ground joints (holds + grounded motors) and held velocities.
+    let mut steps = Vec::new();
+    for step in &scene.steps[first_dynamic..] {
+        let StepKind::Dynamic { duration } = step.kind else {
+            unreachable!("checked above")
+        };
+        let mut joints = Vec::new();
+        let mut held = Vec::new();
+        for (id, node) in scene.nodes.iter().enumerate() {
+            let r = nodes[id];
+            if r.body == 0 {
+                continue;
+            }
+            let mut locked = [false; 6];
+            for c in step.conditions.iter().filter(|c| c.node == id) {
+                locked[joint_axis(c.dof)] = true;
+                match c.dof {
+                    Dof::Translation(i) => held.push(HeldVelocity::Translation {
+                        body: r.body,
+                        local: r.local,
+                        direction: node.frame.column(i).into_owned(),
+                    }),
+                    Dof::Rotation(i) => held.push(HeldVelocity::Rotation {
+                        body: r.body,
+                        axis: node.frame.column(i).into_owned(),
+                    }),
+                }
+            }
+            // A particle never rotates: its rotations are not the joint's business.
+            if bodies[r.body].kind == BodyKind::Particle {
+                locked[3..].fill(false);
+            }
+            let motors: Vec<Motor> = element_groups
+                .iter()
+                .filter_map(|g| match g.connection {
+                    Connection::Grounded { node: n, dof } if n == id => Some(Motor {
+                        axis: joint_axis(dof),
+                        stiffness: g.stiffness,
+                        damping: g.damping,
+                    }),
+                    _ => None,
+                })
+                .filter(|m| !locked[m.axis])
+                .collect();
+            if !locked.iter().any(|&l| l) && motors.is_empty() {
+                continue;
+            }
+            // Held where the static steps left it; motors measured from t = 0.
+            let x0 = node.position;
+            let u = placement.point(&r) - x0;
+            let mut origin = x0;
+            let q = placement.rotation[r.body];
+            for (i, _) in locked.iter().enumerate().filter(|(_, l)| **l) {
+                if i < 3 {
+                    let e: Vector3<f64> = node.frame.column(i).into_owned();
+                    origin += e * e.dot(&u);
+                } else {
+                    let a: Vector3<f64> = node.frame.column(i - 3).into_owned();
+                    if twist(&q, &a).abs() > 1e-12 {
+                        return unsupported(format!(
+                            "node `{}`: rotation {} is held in a dynamic step after a static step turned it",
+                            node.name,
+                            Dof::Rotation(i - 3)
+                        ));
+                    }
+                }
+            }
+            let rotation = frame_rotation(&node.frame);
+            joints.push(JointSpec {
+                body1: 0,
+                body2: r.body,
+                frame1: Frame { origin, rotation },
+                frame2: Frame {
+                    origin: r.local,
+                    rotation,
+                },
+                kind: JointKind::Generic { locked, motors },
+            });
+        }
+        steps.push(StepSpec {
+            duration,
+            joints,
+            held,
+        });
+    }
+
+    // Contact: a slab on the face's body, a small ball on the node's body.
+    let mut colliders = Vec::new();
+    let mut contacts = Vec::new();
+    for pair in &scene.contacts {
+        let face_body = body_of_scene_body[pair.body];
+        let r = nodes[pair.node];
+        if r.body == face_body {
+            return unsupported(format!(
+                "contact `{}`: the node is on the face's own body",
+                pair.name
+            ));
+        }
+        let origin = scene.nodes[scene.bodies[pair.body].reference].position;
+        let spread = scene
+            .nodes
+            .iter()
+            .enumerate()
+            .filter(|(i, n)| {
+                *i == pair.node
+                    || matches!(n.attachment, Attachment::Reference(b) | Attachment::OnBody(b) if b == pair.body)
+            })
+            .map(|(_, n)| (n.position - pair.face_point).norm())
+            .fold(0.0f64, f64::max);
+        let size = 2.0 * spread.max(f64::MIN_POSITIVE.sqrt());
+        let radius = 1e-3 * size;
+        let n = pair.face_normal;
+        let face_point = pair.face_point - origin;
+        let rotation = x_to(&n, dim);
+        colliders.push(ColliderSpec {
+            body: face_body,
+            shape: Shape::Cuboid(Vector3::new(0.5 * size, size, size)),
+            frame: Frame {
+                origin: face_point - n * (radius + 0.5 * size),
+                rotation,
+            },
+        });
+        colliders.push(ColliderSpec {
+            body: r.body,
+            shape: Shape::Ball(radius),
+            frame: Frame {
+                origin: r.local,
+                rotation: UnitQuaternion::identity(),
+            },
+        });
+        contacts.push(ContactSpec {
+            ball: colliders.len() - 1,
+            slab: colliders.len() - 2,
+            node: pair.node,
+            body: face_body,
+            face_point,
+            face_normal: n,
+        });
+    }
+
+    let loads = scene
+        .loads
+        .iter()
+        .filter(|l| nodes[l.node].body != 0)
+        .map(|l| LoadSpec {
+            body: nodes[l.node].body,
+            local: nodes[l.node].local,
+            force: l.force,
+        })
+        .collect();
+
+    Ok(Plan {
+        dimension: dim,
+        bodies,
+        nodes,
+        permanent,
+        steps,
+        colliders,
+        contacts,
+        loads,
+    })
+}
+
+/// After a static step's prescriptions: every DOF the step leaves free must carry no force.
+fn static_check(
+    scene: &Scene,
+    step: &crate::scene::Step,
+    nodes: &[NodeRef],
+    placement: &Placement,
+    element_groups: &[Group],
+    reference_of: &dyn Fn(usize) -> Option<(BodyId, NodeId)>,
+) -> Result<(), EngineError> {
+    let point = |n: NodeId| placement.point(&nodes[n]);
+    let nb = placement.position.len();
+    let mut force = vec![Vector3::<f64>::zeros(); nb];
+    let mut moment = vec![Vector3::<f64>::zeros(); nb];
+    let mut scale = 0.0f64;
+    let apply = |n: NodeId,
+                 f: Vector3<f64>,
+                 force: &mut Vec<Vector3<f64>>,
+                 moment: &mut Vec<Vector3<f64>>| {
+        let r = nodes[n];
+        force[r.body] += f;
+        moment[r.body] += (point(n) - placement.position[r.body]).cross(&f);
+    };
+    for g in element_groups {
+        let k = g.stiffness;
+        if k == 0.0 {
+            continue;
+        }
+        match &g.connection {
+            Connection::Grounded {
+                node,
+                dof: Dof::Translation(i),
+            } => {
+                let e: Vector3<f64> = scene.nodes[*node].frame.column(*i).into_owned();
+                let f = -k * e.dot(&(point(*node) - scene.nodes[*node].position));
+                scale += f.abs();
+                apply(*node, e * f, &mut force, &mut moment);
+            }
+            Connection::Grounded {
+                node,
+                dof: Dof::Rotation(i),
+            } => {
+                let a: Vector3<f64> = scene.nodes[*node].frame.column(*i).into_owned();
+                let b = nodes[*node].body;
+                let m = -k * twist(&placement.rotation[b], &a);
+                scale += m.abs();
+                moment[b] += a * m;
+            }
+            Connection::FixedDirection {
+                nodes: [a, b],
+                direction,
+            } => {
+                let ua = point(*a) - scene.nodes[*a].position;
+                let ub = point(*b) - scene.nodes[*b].position;
+                let f = -k * direction.dot(&(ub - ua));
+                scale += f.abs();
+                apply(*b, direction * f, &mut force, &mut moment);
+                apply(*a, -direction * f, &mut force, &mut moment);
+            }
+            Connection::Axial { nodes: [a, b] } => {
+                let d = point(*b) - point(*a);
+                let rest = (scene.nodes[*b].position - scene.nodes[*a].position).norm();
+                let f = -k * (d.norm() - rest);
+                scale += f.abs();
+                let n = d / d.norm().max(f64::MIN_POSITIVE);
+                apply(*b, n * f, &mut force, &mut moment);
+                apply(*a, -n * f, &mut force, &mut moment);
+            }
+        }
+    }
+    for l in &scene.loads {
+        scale += l.force.norm();
+        apply(l.node, l.force, &mut force, &mut moment);
+    }
+    if scale == 0.0 {
+        return Ok(());
+    }
+    let lever = scene
+        .nodes
+        .iter()
+        .map(|n| n.position.norm())
+        .fold(1.0f64, f64::max);
+    let tol = 1e-9 * scale;
+    for (b, _) in force.iter().enumerate().skip(1) {
+        // The node carrying this body's DOFs: the particle's node or the reference node.
+        let carrier = match reference_of(b) {
+            Some((_, reference)) => reference,
+            None => match nodes.iter().position(|r| r.body == b) {
+                Some(n) => n,
+                None => continue,
+            },
+        };
+        let is_rigid = reference_of(b).is_some();
+        for dof in Dof::all(scene.dimension, is_rigid) {
+            if step
+                .conditions
+                .iter()
+                .any(|c| c.node == carrier && c.dof == dof)
+            {
+                continue;
+            }
+            let (value, limit) = match dof {
+                Dof::Translation(i) => (
+                    force[b].dot(&scene.nodes[carrier].frame.column(i).into_owned()),
+                    tol,
+                ),
+                Dof::Rotation(i) => (
+                    moment[b].dot(&scene.nodes[carrier].frame.column(i).into_owned()),
+                    tol * lever,
+                ),
+            };
+            if value.abs() > limit {
+                return unsupported(format!(
+                    "the static step leaves {dof} of node `{}` free with a resulting force {value:e} (rapier has no static solve; hold or prescribe it)",
+                    scene.nodes[carrier].name
+                ));
+            }
+        }
+    }
+    Ok(())
+}

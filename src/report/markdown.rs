@@ -275,6 +275,11 @@ fn case_section(w: &mut String, c: &CaseSummary) {
         "\n### {}\n\n{} ({}D, {} s).\n",
         c.id, c.title, c.dimension, c.duration
     );
+    let _ = writeln!(
+        w,
+        "![{0}: every engine's histories](figures/{0}.svg)\n",
+        c.id
+    );
     if let Some(m) = &c.contact {
         let validity = match m.valid_until {
             None => {

@@ -4,10 +4,12 @@
 //! - [`summary`]: `summary.json`, every metric per case and engine (deterministic: the same
 //!   inputs give the same bytes);
 //! - `timings.json`: wall-clock seconds per case and engine (the one thing that varies);
+//! - [`figures`]: `figures/<case>.svg`, each case's histories drawn;
 //! - [`markdown`]: `REPORT.md`, rendered from the summary and the timings;
 //! - [`staging`]: how a report is assembled beside its target and swapped into place.
 
 pub mod data;
+pub mod figures;
 pub mod markdown;
 pub mod staging;
 pub mod summary;
@@ -35,6 +37,22 @@ pub fn write(plan: &Plan, outcome: &Outcome, previous: &Path) -> Result<Summary,
                 .entry(job.case.clone())
                 .or_default()
                 .insert(job.engine.clone(), s.info.wall_seconds);
+        }
+    }
+    for case in &summary.cases {
+        let histories: Vec<(&str, crate::engines::History)> = summary
+            .engines
+            .iter()
+            .filter_map(|e| {
+                let h = data::read_history(&data::csv_path(&plan.out, &case.id, e)).ok()?;
+                Some((e.as_str(), h))
+            })
+            .collect();
+        let Some(scene) = plan.cases.iter().find(|s| s.id == case.id) else {
+            continue; // a case this run did not include keeps its previous figure
+        };
+        if let Some(svg) = figures::render(&case.id, scene.family.contract_columns(), &histories) {
+            data::write_atomic(&figures::figure_path(&plan.out, &case.id), svg.as_bytes())?;
         }
     }
     data::write_atomic(&summary_path(&plan.out), summary.to_json().as_bytes())?;

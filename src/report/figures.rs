@@ -1,0 +1,110 @@
+//! SVG figures (plotters): per case, each live contract column over time for the closed form
+//! and the engines, so a reader sees what the error tables measure.
+
+use crate::engines::History;
+use plotters::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// Engines drawn, with their colours, in drawing order (the closed form last, on top).
+const DRAWN: [(&str, RGBColor); 5] = [
+    ("rapier_f64_default", RGBColor(200, 160, 0)),
+    ("rapier_f64", RGBColor(214, 39, 40)),
+    ("explicit", RGBColor(31, 119, 180)),
+    ("explicit_small", RGBColor(44, 160, 44)),
+    ("analytic", RGBColor(0, 0, 0)),
+];
+
+/// `out/figures/<case>.svg`.
+pub fn figure_path(out: &Path, case: &str) -> PathBuf {
+    out.join("figures").join(format!("{case}.svg"))
+}
+
+/// Render a case's figure: one panel per column in `columns` whose values are not all zero,
+/// every available engine's history as a line. `histories` pairs engine names with histories.
+pub fn render(case: &str, columns: &[&str], histories: &[(&str, History)]) -> Option<String> {
+    let live: Vec<&str> = columns
+        .iter()
+        .copied()
+        .filter(|c| {
+            histories
+                .iter()
+                .any(|(_, h)| h.column(c).is_some_and(|v| v.iter().any(|x| *x != 0.0)))
+        })
+        .collect();
+    if live.is_empty() {
+        return None;
+    }
+    let mut svg = String::new();
+    {
+        let height = 220 * live.len() as u32 + 40;
+        let root = SVGBackend::with_string(&mut svg, (900, height)).into_drawing_area();
+        root.fill(&WHITE).ok()?;
+        let (title, body) = root.split_vertically(40);
+        title.titled(case, ("sans-serif", 22)).ok()?;
+        let panels = body.split_evenly((live.len(), 1));
+        for (panel, column) in panels.iter().zip(&live) {
+            let series: Vec<(&str, RGBColor, Vec<(f64, f64)>)> = DRAWN
+                .iter()
+                .filter_map(|(engine, colour)| {
+                    let (_, h) = histories.iter().find(|(e, _)| e == engine)?;
+                    let t = h.column("t")?;
+                    let v = h.column(column)?;
+                    Some((*engine, *colour, t.into_iter().zip(v).collect()))
+                })
+                .collect();
+            let (t0, t1) = series
+                .iter()
+                .flat_map(|s| s.2.iter().map(|p| p.0))
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
+                    (a.min(t), b.max(t))
+                });
+            // Scale to the closed form (or the first engine) so one wild run does not flatten
+            // the others; wild values are clipped at the panel edge.
+            let reference = series
+                .iter()
+                .find(|s| s.0 == "analytic")
+                .unwrap_or(&series[0]);
+            let (lo, hi) = reference
+                .2
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                    (a.min(p.1), b.max(p.1))
+                });
+            let pad = 0.15 * (hi - lo).max(1e-12);
+            let (lo, hi) = (lo - pad, hi + pad);
+            let mut chart = ChartBuilder::on(panel)
+                .margin(8)
+                .x_label_area_size(30)
+                .y_label_area_size(70)
+                .build_cartesian_2d(t0..t1, lo..hi)
+                .ok()?;
+            chart
+                .configure_mesh()
+                .x_desc("t")
+                .y_desc(*column)
+                .y_label_formatter(&|y| format!("{y:.3e}"))
+                .light_line_style(WHITE)
+                .draw()
+                .ok()?;
+            for (engine, colour, points) in &series {
+                let clipped = points.iter().map(|(t, y)| (*t, y.clamp(lo, hi)));
+                chart
+                    .draw_series(LineSeries::new(clipped, colour.stroke_width(1)))
+                    .ok()?
+                    .label(*engine)
+                    .legend(move |(x, y)| {
+                        PathElement::new([(x, y), (x + 18, y)], colour.stroke_width(2))
+                    });
+            }
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .position(SeriesLabelPosition::UpperRight)
+                .draw()
+                .ok()?;
+        }
+        root.present().ok()?;
+    }
+    Some(svg)
+}

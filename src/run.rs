@@ -196,6 +196,9 @@ fn run_job(scene: &Scene, engine: &dyn Engine, settings: &RunSettings, out: &Pat
         .and_then(|output| {
             check_contract(scene, &output.history)
                 .map_err(|e| format!("history breaks the output contract: {e}"))?;
+            if crate::report::staging::interrupted() {
+                return Err("interrupted before its CSV was written".to_string());
+            }
             let csv = data::write_history(out, &scene.id, &name, &output.history)
                 .map_err(|e| format!("cannot write the CSV: {e}"))?;
             Ok(JobSuccess {

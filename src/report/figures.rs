@@ -14,6 +14,9 @@ const DRAWN: [(&str, RGBColor); 5] = [
     ("analytic", RGBColor(0, 0, 0)),
 ];
 
+/// One engine's line in a panel: name, colour, (t, value) points.
+type Series<'a> = (&'a str, RGBColor, Vec<(f64, f64)>);
+
 /// `out/figures/<case>.svg`.
 pub fn figure_path(out: &Path, case: &str) -> PathBuf {
     out.join("figures").join(format!("{case}.svg"))
@@ -43,7 +46,7 @@ pub fn render(case: &str, columns: &[&str], histories: &[(&str, History)]) -> Op
         title.titled(case, ("sans-serif", 22)).ok()?;
         let panels = body.split_evenly((live.len(), 1));
         for (panel, column) in panels.iter().zip(&live) {
-            let series: Vec<(&str, RGBColor, Vec<(f64, f64)>)> = DRAWN
+            let series: Vec<Series> = DRAWN
                 .iter()
                 .filter_map(|(engine, colour)| {
                     let (_, h) = histories.iter().find(|(e, _)| e == engine)?;

@@ -11,9 +11,18 @@ use std::fs;
 use std::io;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The staging directory of the running process, for the signal handler.
 static ACTIVE: Mutex<Option<PathBuf>> = Mutex::new(None);
+
+/// Set by SIGINT or SIGTERM: jobs still running must not write any more.
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// Whether the run was interrupted (jobs check this before writing).
+pub fn interrupted() -> bool {
+    INTERRUPTED.load(Ordering::SeqCst)
+}
 
 /// A report being assembled.
 #[derive(Debug)]
@@ -73,9 +82,10 @@ impl Staging {
             dir,
             committed: false,
         };
-        let data = target.join("data");
-        if data.is_dir() {
-            link_tree(&data, &staging.dir.join("data"))?;
+        // Everything the previous report had (data, figures, summary) is carried over, so a run
+        // of some cases keeps the others'; what this run writes replaces it atomically.
+        if target.is_dir() {
+            link_tree(target, &staging.dir)?;
         }
         Ok(staging)
     }
@@ -160,8 +170,13 @@ fn exchange_by_renames(a: &Path, b: &Path) -> io::Result<()> {
 /// interrupted run leaves the previous report as it was and no stray files.
 pub fn install_signal_cleanup() {
     let _ = ctrlc::set_handler(|| {
+        INTERRUPTED.store(true, Ordering::SeqCst);
         if let Some(dir) = ACTIVE.lock().unwrap_or_else(|e| e.into_inner()).take() {
-            let _ = fs::remove_dir_all(dir);
+            let _ = fs::remove_dir_all(&dir);
+            // A job that was already writing may re-create the directory; it checks the flag
+            // before any further write, so a second pass after it finishes clears it for good.
+            std::thread::sleep(std::time::Duration::from_millis(200));
+            let _ = fs::remove_dir_all(&dir);
         }
         eprintln!("interrupted: the previous report is unchanged");
         std::process::exit(130);

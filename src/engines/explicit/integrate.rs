@@ -75,7 +75,7 @@ pub fn stable_increment<S: Space, const FINITE: bool>(
 
 /// Choose the increment: the rule, never above the stable one, then shortened so that it
 /// divides the output interval exactly (rows fall on steps; no interpolation).
-fn choose_increment(
+pub(crate) fn choose_increment(
     rule: IncrementRule,
     stable: Option<&StableIncrement>,
     duration: f64,

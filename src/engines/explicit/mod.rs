@@ -105,6 +105,15 @@ impl ExplicitEngine {
         }
     }
 
+    /// The increment a run of this scene under these settings uses: the increment rule, never
+    /// above the stable increment (except `Forced`), shortened to divide the output interval.
+    pub fn increment(&self, scene: &Scene, settings: &RunSettings) -> Result<f64, EngineError> {
+        let s = merged(scene, settings);
+        let stable = self.stable_increment(scene, settings);
+        let interval = scene.duration() / (scene.output_rows - 1) as f64;
+        integrate::choose_increment(s.increment, stable.as_ref(), scene.duration(), interval)
+    }
+
     /// The stable increment of a scene under these settings, without running it.
     pub fn stable_increment(
         &self,

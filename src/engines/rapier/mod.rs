@@ -62,7 +62,7 @@ pub mod record;
 
 use super::explicit::ExplicitEngine;
 use super::{Engine, EngineError, RunInfo, RunOutput, RunSettings};
-use crate::scene::{DEFAULT_SAFETY, Dimension, IncrementRule, Scene};
+use crate::scene::{Dimension, IncrementRule, Scene};
 use std::collections::BTreeMap;
 use std::time::Instant;
 
@@ -274,25 +274,21 @@ impl Engine for RapierEngine {
     }
 }
 
-/// The explicit engine's increment for a scene (before its division of the output interval):
-/// the rule's increment, or 0.9 × the explicit stable increment for the rules that derive it
-/// (with no stable increment: the output interval); then shortened to divide the output
-/// interval.
+/// The explicit engine's increment for a scene, by the explicit engine's own rule
+/// ([`ExplicitEngine::increment`]). A given increment is taken as it is even above the
+/// explicit stable one: rapier is implicit and has no such limit.
 pub fn matched_increment(scene: &Scene, settings: &RunSettings) -> f64 {
-    let interval = scene.duration() / (scene.output_rows - 1) as f64;
-    let stable = || {
-        ExplicitEngine::finite()
-            .stable_increment(scene, settings)
-            .map_or(interval, |s| s.increment)
+    let rule = match settings.increment.unwrap_or(scene.settings.increment) {
+        IncrementRule::Given(h) => IncrementRule::Forced(h),
+        other => other,
     };
-    let h = match settings.increment.unwrap_or(scene.settings.increment) {
-        IncrementRule::Given(h) | IncrementRule::Forced(h) => h,
-        IncrementRule::Stable { safety } => safety * stable(),
-        IncrementRule::Accuracy(_) => DEFAULT_SAFETY * stable(),
-    }
-    .min(interval);
-    let per_interval = (interval / h - 1e-9).ceil().max(1.0);
-    interval / per_interval
+    let settings = RunSettings {
+        increment: Some(rule),
+        ..*settings
+    };
+    ExplicitEngine::finite()
+        .increment(scene, &settings)
+        .unwrap_or_else(|_| scene.duration() / (scene.output_rows - 1) as f64)
 }
 
 /// The four rapier engines in report order.

@@ -1,11 +1,23 @@
 //! crosscheck: a verification harness for explicit dynamics.
 //!
-//! Data flows cases → scene → engines → comparison → report:
-//! [`case`] reads `cases/*.toml`, [`scene`] validates them into the one type engines share,
-//! [`engines`] turn a scene into time histories, and [`report`] writes them out.
+//! Data flows cases → scene → engines → run → comparison → report, and every module imports
+//! only from modules before it in that flow (`case` reads the file format and builds the
+//! scene, so it also uses [`scene`] and [`contract`]):
+//!
+//! - [`scene`]: the validated model, the one type every engine reads (knows no file format);
+//! - [`contract`]: the output contract every engine's history meets (column names, sampling);
+//! - [`case`]: `cases/*.toml` → [`scene::Scene`], with located diagnostics;
+//! - [`engines`]: scene + run settings → history, one module per engine behind one trait;
+//!   engines never import each other;
+//! - [`run`]: loads the cases, plans every (case × engine) job (what "matched settings" means
+//!   lives here), runs them in parallel and returns data; it writes nothing;
+//! - [`comparison`]: the metrics of one history against another;
+//! - [`report`]: writes what a run returned: CSVs, figures, summary, REPORT.md, staged and
+//!   swapped into place.
 
 pub mod case;
 pub mod comparison;
+pub mod contract;
 pub mod engines;
 pub mod report;
 pub mod run;

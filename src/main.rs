@@ -242,11 +242,10 @@ fn run_command(args: RunArgs) -> ExitCode {
         cases,
         engines,
         settings: args.settings(),
-        out: staging.path().to_path_buf(),
     };
     let outcome = run::execute(&plan, !args.quiet);
     print!("{}", outcome.table());
-    let summary = match report::write(&plan, &outcome, staging.target()) {
+    let summary = match report::write(staging.path(), &plan, &outcome, staging.target()) {
         Ok(s) => s,
         Err(e) => {
             eprintln!("error: cannot write the report (the previous one is unchanged): {e}");

@@ -104,7 +104,7 @@ fn bounded(scene: &Scene, h: f64, reference: f64) -> bool {
         Err(_) => false,
         Ok(o) => {
             let last = o.history.rows.last().unwrap();
-            let n = scene.family.contract_columns().len();
+            let n = crosscheck::contract::columns(scene.family).len();
             last[1..=n]
                 .iter()
                 .all(|x| x.is_finite() && x.abs() <= 10.0 * reference)
@@ -124,7 +124,7 @@ fn bisect_stable(scene: &Scene, guess: f64) -> f64 {
             },
         )
         .unwrap();
-    let n = scene.family.contract_columns().len();
+    let n = crosscheck::contract::columns(scene.family).len();
     let reference = reference_run
         .history
         .rows

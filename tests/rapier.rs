@@ -4,13 +4,14 @@
 mod common;
 use common::*;
 use crosscheck::comparison::compare;
+use crosscheck::contract::check as check_contract;
 use crosscheck::engines::analytic::AnalyticEngine;
 use crosscheck::engines::explicit::ExplicitEngine;
 use crosscheck::engines::rapier::{
-    Configuration, MatchedSettings, Precision, RapierEngine, engines, matched_increment,
+    Configuration, MatchedSettings, Precision, RapierEngine, engines,
 };
 use crosscheck::engines::{Engine, EngineError, History, RunSettings};
-use crosscheck::run::check_contract;
+use crosscheck::run::matching::matched_increment;
 use crosscheck::scene::{Dof, Scene};
 use std::collections::HashMap;
 use std::sync::{Mutex, OnceLock};
@@ -47,9 +48,7 @@ fn matched_with(precision: Precision, f: impl FnOnce(&mut MatchedSettings)) -> R
 /// column's peak (columns the analytic holds at 0 are skipped: they measure joint leakage, not
 /// the answer).
 fn change(scene: &Scene, analytic: &History, a: &History, b: &History) -> f64 {
-    scene
-        .family
-        .contract_columns()
+    crosscheck::contract::columns(scene.family)
         .iter()
         .filter_map(|name| {
             let p = peak(&col(analytic, name));

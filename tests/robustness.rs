@@ -68,7 +68,6 @@ fn a_failed_case_does_not_stop_the_others() {
         cases: vec![bad, scene("springs_n2n_b")],
         engines: engines::all(),
         settings: RunSettings::default(),
-        out: out.path().to_path_buf(),
     };
     let outcome = run::execute(&plan, false);
     // The closed form of the bad case still runs (and so does rapier, which is implicit and
@@ -81,7 +80,8 @@ fn a_failed_case_does_not_stop_the_others() {
             .filter(|j| j.case == "springs_n2n_b")
             .all(|j| j.is_ok())
     );
-    let summary = crosscheck::report::write(&plan, &outcome, &out.path().join("none")).unwrap();
+    let summary =
+        crosscheck::report::write(out.path(), &plan, &outcome, &out.path().join("none")).unwrap();
     let bad_runs = &summary
         .cases
         .iter()

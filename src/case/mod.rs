@@ -1,5 +1,6 @@
 //! Case files: finding them, reading them, and turning them into validated scenes.
 
+pub mod build;
 pub mod diagnostic;
 pub mod file;
 
@@ -153,7 +154,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Scene, CaseError> {
         }
     })?;
     let stem = path.file_stem().and_then(|s| s.to_str());
-    Scene::from_case(&case, stem).map_err(|e| invalid(text, path, e))
+    build::scene(&case, stem).map_err(|e| invalid(text, path, e))
 }
 
 /// A scene error located in the text of its case file.

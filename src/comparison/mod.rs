@@ -11,8 +11,7 @@
 //! balance error of an engine that writes `e_balance` is its largest magnitude divided by the
 //! largest kinetic + elastic energy of the run.
 
-use crate::engines::History;
-use crate::engines::analytic::VALID_COLUMN;
+use crate::contract::{self, History, VALID_COLUMN};
 use crate::scene::Scene;
 use serde::{Deserialize, Serialize};
 
@@ -70,9 +69,7 @@ fn valid_rows(reference: &History) -> usize {
 /// Measure `candidate` against the analytic `reference` on the scene's contract columns.
 pub fn compare(scene: &Scene, reference: &History, candidate: &History) -> Comparison {
     let n = valid_rows(reference).min(candidate.rows.len());
-    let columns: Vec<ColumnError> = scene
-        .family
-        .contract_columns()
+    let columns: Vec<ColumnError> = contract::columns(scene.family)
         .iter()
         .filter_map(|name| {
             let a = reference.column(name)?;

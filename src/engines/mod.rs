@@ -7,6 +7,7 @@ pub mod analytic;
 pub mod explicit;
 pub mod rapier;
 
+pub use crate::contract::History;
 use crate::scene::{ContactStart, DampingTreatment, IncrementRule, PenaltyRule, Scene};
 use std::collections::BTreeMap;
 
@@ -21,23 +22,6 @@ pub struct RunSettings {
     pub damping: Option<DampingTreatment>,
     /// Contact start.
     pub contact_start: Option<ContactStart>,
-}
-
-/// A time history: a header and rows, the first column `t`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct History {
-    /// Column names, starting with `t`.
-    pub columns: Vec<String>,
-    /// Rows, each as long as `columns`.
-    pub rows: Vec<Vec<f64>>,
-}
-
-impl History {
-    /// Values of a named column.
-    pub fn column(&self, name: &str) -> Option<Vec<f64>> {
-        let k = self.columns.iter().position(|c| c == name)?;
-        Some(self.rows.iter().map(|r| r[k]).collect())
-    }
 }
 
 /// What a run used and cost.
@@ -90,10 +74,26 @@ pub enum EngineError {
     Failed(String),
 }
 
+/// What an engine needs decided for it, beyond the case and the run's overrides, before it
+/// runs. The layer that plans jobs decides it (`run::matching`); engines never ask each other.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Needs {
+    /// Nothing: the engine takes the case's settings and the run's overrides as they are.
+    #[default]
+    Nothing,
+    /// The explicit engine's increment for the scene, so that the two can be compared step for
+    /// step; handed over as [`IncrementRule::Forced`] in [`RunSettings::increment`].
+    MatchedIncrement,
+}
+
 /// An engine.
 pub trait Engine: Send + Sync {
     /// Name, used as the CSV file stem and in reports.
     fn name(&self) -> &str;
+    /// What the planner must decide for this engine's runs.
+    fn needs(&self) -> Needs {
+        Needs::Nothing
+    }
     /// Run a scene.
     fn run(&self, scene: &Scene, settings: &RunSettings) -> Result<RunOutput, EngineError>;
 }

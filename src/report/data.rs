@@ -6,7 +6,7 @@
 //! Files are written atomically: a temporary file in the same directory is renamed into place, so
 //! an interrupted run leaves either the old file or the new one, never half of one.
 
-use crate::engines::History;
+use crate::contract::History;
 use std::fs::{self, File};
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};

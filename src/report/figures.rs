@@ -1,7 +1,7 @@
 //! SVG figures (plotters): per case, each live contract column over time for the closed form
 //! and the engines, so a reader sees what the error tables measure.
 
-use crate::engines::History;
+use crate::contract::History;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 

@@ -1,4 +1,5 @@
-//! Writing results: the files other tools and people read.
+//! Writing results: the files other tools and people read. The report reads what a run
+//! returned ([`crate::run::Outcome`]); it never drives a run.
 //!
 //! - [`data`]: the time histories, one CSV per case and engine (the spec's output contract);
 //! - [`summary`]: `summary.json`, every metric per case and engine (deterministic: the same
@@ -14,7 +15,9 @@ pub mod markdown;
 pub mod staging;
 pub mod summary;
 
+use crate::contract::{self, History};
 use crate::run::{Outcome, Plan};
+use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use summary::Summary;
@@ -22,11 +25,17 @@ use summary::Summary;
 /// Wall-clock seconds per case and engine.
 pub type Timings = BTreeMap<String, BTreeMap<String, f64>>;
 
-/// Write `summary.json`, `timings.json` and `REPORT.md` for a run into `plan.out` (the staging
-/// directory), keeping what the `previous` report had for cases and engines this run did not
-/// include. Returns the summary.
-pub fn write(plan: &Plan, outcome: &Outcome, previous: &Path) -> Result<Summary, data::DataError> {
-    let mut summary = Summary::build(plan, outcome);
+/// Write a run's report into `out` (the staging directory): each successful job's history as
+/// CSV, the figures, `summary.json`, `timings.json` and `REPORT.md`, keeping what the
+/// `previous` report had for cases and engines this run did not include. Returns the summary.
+pub fn write(
+    out: &Path,
+    plan: &Plan,
+    outcome: &Outcome,
+    previous: &Path,
+) -> Result<Summary, data::DataError> {
+    write_histories(out, outcome)?;
+    let mut summary = Summary::build(plan, outcome, out);
     let mut timings: Timings = read_json(&timings_path(previous)).unwrap_or_default();
     if let Some(old) = read_json::<Summary>(&summary_path(previous)) {
         summary.merge_previous(old);
@@ -40,29 +49,41 @@ pub fn write(plan: &Plan, outcome: &Outcome, previous: &Path) -> Result<Summary,
         }
     }
     for case in &summary.cases {
-        let histories: Vec<(&str, crate::engines::History)> = summary
+        let histories: Vec<(&str, History)> = summary
             .engines
             .iter()
             .filter_map(|e| {
-                let h = data::read_history(&data::csv_path(&plan.out, &case.id, e)).ok()?;
+                let h = data::read_history(&data::csv_path(out, &case.id, e)).ok()?;
                 Some((e.as_str(), h))
             })
             .collect();
         let Some(scene) = plan.cases.iter().find(|s| s.id == case.id) else {
             continue; // a case this run did not include keeps its previous figure
         };
-        if let Some(svg) = figures::render(&case.id, scene.family.contract_columns(), &histories) {
-            data::write_atomic(&figures::figure_path(&plan.out, &case.id), svg.as_bytes())?;
+        if let Some(svg) = figures::render(&case.id, contract::columns(scene.family), &histories) {
+            data::write_atomic(&figures::figure_path(out, &case.id), svg.as_bytes())?;
         }
     }
-    data::write_atomic(&summary_path(&plan.out), summary.to_json().as_bytes())?;
+    data::write_atomic(&summary_path(out), summary.to_json().as_bytes())?;
     let json = serde_json::to_string_pretty(&timings).expect("timings serialise") + "\n";
-    data::write_atomic(&timings_path(&plan.out), json.as_bytes())?;
+    data::write_atomic(&timings_path(out), json.as_bytes())?;
     data::write_atomic(
-        &report_path(&plan.out),
+        &report_path(out),
         markdown::render(&summary, &timings).as_bytes(),
     )?;
     Ok(summary)
+}
+
+/// Write each successful job's history to `out/data/<case>/<engine>.csv` (in parallel; each
+/// file atomically).
+pub fn write_histories(out: &Path, outcome: &Outcome) -> Result<(), data::DataError> {
+    outcome
+        .jobs
+        .par_iter()
+        .filter_map(|job| Some((job, job.result.as_ref().ok()?)))
+        .try_for_each(|(job, s)| {
+            data::write_history(out, &job.case, &job.engine, &s.history).map(|_| ())
+        })
 }
 
 fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Option<T> {

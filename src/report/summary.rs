@@ -2,12 +2,13 @@
 //! cost. REPORT.md is rendered from the same [`Summary`], so their numbers agree.
 
 use crate::comparison::{self, Comparison, ContactValidity, REFERENCE_ENGINE};
-use crate::engines::History;
+use crate::contract::History;
 use crate::report::data::{csv_path, read_history};
-use crate::run::{Outcome, Plan};
+use crate::run::{JobResult, Outcome, Plan};
 use crate::scene::{Dimension, Scene};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
+use std::path::Path;
 
 /// The whole run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -97,9 +98,10 @@ pub struct EngineSummary {
 impl Summary {
     /// Build from a run's plan and outcome.
     ///
-    /// Histories of engines this run did not include are read from the CSVs already in
-    /// `plan.out` (a run of some engines still compares against the analytic answer on disk).
-    pub fn build(plan: &Plan, outcome: &Outcome) -> Summary {
+    /// Histories of engines this run did not include are read from the CSVs already in `out`
+    /// (a run of some engines still compares against the analytic answer on disk); a failed
+    /// job whose CSV from an earlier run is still in `out` says so.
+    pub fn build(plan: &Plan, outcome: &Outcome, out: &Path) -> Summary {
         let history = |case: &str, engine: &str| -> Option<History> {
             match outcome
                 .jobs
@@ -107,7 +109,7 @@ impl Summary {
                 .find(|j| j.case == case && j.engine == engine)
             {
                 Some(j) => j.result.as_ref().ok().map(|s| s.history.clone()),
-                None => read_history(&csv_path(&plan.out, case, engine)).ok(),
+                None => read_history(&csv_path(out, case, engine)).ok(),
             }
         };
         let cases = plan
@@ -120,7 +122,10 @@ impl Summary {
                     .jobs
                     .iter()
                     .filter(|j| j.case == scene.id)
-                    .map(|j| engine_summary(scene, j, reference))
+                    .map(|j| {
+                        let stale = !j.is_ok() && csv_path(out, &j.case, &j.engine).exists();
+                        engine_summary(scene, j, reference, stale)
+                    })
                     .collect();
                 CaseSummary {
                     id: scene.id.clone(),
@@ -241,14 +246,19 @@ impl Summary {
 
 fn engine_summary(
     scene: &Scene,
-    job: &crate::run::JobResult,
+    job: &JobResult,
     reference: Option<&History>,
+    stale_csv: bool,
 ) -> EngineSummary {
     let tolerance = comparison::tolerance(scene, &job.engine);
     match &job.result {
         Err(e) => EngineSummary {
             engine: job.engine.clone(),
-            error: Some(e.clone()),
+            error: Some(if stale_csv {
+                format!("{e} (a CSV from an earlier run is still in place)")
+            } else {
+                e.clone()
+            }),
             increment: None,
             steps: None,
             stable_increment: None,

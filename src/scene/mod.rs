@@ -1,15 +1,21 @@
 //! The validated scene: the one type every engine reads.
 //!
-//! A [`Scene`] is built from a case file by [`Scene::from_case`] (see `build.rs`) and is then
-//! immutable. Positions and directions are stored as 3-vectors; in a 2D scene every z component
+//! A [`Scene`] is built from a case file by the case reader (`src/case/build.rs`) and is then immutable; this module
+//! knows nothing of files, TOML or spans. Positions and directions are stored as 3-vectors; in a 2D scene every z component
 //! is zero and only the in-plane DOFs (`ux`, `uy`, `rz`) exist.
-
-mod build;
 
 use nalgebra::{Matrix3, Vector3};
 use std::fmt;
 
-pub use build::SceneError;
+/// A scene that is not valid: which field, and what is wrong with it.
+#[derive(Debug, Clone, thiserror::Error)]
+#[error("{field}: {message}")]
+pub struct SceneError {
+    /// Key path of the offending field, e.g. `springs[2].stiffness`.
+    pub field: String,
+    /// What is wrong and what would be valid.
+    pub message: String,
+}
 
 /// Index of a node in [`Scene::nodes`].
 pub type NodeId = usize;
@@ -45,13 +51,6 @@ pub enum Family {
 }
 
 impl Family {
-    /// The contract columns of the family, in order (see the spec's output conventions).
-    pub fn contract_columns(self) -> &'static [&'static str] {
-        match self {
-            Family::RigidBody => &["rz", "ux", "ux_node", "contact_force"],
-            Family::Springs => &["u_end", "u_mid", "v_end", "v_mid"],
-        }
-    }
     /// Name as written in case files.
     pub fn name(self) -> &'static str {
         match self {

@@ -58,9 +58,7 @@ pub fn max_diff(a: &[f64], b: &[f64]) -> f64 {
 
 /// The contract columns of a scene that are not identically zero.
 pub fn live_columns(scene: &Scene) -> Vec<String> {
-    scene
-        .family
-        .contract_columns()
+    crosscheck::contract::columns(scene.family)
         .iter()
         .zip(&scene.columns)
         .filter(|(_, c)| !matches!(c.probe, crosscheck::scene::Probe::Zero { .. }))

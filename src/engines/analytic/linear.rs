@@ -1,7 +1,7 @@
 //! A general exact solver for linear scenes without contact: particles, springs and dashpots of
 //! the three kinds, constant point loads and rigid bodies under small rotation, in 2D and 3D.
 //!
-//! It is written from the equations of motion, independently of the explicit engine, so that
+//! It is written from the equations of motion, independently of the central-difference engine, so that
 //! the two cross-check each other on every linear scene (and the hand-derived forms of
 //! [`super::springs`] cross-check this one).
 //!
@@ -70,7 +70,8 @@
 //! rotation = axis·(R q), zero = 0. Contact (pairs or contact-force columns), a free DOF without
 //! mass in a dynamic step and a singular mass matrix are not supported.
 
-use super::{VALID_COLUMN, exponential_states, unsupported};
+use super::{exponential_states, unsupported};
+use crate::contract::VALID_COLUMN;
 use crate::engines::{EngineError, History};
 use crate::scene::{
     Attachment, BodyId, Connection, Dimension, Dof, Element, NodeId, Probe, Scene, Step, StepKind,

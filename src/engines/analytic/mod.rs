@@ -1,5 +1,5 @@
 //! `analytic`: closed-form solutions, derived from the problems' equations and written
-//! independently of the explicit engine's force assembly.
+//! independently of the central-difference engine's force assembly.
 //!
 //! - [`springs`]: the spring/dashpot/mass systems by hand: the damped single-DOF oscillator,
 //!   and the two-DOF system through the exponential of its 4×4 state matrix.
@@ -15,13 +15,11 @@ pub mod rigid;
 pub mod springs;
 
 use super::{Engine, EngineError, History, RunInfo, RunOutput, RunSettings};
+use crate::contract::{self, VALID_COLUMN};
 use crate::scene::{Family, Scene};
 use nalgebra::{DMatrix, DVector};
 use std::collections::BTreeMap;
 use std::time::Instant;
-
-/// Name of the column that marks rows where the closed form's assumptions hold (1) or not (0).
-pub const VALID_COLUMN: &str = "valid";
 
 /// The closed-form engine.
 #[derive(Debug, Clone, Copy, Default)]
@@ -63,9 +61,7 @@ pub fn exponential_states(a: &DMatrix<f64>, s0: &DVector<f64>, times: &[f64]) ->
 pub(crate) fn history(scene: &Scene, times: &[f64], rows: Vec<Vec<f64>>) -> History {
     let columns = std::iter::once("t".to_string())
         .chain(
-            scene
-                .family
-                .contract_columns()
+            contract::columns(scene.family)
                 .iter()
                 .map(|s| s.to_string()),
         )

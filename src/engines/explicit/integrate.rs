@@ -11,6 +11,7 @@
 use super::linear::{StableIncrement, static_step};
 use super::model::{Config, Constraints, ContactMode, Counters, Forces, Model, Rates};
 use super::space::{Lin, Space};
+use crate::contract::ENERGY_COLUMNS;
 use crate::engines::{EngineError, History};
 use crate::scene::{
     ContactStart, DampingTreatment, IncrementRule, Probe, Scene, SceneSettings, StepKind,
@@ -30,15 +31,6 @@ pub struct Integration {
     /// Work counters.
     pub counters: Counters,
 }
-
-/// Energy columns appended after the case's columns.
-pub const ENERGY_COLUMNS: [&str; 5] = [
-    "e_kinetic",
-    "e_elastic",
-    "e_viscous",
-    "w_external",
-    "e_balance",
-];
 
 const MAX_DAMPING_ITERATIONS: usize = 100;
 

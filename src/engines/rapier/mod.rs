@@ -1,5 +1,5 @@
 //! `rapier_*`: the scenes run through the rapier physics engine (0.36), as a third-party
-//! cross-check of the explicit engine and as a measure of what a game-physics solver gives on
+//! cross-check of our central-difference engine and as a measure of what a game-physics solver gives on
 //! verification problems.
 //!
 //! One generic builder ([`plan`]) maps any scene onto rapier bodies, joints and colliders; one
@@ -20,7 +20,7 @@
 //!
 //! Each step of length dt runs [`MatchedSettings::solver_iterations`] substeps of dt/n (rapier's
 //! "solver iterations" are substeps of its TGS-soft solver). Per substep: external forces are
-//! applied explicitly, the constraints (joints, contacts) are solved by projected Gauss–Seidel
+//! applied as known forces, the constraints (joints, contacts) are solved by projected Gauss–Seidel
 //! ([`MatchedSettings::pgs_iterations`] sweeps, with position bias), the positions advance with
 //! the new velocities, and one more sweep without bias relaxes the velocities. A force-based
 //! joint motor is an implicit spring: its impulse solves m Δv = −h(k(x + h v⁺) + c v⁺), i.e.
@@ -34,7 +34,7 @@
 //! t = 0 and the velocity-level constraint carries the rigid contact force from the first step,
 //! so there is no penalty ringing. The first step's force lacks the curvature (centripetal)
 //! part, which rapier only recovers through the position bias once a penetration exists: it is
-//! ~20 % low (pinned surface case: 3.4e3 against 4.26e3 from the explicit engine), then right.
+//! ~20 % low (pinned surface case: 3.4e3 against 4.26e3 from the central-difference engine), then right.
 //! The collision detection runs once before the first step, or rapier only registers the new
 //! pair during step 1 and that step gets no contact at all. In f32 the rounded initial geometry
 //! leaves a gap of ~1.5e-8, so the first step carries no contact impulse either way.
@@ -60,8 +60,7 @@ pub mod backend;
 pub mod plan;
 pub mod record;
 
-use super::explicit::ExplicitEngine;
-use super::{Engine, EngineError, RunInfo, RunOutput, RunSettings};
+use super::{Engine, EngineError, Needs, RunInfo, RunOutput, RunSettings};
 use crate::scene::{Dimension, IncrementRule, Scene};
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -78,7 +77,7 @@ pub enum Precision {
 /// How rapier is set up.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Configuration {
-    /// Same time increment as the explicit engine, solver converged, contact tightened: the
+    /// Same time increment as the central-difference engine, solver converged, contact tightened: the
     /// settings of [`MatchedSettings::CHOSEN`] (or others, for studies).
     Matched(MatchedSettings),
     /// What a typical user gets: `IntegrationParameters::default()` (4 substeps, 1 PGS sweep,
@@ -115,14 +114,15 @@ pub struct MatchedSettings {
 impl MatchedSettings {
     /// The matched configuration (chosen by the studies in `tests/rapier.rs`).
     ///
-    /// - Time increment: the explicit engine's for the case (the case's `[time] increment`, or
-    ///   0.9 × its stable increment; a run's `increment` override is honoured), shortened to
-    ///   divide the output interval so that rows fall on steps (1e-5 s rigid, 5e-5 s springs).
+    /// - Time increment: the one the job planner hands over (`run::matching`: what the
+    ///   central-difference engine takes on the case, i.e. the case's `[time] increment` or 0.9 ×
+    ///   its stable increment, a run's `increment` override honoured), shortened to divide the
+    ///   output interval so that rows fall on steps (1e-5 s rigid, 5e-5 s springs).
     /// - `solver_iterations` = 4 substeps, rapier's default. A substep is rapier's time step:
     ///   more of them refine its first-order scheme rather than converge a solve (doubling them
-    ///   halves the difference from the explicit engine, ratio 2.00 measured), so the count
-    ///   stays rapier's own and what is matched is the increment. Reaching the 1e-4 criterion
-    ///   through substeps would take ~256 of them in the rigid cases (60× the cost).
+    ///   halves the difference from the central-difference engine, ratio 2.00 measured), so
+    ///   the count stays rapier's own and what is matched is the increment. Reaching the 1e-4
+    ///   criterion through substeps would take ~256 of them in the rigid cases (60× the cost).
     /// - `pgs_iterations` = 2 Gauss–Seidel sweeps per substep: the smallest count where doubling
     ///   changes no contract column by 1e-4 of its peak (1 → 2: 2.6e-4, 2 → 4: 7.3e-6,
     ///   4 → 8: 6e-9, worst case the pinned surface-mass body).
@@ -201,7 +201,7 @@ impl RapierEngine {
         let start = Instant::now();
         let plan = plan::plan(scene)?;
         let (dt, solver) = match self.configuration {
-            Configuration::Matched(m) => (matched_increment(scene, settings), Some(m)),
+            Configuration::Matched(m) => (own_increment(scene, settings), Some(m)),
             Configuration::Default => (DEFAULT_INCREMENT, None),
         };
         let run = backend::Run {
@@ -254,6 +254,12 @@ impl Engine for RapierEngine {
     fn name(&self) -> &str {
         &self.name
     }
+    fn needs(&self) -> Needs {
+        match self.configuration {
+            Configuration::Matched(_) => Needs::MatchedIncrement,
+            Configuration::Default => Needs::Nothing,
+        }
+    }
     fn run(&self, scene: &Scene, settings: &RunSettings) -> Result<RunOutput, EngineError> {
         let (mut output, diagnostics) = self.run_with_diagnostics(scene, settings)?;
         for (k, contact) in scene.contacts.iter().enumerate() {
@@ -274,21 +280,19 @@ impl Engine for RapierEngine {
     }
 }
 
-/// The explicit engine's increment for a scene, by the explicit engine's own rule
-/// ([`ExplicitEngine::increment`]). A given increment is taken as it is even above the
-/// explicit stable one: rapier is implicit and has no such limit.
-pub fn matched_increment(scene: &Scene, settings: &RunSettings) -> f64 {
-    let rule = match settings.increment.unwrap_or(scene.settings.increment) {
-        IncrementRule::Given(h) => IncrementRule::Forced(h),
-        other => other,
-    };
-    let settings = RunSettings {
-        increment: Some(rule),
-        ..*settings
-    };
-    ExplicitEngine::finite()
-        .increment(scene, &settings)
-        .unwrap_or_else(|_| scene.duration() / (scene.output_rows - 1) as f64)
+/// The increment of a matched run: the run's increment override, else the case's given one,
+/// shortened to divide the output interval so that rows fall on steps; for a case whose rule
+/// needs a stable increment (rapier has none), the output interval. The job planner hands the
+/// central-difference engine's increment over as an override, so a planned matched run steps
+/// with it.
+pub fn own_increment(scene: &Scene, settings: &RunSettings) -> f64 {
+    let interval = scene.duration() / (scene.output_rows - 1) as f64;
+    match settings.increment.unwrap_or(scene.settings.increment) {
+        IncrementRule::Given(h) | IncrementRule::Forced(h) => {
+            interval / (interval / h - 1e-9).ceil().max(1.0)
+        }
+        IncrementRule::Accuracy(_) | IncrementRule::Stable { .. } => interval,
+    }
 }
 
 /// The four rapier engines in report order.

@@ -18,7 +18,7 @@
 
 use super::backend::Trace;
 use super::plan::{BodyState, Plan, twist};
-use crate::engines::explicit::integrate::ENERGY_COLUMNS;
+use crate::contract::ENERGY_COLUMNS;
 use crate::engines::{EngineError, History};
 use crate::scene::{Connection, Dof, Element, Probe, Scene};
 use nalgebra::Vector3;

@@ -1,6 +1,7 @@
-//! Orchestration: load cases, run every (case × engine) job in parallel, write the CSVs.
+//! Running: every (case × engine) job in parallel, each with the settings its engine needs.
 //!
-//! The binary is a thin shell over this module; tests and other tools can drive it directly:
+//! This layer returns data (histories, what each run used and cost, failures) and writes
+//! nothing; the report writes the files. The binary is a thin shell over it:
 //!
 //! ```no_run
 //! use crosscheck::{case, engines, run};
@@ -9,22 +10,31 @@
 //!     cases,
 //!     engines: engines::all(),
 //!     settings: Default::default(),
-//!     out: "report".into(),
 //! };
 //! let outcome = run::execute(&plan, false);
 //! print!("{}", outcome.table());
 //! ```
+//!
+//! - [`load`]: resolve and validate the cases (with the checks that need an engine);
+//! - [`matching`]: what "matched settings" means: the settings one engine's job gets from
+//!   another engine's rules (rapier's increment is the explicit engine's);
+//! - this module: the jobs, run in parallel, their results in plan order.
 
-use crate::case::{self, CaseError};
-use crate::engines::explicit::ExplicitEngine;
-use crate::engines::{self, Engine, History, RunInfo, RunSettings};
-use crate::report::data;
-use crate::scene::{IncrementRule, Scene, SceneError};
+pub mod load;
+pub mod matching;
+
+pub use load::{
+    LoadError, UnknownEngine, check_increment, check_scene, engine_names, load_cases,
+    select_engines,
+};
+
+use crate::contract::{self, History};
+use crate::engines::{Engine, RunInfo, RunSettings};
+use crate::scene::Scene;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use std::io::IsTerminal;
 use std::panic::{self, AssertUnwindSafe};
-use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// What to run: every case with every engine, under one set of setting overrides.
@@ -35,8 +45,6 @@ pub struct Plan {
     pub engines: Vec<Box<dyn Engine>>,
     /// Overrides applied to every job.
     pub settings: RunSettings,
-    /// Output directory; CSVs go to `out/data/<case-id>/<engine>.csv`.
-    pub out: PathBuf,
 }
 
 impl Plan {
@@ -46,14 +54,12 @@ impl Plan {
     }
 }
 
-/// A job that produced a history and wrote it.
+/// A job that produced a history that meets the output contract.
 #[derive(Debug, Clone)]
 pub struct JobSuccess {
     /// What the run used and cost, as the engine reported it.
     pub info: RunInfo,
-    /// The CSV written.
-    pub csv: PathBuf,
-    /// The history itself (for the comparison and the report).
+    /// The history (for the CSV, the comparison and the report).
     pub history: History,
 }
 
@@ -64,15 +70,15 @@ pub struct JobResult {
     pub case: String,
     /// Engine name.
     pub engine: String,
-    /// Wall-clock seconds of the whole job as the harness measured it (engine run, checks and
-    /// the CSV write; available for failed jobs too).
+    /// Wall-clock seconds of the whole job as the harness measured it (settings, engine run,
+    /// contract check; available for failed jobs too).
     pub elapsed: f64,
-    /// The run and its CSV, or why there is none.
+    /// The run, or why there is none.
     pub result: Result<JobSuccess, String>,
 }
 
 impl JobResult {
-    /// Whether the job produced and wrote its history.
+    /// Whether the job produced its history.
     pub fn is_ok(&self) -> bool {
         self.result.is_ok()
     }
@@ -151,10 +157,11 @@ impl Outcome {
     }
 }
 
-/// Run every job of `plan` in parallel and write each successful history as CSV.
+/// Run every job of `plan` in parallel.
 ///
-/// An engine error (or panic), a history that breaks the output contract, or a failed write
-/// fails that job only; the others still run. A progress bar on stderr ticks once per job; it
+/// Each job gets the plan's overrides completed with what its engine needs
+/// ([`matching::job_settings`]). An engine error (or panic), or a history that breaks the
+/// output contract, fails that job only; the others still run. A progress bar on stderr ticks once per job; it
 /// is hidden when `progress` is false or stderr is not a terminal. Results come back in plan
 /// order (case, then engine) whatever the thread scheduling.
 pub fn execute(plan: &Plan, progress: bool) -> Outcome {
@@ -176,7 +183,7 @@ pub fn execute(plan: &Plan, progress: bool) -> Outcome {
     let results = jobs
         .par_iter()
         .map(|&(scene, engine)| {
-            let result = run_job(scene, engine, &plan.settings, &plan.out);
+            let result = run_job(scene, engine, &plan.settings);
             bar.set_message(format!("{}/{}", scene.id, engine.name()));
             bar.inc(1);
             result
@@ -186,34 +193,24 @@ pub fn execute(plan: &Plan, progress: bool) -> Outcome {
     Outcome { jobs: results }
 }
 
-/// Run one job: the engine, the contract check, the CSV write.
-fn run_job(scene: &Scene, engine: &dyn Engine, settings: &RunSettings, out: &Path) -> JobResult {
+/// Run one job: its settings, the engine, the contract check.
+fn run_job(scene: &Scene, engine: &dyn Engine, settings: &RunSettings) -> JobResult {
     let start = Instant::now();
     let name = engine.name().to_string();
-    let result = panic::catch_unwind(AssertUnwindSafe(|| engine.run(scene, settings)))
-        .map_err(|payload| format!("engine panicked: {}", panic_message(payload.as_ref())))
-        .and_then(|r| r.map_err(|e| e.to_string()))
-        .and_then(|output| {
-            check_contract(scene, &output.history)
-                .map_err(|e| format!("history breaks the output contract: {e}"))?;
-            if crate::report::staging::interrupted() {
-                return Err("interrupted before its CSV was written".to_string());
-            }
-            let csv = data::write_history(out, &scene.id, &name, &output.history)
-                .map_err(|e| format!("cannot write the CSV: {e}"))?;
-            Ok(JobSuccess {
-                info: output.info,
-                csv,
-                history: output.history,
-            })
+    let result = panic::catch_unwind(AssertUnwindSafe(|| {
+        let settings = matching::job_settings(engine, scene, settings);
+        engine.run(scene, &settings)
+    }))
+    .map_err(|payload| format!("engine panicked: {}", panic_message(payload.as_ref())))
+    .and_then(|r| r.map_err(|e| e.to_string()))
+    .and_then(|output| {
+        contract::check(scene, &output.history)
+            .map_err(|e| format!("history breaks the output contract: {e}"))?;
+        Ok(JobSuccess {
+            info: output.info,
+            history: output.history,
         })
-        .map_err(|e| {
-            if data::csv_path(out, &scene.id, &name).exists() {
-                format!("{e} (a CSV from an earlier run is still in place)")
-            } else {
-                e
-            }
-        });
+    });
     JobResult {
         case: scene.id.clone(),
         engine: name,
@@ -232,226 +229,13 @@ fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
     }
 }
 
-/// Check a history against the output contract for `scene`: header `t` then the family's
-/// contract columns; every row as long as the header; at least 200 rows sampling the duration
-/// uniformly, first t = 0, last t = the duration.
-pub fn check_contract(scene: &Scene, history: &History) -> Result<(), String> {
-    let want: Vec<&str> = std::iter::once("t")
-        .chain(scene.family.contract_columns().iter().copied())
-        .collect();
-    let got: Vec<&str> = history.columns.iter().map(String::as_str).collect();
-    if !got.starts_with(&want) {
-        return Err(format!(
-            "columns must start with {}; got {}",
-            want.join(","),
-            got.join(",")
-        ));
-    }
-    if let Some((i, r)) = history
-        .rows
-        .iter()
-        .enumerate()
-        .find(|(_, r)| r.len() != history.columns.len())
-    {
-        return Err(format!(
-            "row {i} has {} values for {} columns",
-            r.len(),
-            history.columns.len()
-        ));
-    }
-    let n = history.rows.len();
-    if n < 200 {
-        return Err(format!("{n} rows; at least 200 are needed"));
-    }
-    let duration = scene.duration();
-    let tol = 1e-9 * duration;
-    for (i, r) in history.rows.iter().enumerate() {
-        let expected = duration * i as f64 / (n - 1) as f64;
-        let on_grid = (r[0] - expected).abs() <= tol; // false for NaN too
-        if !on_grid {
-            return Err(format!(
-                "row {i} has t = {:e}; uniform sampling of 0..{duration:e} over {n} rows needs {expected:e}",
-                r[0]
-            ));
-        }
-    }
-    Ok(())
-}
-
-/// Checks that need the engines: tolerance names must be engine names, and a given increment
-/// must not exceed the stable one.
-pub fn check_scene(scene: &Scene) -> Result<(), SceneError> {
-    let names = engine_names();
-    for engine in scene.tolerances.keys() {
-        if !names.contains(engine) {
-            return Err(SceneError {
-                field: format!("tolerances.{engine}"),
-                message: format!(
-                    "`{engine}` is not an engine; valid names: {}",
-                    names.join(", ")
-                ),
-            });
-        }
-    }
-    check_increment(scene)
-}
-
-/// A case's given time increment must not exceed the stable increment of either explicit
-/// kinematics (finite rotation adds geometric stiffness, so the two can differ).
-pub fn check_increment(scene: &Scene) -> Result<(), SceneError> {
-    let IncrementRule::Given(h) = scene.settings.increment else {
-        return Ok(());
-    };
-    let settings = RunSettings::default();
-    let stable = [ExplicitEngine::finite(), ExplicitEngine::small()]
-        .iter()
-        .filter_map(|e| e.stable_increment(scene, &settings))
-        .min_by(|a, b| a.increment.total_cmp(&b.increment));
-    match stable {
-        Some(s) if h > s.increment * (1.0 + 1e-12) => Err(SceneError {
-            field: "time.increment".into(),
-            message: format!(
-                "{h:e} is above this scene's stable increment {:e} (highest frequency {:.4e} rad/s, penalty included); use at most that, or give `safety` instead",
-                s.increment, s.omega_max
-            ),
-        }),
-        _ => Ok(()),
-    }
-}
-
-/// An engine name that matches no engine.
-#[derive(Debug, Clone, thiserror::Error)]
-#[error("unknown engine `{name}`; valid engines: {}", .valid.join(", "))]
-pub struct UnknownEngine {
-    /// The name given.
-    pub name: String,
-    /// Every valid name, in report order.
-    pub valid: Vec<String>,
-}
-
-/// Every engine name, in report order.
-pub fn engine_names() -> Vec<String> {
-    engines::all()
-        .iter()
-        .map(|e| e.name().to_string())
-        .collect()
-}
-
-/// Engines by name, in the order given (duplicates dropped); every engine when `names` is empty.
-pub fn select_engines(names: &[String]) -> Result<Vec<Box<dyn Engine>>, UnknownEngine> {
-    if names.is_empty() {
-        return Ok(engines::all());
-    }
-    let mut out: Vec<Box<dyn Engine>> = Vec::new();
-    for name in names {
-        let name = name.trim();
-        if out.iter().any(|e| e.name() == name) {
-            continue;
-        }
-        match engines::named(name) {
-            Some(e) => out.push(e),
-            None => {
-                return Err(UnknownEngine {
-                    name: name.to_string(),
-                    valid: engine_names(),
-                });
-            }
-        }
-    }
-    Ok(out)
-}
-
-/// Why the cases of a run could not be loaded.
-#[derive(Debug, thiserror::Error)]
-pub enum LoadError {
-    /// A case argument that is not a case, or a case file that is not valid.
-    #[error(transparent)]
-    Case(#[from] CaseError),
-    /// The case directory could not be listed.
-    #[error("{path}: cannot list cases: {source}")]
-    Directory {
-        /// The directory.
-        path: PathBuf,
-        /// Cause.
-        source: std::io::Error,
-    },
-    /// Two different files with the same case id (their CSVs would collide).
-    #[error("case id `{id}` is given by both {first} and {second}")]
-    DuplicateId {
-        /// The id.
-        id: String,
-        /// The first file.
-        first: PathBuf,
-        /// The second file.
-        second: PathBuf,
-    },
-    /// No case to run.
-    #[error("no case files (*.toml) in {0}")]
-    NoCases(PathBuf),
-}
-
-/// Resolve and validate the cases named by `args` (ids from `dir` or paths to `.toml` files),
-/// or every case in `dir` when `args` is empty. Every case is loaded before returning, so the
-/// caller sees every problem at once; a case given twice is kept once. The scenes come back
-/// sorted by id (the report order).
-pub fn load_cases(args: &[String], dir: &Path) -> Result<Vec<Scene>, Vec<LoadError>> {
-    let paths: Vec<Result<PathBuf, LoadError>> = if args.is_empty() {
-        match case::discover(dir) {
-            Ok(v) if v.is_empty() => return Err(vec![LoadError::NoCases(dir.to_path_buf())]),
-            Ok(v) => v.into_iter().map(Ok).collect(),
-            Err(source) => {
-                return Err(vec![LoadError::Directory {
-                    path: dir.to_path_buf(),
-                    source,
-                }]);
-            }
-        }
-    } else {
-        args.iter()
-            .map(|a| case::resolve(a, dir).map_err(LoadError::from))
-            .collect()
-    };
-    let mut scenes: Vec<(PathBuf, Scene)> = Vec::new();
-    let mut errors = Vec::new();
-    for p in paths {
-        let path = match p {
-            Ok(p) => p,
-            Err(e) => {
-                errors.push(e);
-                continue;
-            }
-        };
-        let scene = match case::load_checked(&path, &check_scene) {
-            Ok(s) => s,
-            Err(e) => {
-                errors.push(e.into());
-                continue;
-            }
-        };
-        let canonical = path.canonicalize().unwrap_or_else(|_| path.clone());
-        match scenes.iter().find(|(_, s)| s.id == scene.id) {
-            Some((first, _)) if *first == canonical => {}
-            Some((first, _)) => errors.push(LoadError::DuplicateId {
-                id: scene.id.clone(),
-                first: first.clone(),
-                second: canonical,
-            }),
-            None => scenes.push((canonical, scene)),
-        }
-    }
-    if errors.is_empty() {
-        scenes.sort_by(|a, b| a.1.id.cmp(&b.1.id));
-        Ok(scenes.into_iter().map(|(_, s)| s).collect())
-    } else {
-        Err(errors)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::case;
     use crate::engines::{EngineError, RunOutput};
     use std::collections::BTreeMap;
+    use std::path::Path;
 
     const CASE: &str = r#"
 id = "tiny"
@@ -542,7 +326,6 @@ hold = [{ node = "end", dofs = ["uy"] }]
 
     #[test]
     fn failures_are_isolated_and_order_is_deterministic() {
-        let out = tempfile::tempdir().unwrap();
         let plan = Plan {
             cases: vec![scene("b_case"), scene("a_case")],
             engines: vec![
@@ -564,7 +347,6 @@ hold = [{ node = "end", dofs = ["uy"] }]
                 }),
             ],
             settings: RunSettings::default(),
-            out: out.path().to_path_buf(),
         };
         let outcome = execute(&plan, false);
         let order: Vec<(&str, &str)> = outcome
@@ -579,14 +361,8 @@ hold = [{ node = "end", dofs = ["uy"] }]
         assert_eq!(order, expected);
         assert_eq!(outcome.failures(), 6);
         for j in &outcome.jobs {
-            let csv = data::csv_path(out.path(), &j.case, &j.engine);
-            assert_eq!(csv.exists(), j.engine == "good", "{j:?}");
             match j.engine.as_str() {
-                "good" => {
-                    let h = data::read_history(&csv).unwrap();
-                    assert_eq!(h.rows.len(), 201);
-                    assert_eq!(j.result.as_ref().unwrap().csv, csv);
-                }
+                "good" => assert_eq!(j.result.as_ref().unwrap().history.rows.len(), 201),
                 "bad" => assert_eq!(j.result.as_ref().unwrap_err(), "boom"),
                 "wild" => assert!(j.result.as_ref().unwrap_err().contains("kaboom")),
                 _ => assert!(j.result.as_ref().unwrap_err().contains("10 rows")),

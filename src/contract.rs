@@ -1,0 +1,99 @@
+//! The output contract (`../shared/spec/PROBLEMS.md`, section 3): what every engine's time
+//! history looks like, stated once so that engines, the comparison and the report read the
+//! same names.
+//!
+//! A history has a header row and one row per output time. The first column is `t`; then the
+//! family's contract columns ([`columns`]); then whatever an engine adds: the energy
+//! bookkeeping ([`ENERGY_COLUMNS`]) of the engines that keep it, and the validity mark
+//! ([`VALID_COLUMN`]) of a closed form. The rows sample the duration uniformly, at least
+//! [`MIN_ROWS`] of them, from t = 0 to t = the duration ([`check`]).
+
+use crate::scene::{Family, Scene};
+
+/// The contract columns of a family, in order, after `t`.
+pub fn columns(family: Family) -> &'static [&'static str] {
+    match family {
+        Family::RigidBody => &["rz", "ux", "ux_node", "contact_force"],
+        Family::Springs => &["u_end", "u_mid", "v_end", "v_mid"],
+    }
+}
+
+/// Energy columns an engine that keeps energies appends after the contract columns: kinetic,
+/// elastic (springs and penalty), viscous dissipation, external work since the dynamic start,
+/// and their balance (kinetic + elastic + viscous − work − initial energy; zero when exact).
+pub const ENERGY_COLUMNS: [&str; 5] = [
+    "e_kinetic",
+    "e_elastic",
+    "e_viscous",
+    "w_external",
+    "e_balance",
+];
+
+/// Column of a closed form marking the rows where its assumptions hold (1) or not (0).
+pub const VALID_COLUMN: &str = "valid";
+
+/// The fewest output rows a history may have.
+pub const MIN_ROWS: usize = 200;
+
+/// A time history: a header and rows, the first column `t`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct History {
+    /// Column names, starting with `t`.
+    pub columns: Vec<String>,
+    /// Rows, each as long as `columns`.
+    pub rows: Vec<Vec<f64>>,
+}
+
+impl History {
+    /// Values of a named column.
+    pub fn column(&self, name: &str) -> Option<Vec<f64>> {
+        let k = self.columns.iter().position(|c| c == name)?;
+        Some(self.rows.iter().map(|r| r[k]).collect())
+    }
+}
+
+/// Check a history against the output contract for `scene`: header `t` then the family's
+/// contract columns; every row as long as the header; at least [`MIN_ROWS`] rows sampling the
+/// duration uniformly, first t = 0, last t = the duration.
+pub fn check(scene: &Scene, history: &History) -> Result<(), String> {
+    let want: Vec<&str> = std::iter::once("t")
+        .chain(columns(scene.family).iter().copied())
+        .collect();
+    let got: Vec<&str> = history.columns.iter().map(String::as_str).collect();
+    if !got.starts_with(&want) {
+        return Err(format!(
+            "columns must start with {}; got {}",
+            want.join(","),
+            got.join(",")
+        ));
+    }
+    if let Some((i, r)) = history
+        .rows
+        .iter()
+        .enumerate()
+        .find(|(_, r)| r.len() != history.columns.len())
+    {
+        return Err(format!(
+            "row {i} has {} values for {} columns",
+            r.len(),
+            history.columns.len()
+        ));
+    }
+    let n = history.rows.len();
+    if n < MIN_ROWS {
+        return Err(format!("{n} rows; at least {MIN_ROWS} are needed"));
+    }
+    let duration = scene.duration();
+    let tol = 1e-9 * duration;
+    for (i, r) in history.rows.iter().enumerate() {
+        let expected = duration * i as f64 / (n - 1) as f64;
+        let on_grid = (r[0] - expected).abs() <= tol; // false for NaN too
+        if !on_grid {
+            return Err(format!(
+                "row {i} has t = {:e}; uniform sampling of 0..{duration:e} over {n} rows needs {expected:e}",
+                r[0]
+            ));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,177 @@
+//! Loading the cases of a run: resolving ids and paths, validating every file, and the checks
+//! that need the engines (tolerance names, a given increment against the stable one).
+
+use crate::case::{self, CaseError};
+use crate::engines::explicit::ExplicitEngine;
+use crate::engines::{self, Engine, RunSettings};
+use crate::scene::{IncrementRule, Scene, SceneError};
+use std::path::{Path, PathBuf};
+
+/// Checks that need the engines: tolerance names must be engine names, and a given increment
+/// must not exceed the stable one.
+pub fn check_scene(scene: &Scene) -> Result<(), SceneError> {
+    let names = engine_names();
+    for engine in scene.tolerances.keys() {
+        if !names.contains(engine) {
+            return Err(SceneError {
+                field: format!("tolerances.{engine}"),
+                message: format!(
+                    "`{engine}` is not an engine; valid names: {}",
+                    names.join(", ")
+                ),
+            });
+        }
+    }
+    check_increment(scene)
+}
+
+/// A case's given time increment must not exceed the stable increment of either explicit
+/// kinematics (finite rotation adds geometric stiffness, so the two can differ).
+pub fn check_increment(scene: &Scene) -> Result<(), SceneError> {
+    let IncrementRule::Given(h) = scene.settings.increment else {
+        return Ok(());
+    };
+    let settings = RunSettings::default();
+    let stable = [ExplicitEngine::finite(), ExplicitEngine::small()]
+        .iter()
+        .filter_map(|e| e.stable_increment(scene, &settings))
+        .min_by(|a, b| a.increment.total_cmp(&b.increment));
+    match stable {
+        Some(s) if h > s.increment * (1.0 + 1e-12) => Err(SceneError {
+            field: "time.increment".into(),
+            message: format!(
+                "{h:e} is above this scene's stable increment {:e} (highest frequency {:.4e} rad/s, penalty included); use at most that, or give `safety` instead",
+                s.increment, s.omega_max
+            ),
+        }),
+        _ => Ok(()),
+    }
+}
+
+/// An engine name that matches no engine.
+#[derive(Debug, Clone, thiserror::Error)]
+#[error("unknown engine `{name}`; valid engines: {}", .valid.join(", "))]
+pub struct UnknownEngine {
+    /// The name given.
+    pub name: String,
+    /// Every valid name, in report order.
+    pub valid: Vec<String>,
+}
+
+/// Every engine name, in report order.
+pub fn engine_names() -> Vec<String> {
+    engines::all()
+        .iter()
+        .map(|e| e.name().to_string())
+        .collect()
+}
+
+/// Engines by name, in the order given (duplicates dropped); every engine when `names` is empty.
+pub fn select_engines(names: &[String]) -> Result<Vec<Box<dyn Engine>>, UnknownEngine> {
+    if names.is_empty() {
+        return Ok(engines::all());
+    }
+    let mut out: Vec<Box<dyn Engine>> = Vec::new();
+    for name in names {
+        let name = name.trim();
+        if out.iter().any(|e| e.name() == name) {
+            continue;
+        }
+        match engines::named(name) {
+            Some(e) => out.push(e),
+            None => {
+                return Err(UnknownEngine {
+                    name: name.to_string(),
+                    valid: engine_names(),
+                });
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Why the cases of a run could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    /// A case argument that is not a case, or a case file that is not valid.
+    #[error(transparent)]
+    Case(#[from] CaseError),
+    /// The case directory could not be listed.
+    #[error("{path}: cannot list cases: {source}")]
+    Directory {
+        /// The directory.
+        path: PathBuf,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// Two different files with the same case id (their CSVs would collide).
+    #[error("case id `{id}` is given by both {first} and {second}")]
+    DuplicateId {
+        /// The id.
+        id: String,
+        /// The first file.
+        first: PathBuf,
+        /// The second file.
+        second: PathBuf,
+    },
+    /// No case to run.
+    #[error("no case files (*.toml) in {0}")]
+    NoCases(PathBuf),
+}
+
+/// Resolve and validate the cases named by `args` (ids from `dir` or paths to `.toml` files),
+/// or every case in `dir` when `args` is empty. Every case is loaded before returning, so the
+/// caller sees every problem at once; a case given twice is kept once. The scenes come back
+/// sorted by id (the report order).
+pub fn load_cases(args: &[String], dir: &Path) -> Result<Vec<Scene>, Vec<LoadError>> {
+    let paths: Vec<Result<PathBuf, LoadError>> = if args.is_empty() {
+        match case::discover(dir) {
+            Ok(v) if v.is_empty() => return Err(vec![LoadError::NoCases(dir.to_path_buf())]),
+            Ok(v) => v.into_iter().map(Ok).collect(),
+            Err(source) => {
+                return Err(vec![LoadError::Directory {
+                    path: dir.to_path_buf(),
+                    source,
+                }]);
+            }
+        }
+    } else {
+        args.iter()
+            .map(|a| case::resolve(a, dir).map_err(LoadError::from))
+            .collect()
+    };
+    let mut scenes: Vec<(PathBuf, Scene)> = Vec::new();
+    let mut errors = Vec::new();
+    for p in paths {
+        let path = match p {
+            Ok(p) => p,
+            Err(e) => {
+                errors.push(e);
+                continue;
+            }
+        };
+        let scene = match case::load_checked(&path, &check_scene) {
+            Ok(s) => s,
+            Err(e) => {
+                errors.push(e.into());
+                continue;
+            }
+        };
+        let canonical = path.canonicalize().unwrap_or_else(|_| path.clone());
+        match scenes.iter().find(|(_, s)| s.id == scene.id) {
+            Some((first, _)) if *first == canonical => {}
+            Some((first, _)) => errors.push(LoadError::DuplicateId {
+                id: scene.id.clone(),
+                first: first.clone(),
+                second: canonical,
+            }),
+            None => scenes.push((canonical, scene)),
+        }
+    }
+    if errors.is_empty() {
+        scenes.sort_by(|a, b| a.1.id.cmp(&b.1.id));
+        Ok(scenes.into_iter().map(|(_, s)| s).collect())
+    } else {
+        Err(errors)
+    }
+}

@@ -52,6 +52,22 @@ impl History {
     }
 }
 
+/// Every value of a history must be finite: the first non-finite one fails it, naming the
+/// column and the time.
+pub fn check_finite(history: &History) -> Result<(), String> {
+    for row in &history.rows {
+        if let Some(k) = row.iter().position(|x| !x.is_finite()) {
+            return Err(format!(
+                "non-finite value {} in column `{}` at t = {:e}; nothing of this run is written",
+                row[k],
+                history.columns.get(k).map_or("?", String::as_str),
+                row.first().copied().unwrap_or(f64::NAN)
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Check a history against the output contract for `scene`: header `t` then the family's
 /// contract columns; every row as long as the header; at least [`MIN_ROWS`] rows sampling the
 /// duration uniformly, first t = 0, last t = the duration.

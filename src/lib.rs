@@ -6,6 +6,7 @@
 //!
 //! - [`scene`]: the validated model, the one type every engine reads (knows no file format);
 //! - [`contract`]: the output contract every engine's history meets (column names, sampling);
+//! - [`interrupt`]: signals set a flag that long work polls at safe points;
 //! - [`case`]: `cases/*.toml` → [`scene::Scene`], with located diagnostics;
 //! - [`engines`]: scene + run settings → history, one module per engine behind one trait;
 //!   engines never import each other;
@@ -19,6 +20,7 @@ pub mod case;
 pub mod comparison;
 pub mod contract;
 pub mod engines;
+pub mod interrupt;
 pub mod report;
 pub mod run;
 pub mod scene;

@@ -1,15 +1,20 @@
 //! `crosscheck`: run the verification cases through the engines and write the report data.
 //!
-//! Exit codes: 0 every job succeeded; 1 some job failed (the others were written);
-//! 2 bad input (invalid or unknown case, unknown engine, bad option): nothing was run or written.
+//! Exit codes: 0 every job succeeded; 1 some job failed (the others were written), or the report
+//! or standard output could not be written; 2 bad input (invalid or unknown case, unknown
+//! engine, bad option, unusable `--out`, a run above its resource limits, an output another run
+//! holds with `--no-wait`): nothing was run or written; 130 interrupted (SIGINT, SIGTERM,
+//! SIGHUP): the previous report is unchanged.
 
 use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand, ValueEnum};
 use crosscheck::case;
 use crosscheck::engines::RunSettings;
+use crosscheck::interrupt;
 use crosscheck::report::{self, staging};
-use crosscheck::run::{self, LoadError, Plan};
+use crosscheck::run::{self, LoadError, Plan, budget};
 use crosscheck::scene::{ContactStart, DampingTreatment, Dimension, IncrementRule, PenaltyRule};
-use std::path::PathBuf;
+use std::io::Write;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 /// Verification harness for explicit dynamics: on problems whose exact answer is known, how
@@ -19,6 +24,9 @@ use std::process::ExitCode;
 #[derive(Debug, Parser)]
 #[command(name = "crosscheck", version)]
 struct Cli {
+    /// Directory of the case files (default: `cases/` in the working directory).
+    #[arg(long = "cases", id = "cases_dir", value_name = "DIR", global = true)]
+    cases_dir: Option<PathBuf>,
     #[command(subcommand)]
     command: Option<Command>,
 }
@@ -37,7 +45,7 @@ enum Command {
     },
 }
 
-#[derive(Debug, Args, Default)]
+#[derive(Debug, Args)]
 struct RunArgs {
     /// Case ids from cases/ or paths to .toml case files (default: every case in cases/).
     #[arg(value_name = "CASE")]
@@ -63,6 +71,18 @@ struct RunArgs {
     /// Do not show the progress bar.
     #[arg(long, short)]
     quiet: bool,
+    /// Refuse at once (exit 2) when another run is writing the same output, instead of waiting.
+    #[arg(long)]
+    no_wait: bool,
+    /// Most increments one job may take.
+    #[arg(long, value_name = "N", default_value_t = budget::Limits::default().max_increments, value_parser = positive)]
+    max_increments: f64,
+    /// Most output rows one case may have.
+    #[arg(long, value_name = "N", default_value_t = budget::Limits::default().max_rows)]
+    max_rows: usize,
+    /// Most bytes of output histories the run may hold.
+    #[arg(long, value_name = "BYTES", default_value_t = budget::Limits::default().max_memory_bytes, value_parser = positive)]
+    max_memory: f64,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -90,6 +110,32 @@ fn positive(s: &str) -> Result<f64, String> {
 }
 
 impl RunArgs {
+    /// Every case, every engine, into `report/`.
+    fn everything() -> RunArgs {
+        RunArgs {
+            cases: Vec::new(),
+            engines: Vec::new(),
+            out: PathBuf::from("report"),
+            increment: None,
+            penalty: None,
+            damping: None,
+            contact_start: None,
+            quiet: false,
+            no_wait: false,
+            max_increments: budget::Limits::default().max_increments,
+            max_rows: budget::Limits::default().max_rows,
+            max_memory: budget::Limits::default().max_memory_bytes,
+        }
+    }
+
+    fn limits(&self) -> budget::Limits {
+        budget::Limits {
+            max_increments: self.max_increments,
+            max_rows: self.max_rows,
+            max_memory_bytes: self.max_memory,
+        }
+    }
+
     fn settings(&self) -> RunSettings {
         RunSettings {
             increment: self.increment.map(IncrementRule::Given),
@@ -116,46 +162,98 @@ fn main() -> ExitCode {
         })
     });
     let cli = Cli::from_arg_matches(&command.get_matches()).unwrap_or_else(|e| e.exit());
-    staging::install_signal_cleanup();
+    interrupt::install();
+    let dir = cli.cases_dir.clone().unwrap_or_else(case::cases_dir);
     match cli.command {
-        None => run_command(RunArgs {
-            out: PathBuf::from("report"),
-            ..RunArgs::default()
-        }),
-        Some(Command::List) => list(),
-        Some(Command::Run(args)) => run_command(args),
-        Some(Command::Check { files }) => check(files),
+        None => run_command(RunArgs::everything(), &dir),
+        Some(Command::List) => list(&dir),
+        Some(Command::Run(args)) => run_command(args, &dir),
+        Some(Command::Check { files }) => check(files, &dir),
     }
 }
 
-fn check(files: Vec<PathBuf>) -> ExitCode {
+/// Standard output that may be closed (`| head`) or full: the first failure is kept and
+/// reported once, never a panic.
+#[derive(Default)]
+struct Stdout {
+    failed: Option<std::io::Error>,
+}
+
+impl Stdout {
+    fn print(&mut self, text: &str) {
+        if self.failed.is_none()
+            && let Err(e) = std::io::stdout().lock().write_all(text.as_bytes())
+        {
+            self.failed = Some(e);
+        }
+    }
+
+    /// `code`, or 1 with a message when standard output could not be written.
+    fn finish(mut self, code: ExitCode) -> ExitCode {
+        if self.failed.is_none()
+            && let Err(e) = std::io::stdout().lock().flush()
+        {
+            self.failed = Some(e);
+        }
+        match self.failed {
+            None => code,
+            Some(e) => {
+                eprintln!("error: cannot write to standard output: {e}");
+                if code == ExitCode::SUCCESS {
+                    ExitCode::FAILURE
+                } else {
+                    code
+                }
+            }
+        }
+    }
+}
+
+/// The case files of `dir`, or a message saying why there are none.
+fn case_files(dir: &Path) -> Result<Vec<PathBuf>, String> {
+    if !dir.is_dir() {
+        return Err(format!(
+            "no case directory {}: run from a directory that has `cases/`, or give --cases DIR",
+            dir.display()
+        ));
+    }
+    match case::discover(dir) {
+        Ok(f) if f.is_empty() => Err(format!("no case files (*.toml) in {}", dir.display())),
+        Ok(f) => Ok(f),
+        Err(e) => Err(format!("{}: cannot list cases: {e}", dir.display())),
+    }
+}
+
+fn check(files: Vec<PathBuf>, dir: &Path) -> ExitCode {
     let files = if files.is_empty() {
-        match case::discover(&case::cases_dir()) {
+        match case_files(dir) {
             Ok(f) => f,
             Err(e) => {
-                eprintln!("error: cannot list cases: {e}");
+                eprintln!("error: {e}");
                 return ExitCode::from(2);
             }
         }
     } else {
         files
     };
+    let mut out = Stdout::default();
     let mut invalid = 0;
     for f in &files {
         match case::load_checked(f, &run::check_scene) {
-            Ok(scene) => println!("ok: {} ({})", f.display(), scene.id),
+            Ok(scene) => out.print(&format!("ok: {} ({})\n", f.display(), scene.id)),
             Err(e) => {
                 invalid += 1;
                 eprint!("{}", e.render());
             }
         }
     }
-    if invalid == 0 {
+    let code = if invalid == 0 {
         ExitCode::SUCCESS
     } else {
         eprintln!("{invalid} of {} case file(s) invalid", files.len());
         ExitCode::from(2)
-    }
+    };
+    out.finish(code)
 }
 
 fn report_load_errors(errors: &[LoadError]) {
@@ -167,12 +265,11 @@ fn report_load_errors(errors: &[LoadError]) {
     }
 }
 
-fn list() -> ExitCode {
-    let dir = case::cases_dir();
-    let paths = match case::discover(&dir) {
+fn list(dir: &Path) -> ExitCode {
+    let paths = match case_files(dir) {
         Ok(p) => p,
         Err(e) => {
-            eprintln!("error: {}: cannot list cases: {e}", dir.display());
+            eprintln!("error: {e}");
             return ExitCode::from(2);
         }
     };
@@ -191,6 +288,7 @@ fn list() -> ExitCode {
         .map(|s| s.family.name().len())
         .max()
         .unwrap_or(0);
+    let mut out = Stdout::default();
     for s in &scenes {
         let dim = match s.dimension {
             Dimension::Two => "2D",
@@ -202,17 +300,23 @@ fn list() -> ExitCode {
             s.family.name(),
             s.effects().join(" ")
         );
-        println!("{}", line.trim_end());
+        out.print(&format!("{}\n", line.trim_end()));
     }
-    if errors.is_empty() {
+    let code = if errors.is_empty() {
         ExitCode::SUCCESS
     } else {
         report_load_errors(&errors);
         ExitCode::from(2)
-    }
+    };
+    out.finish(code)
 }
 
-fn run_command(args: RunArgs) -> ExitCode {
+fn interrupted() -> ExitCode {
+    eprintln!("interrupted: the previous report is unchanged");
+    ExitCode::from(interrupt::EXIT_CODE)
+}
+
+fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
     let engines = match run::select_engines(&args.engines) {
         Ok(e) => e,
         Err(e) => {
@@ -220,7 +324,20 @@ fn run_command(args: RunArgs) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let cases = match run::load_cases(&args.cases, &case::cases_dir()) {
+    let target = match staging::resolve_output(&args.out) {
+        Ok(t) => t,
+        Err(e) => {
+            eprintln!("error: {e}; nothing was run");
+            return ExitCode::from(2);
+        }
+    };
+    if args.cases.is_empty()
+        && let Err(e) = case_files(dir)
+    {
+        eprintln!("error: {e}; nothing was run");
+        return ExitCode::from(2);
+    }
+    let cases = match run::load_cases(&args.cases, dir) {
         Ok(c) => c,
         Err(errors) => {
             report_load_errors(&errors);
@@ -228,46 +345,87 @@ fn run_command(args: RunArgs) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let staging = match staging::Staging::begin(&args.out) {
+    let settings = args.settings();
+    let refused = run::check_overrides(&cases, &settings);
+    let plan = Plan {
+        cases,
+        engines,
+        settings,
+    };
+    let refused = if refused.is_empty() {
+        budget::check(&plan, &settings, &args.limits())
+    } else {
+        refused
+    };
+    if !refused.is_empty() {
+        for r in &refused {
+            eprintln!("error: {r}");
+        }
+        eprintln!("nothing was run");
+        return ExitCode::from(2);
+    }
+    if interrupt::checkpoint("load").is_err() {
+        return interrupted();
+    }
+    let _lock = match staging::OutputLock::acquire(&target, !args.no_wait) {
+        Ok(l) => l,
+        Err(staging::OutputError::Interrupted) => return interrupted(),
+        Err(e @ staging::OutputError::Busy { .. }) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+        Err(e) => {
+            eprintln!("error: cannot lock the report: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let staging = match staging::Staging::begin(&target, &report::ENTRIES) {
         Ok(s) => s,
         Err(e) => {
             eprintln!(
-                "error: cannot prepare the report beside {}: {e}",
-                args.out.display()
+                "error: cannot prepare the report in {}: {e}",
+                target.display()
             );
             return ExitCode::FAILURE;
         }
     };
-    let plan = Plan {
-        cases,
-        engines,
-        settings: args.settings(),
-    };
     let outcome = run::execute(&plan, !args.quiet);
-    print!("{}", outcome.table());
+    if interrupt::requested() {
+        return interrupted();
+    }
     let summary = match report::write(staging.path(), &plan, &outcome, staging.target()) {
         Ok(s) => s,
+        Err(report::data::DataError::Interrupted) => return interrupted(),
         Err(e) => {
             eprintln!("error: cannot write the report (the previous one is unchanged): {e}");
             return ExitCode::FAILURE;
         }
     };
+    if interrupt::checkpoint("swap").is_err() {
+        return interrupted();
+    }
     if let Err(e) = staging.commit() {
         eprintln!("error: cannot put the report in place (the previous one is unchanged): {e}");
         return ExitCode::FAILURE;
     }
+    let mut out = Stdout::default();
+    out.print(&outcome.table());
     let checks = summary.tolerance_checks();
-    println!(
-        "{} job(s), {} failed; report: {} ({} of {} tolerances met)",
+    out.print(&format!(
+        "{} job(s), {} failed; report: {} ({} of {} tolerances met)\n",
         outcome.jobs.len(),
         outcome.failures(),
         report::report_path(&args.out).display(),
         checks.iter().filter(|c| c.4).count(),
         checks.len()
-    );
-    if outcome.all_ok() {
+    ));
+    if interrupt::requested() {
+        eprintln!("interrupted after the new report was put in place");
+        return ExitCode::from(interrupt::EXIT_CODE);
+    }
+    out.finish(if outcome.all_ok() {
         ExitCode::SUCCESS
     } else {
         ExitCode::FAILURE
-    }
+    })
 }

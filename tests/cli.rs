@@ -28,8 +28,9 @@ fn crosscheck(args: &[&str], dir: &std::path::Path) -> std::process::Output {
 
 #[test]
 fn list_prints_one_line_per_case() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = crosscheck(&["list"], dir.path());
+    // The cases are found where the user is: `cases/` in the working directory.
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = crosscheck(&["list"], dir);
     let stdout = String::from_utf8(out.stdout).unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "status {:?}\n{stderr}", out.status);
@@ -49,6 +50,26 @@ fn list_prints_one_line_per_case() {
         let dim = l.split_whitespace().nth(2);
         assert!(matches!(dim, Some("2D" | "3D")), "{l}");
     }
+}
+
+/// Elsewhere, `--cases DIR` says where they are; without it, a clear message and exit 2.
+#[test]
+fn cases_are_found_in_the_working_directory_or_with_cases() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = crosscheck(&["list"], dir.path());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("no case directory") && stderr.contains("--cases DIR"),
+        "{stderr}"
+    );
+    let cases = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases");
+    let out = crosscheck(&["list", "--cases", cases.to_str().unwrap()], dir.path());
+    assert!(out.status.success());
+    assert_eq!(String::from_utf8_lossy(&out.stdout).lines().count(), 13);
+    let out = crosscheck(&["run", "--out", "o"], dir.path());
+    assert_eq!(out.status.code(), Some(2));
+    assert!(!dir.path().join("o").exists());
 }
 
 #[test]

@@ -14,6 +14,45 @@ fn err<T>(field: impl Into<String>, message: impl Into<String>) -> Result<T, Sce
     })
 }
 
+/// The largest magnitude a physical number may have (masses, stiffnesses, loads, coordinates,
+/// durations, ...): products of a few of them stay finite in f64, so no frequency, energy or
+/// increment computed from a valid scene overflows.
+pub const MAX_MAGNITUDE: f64 = 1e100;
+/// The smallest non-zero magnitude a physical number may have (no denormals, and quotients of
+/// a few of them stay finite).
+pub const MIN_MAGNITUDE: f64 = 1e-100;
+
+/// A finite number, zero or of magnitude within [`MIN_MAGNITUDE`, `MAX_MAGNITUDE`].
+fn in_range(field: &str, v: f64) -> Result<f64, SceneError> {
+    if !v.is_finite() {
+        return err(field, format!("must be a finite number, got {v}"));
+    }
+    if v != 0.0 && !(MIN_MAGNITUDE..=MAX_MAGNITUDE).contains(&v.abs()) {
+        return err(
+            field,
+            format!(
+                "{v:e} is outside the supported magnitude range [{MIN_MAGNITUDE:e}, {MAX_MAGNITUDE:e}] (or 0); rescale the units"
+            ),
+        );
+    }
+    Ok(v)
+}
+
+/// An id used in file names and CSV headers: `[A-Za-z0-9_-]+`.
+fn identifier(field: &str, id: &str) -> Result<(), SceneError> {
+    if id.is_empty()
+        || !id
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+    {
+        return err(
+            field,
+            format!("`{id}` is not a valid id: use letters, digits, `_` and `-` only"),
+        );
+    }
+    Ok(())
+}
+
 struct Builder<'a> {
     dim: Dimension,
     node_index: HashMap<&'a str, NodeId>,
@@ -22,6 +61,15 @@ struct Builder<'a> {
 
 impl<'a> Builder<'a> {
     fn vector(&self, field: &str, v: &[f64]) -> Result<Vector3<f64>, SceneError> {
+        let v = self.components(field, v)?;
+        for x in v.iter() {
+            in_range(field, *x)?;
+        }
+        Ok(v)
+    }
+
+    /// The right number of finite components, any magnitude.
+    fn components(&self, field: &str, v: &[f64]) -> Result<Vector3<f64>, SceneError> {
         if v.len() != self.dim.count() {
             return err(
                 field,
@@ -43,13 +91,16 @@ impl<'a> Builder<'a> {
         ))
     }
 
+    /// A direction: any finite, non-zero vector, scaled by its largest component before it is
+    /// normalised (no overflow or underflow whatever its magnitude).
     fn unit(&self, field: &str, v: &[f64]) -> Result<Vector3<f64>, SceneError> {
-        let v = self.vector(field, v)?;
-        let n = v.norm();
-        if n < 1e-12 {
+        let v = self.components(field, v)?;
+        let scale = v.amax();
+        if scale == 0.0 {
             return err(field, "is a zero vector; a direction is needed");
         }
-        Ok(v / n)
+        let v = v / scale;
+        Ok(v / v.norm())
     }
 
     fn node(&self, field: &str, name: &str) -> Result<NodeId, SceneError> {
@@ -100,7 +151,7 @@ impl<'a> Builder<'a> {
                 format!("{what} must be a finite number > 0, got {v}"),
             );
         }
-        Ok(v)
+        in_range(field, v)
     }
 
     fn angular(&self, field: &str, v: &toml::Value) -> Result<Vector3<f64>, SceneError> {
@@ -123,14 +174,15 @@ impl<'a> Builder<'a> {
 
 fn number(field: &str, v: &toml::Value) -> Result<f64, SceneError> {
     match v {
-        toml::Value::Float(x) if x.is_finite() => Ok(*x),
-        toml::Value::Integer(i) => Ok(*i as f64),
+        toml::Value::Float(x) if x.is_finite() => in_range(field, *x),
+        toml::Value::Integer(i) => in_range(field, *i as f64),
         _ => err(field, format!("expected a finite number, got `{v}`")),
     }
 }
 
 /// Validate a parsed case file into a scene. `stem` is the file stem the id must match.
 pub fn scene(case: &CaseFile, stem: Option<&str>) -> Result<Scene, SceneError> {
+    identifier("id", &case.id)?;
     if let Some(stem) = stem
         && stem != case.id
     {
@@ -163,6 +215,7 @@ pub fn scene(case: &CaseFile, stem: Option<&str>) -> Result<Scene, SceneError> {
         body_index: HashMap::new(),
     };
     for (i, n) in case.nodes.iter().enumerate() {
+        identifier(&format!("nodes[{i}].id"), &n.id)?;
         if b.node_index.insert(n.id.as_str(), i).is_some() {
             return err(
                 format!("nodes[{i}].id"),
@@ -171,6 +224,7 @@ pub fn scene(case: &CaseFile, stem: Option<&str>) -> Result<Scene, SceneError> {
         }
     }
     for (i, body) in case.bodies.iter().enumerate() {
+        identifier(&format!("bodies[{i}].id"), &body.id)?;
         if b.body_index.insert(body.id.as_str(), i).is_some() {
             return err(
                 format!("bodies[{i}].id"),
@@ -193,7 +247,7 @@ pub fn scene(case: &CaseFile, stem: Option<&str>) -> Result<Scene, SceneError> {
                 return err(format!("{field}.y_axis"), "a 2D frame takes only x_axis");
             }
             (Dimension::Three, Some(y)) => {
-                let y = b.vector(&format!("{field}.y_axis"), y)?;
+                let y = b.unit(&format!("{field}.y_axis"), y)?;
                 let y = y - x * x.dot(&y);
                 if y.norm() < 1e-12 {
                     return err(format!("{field}.y_axis"), "is parallel to x_axis");
@@ -337,6 +391,7 @@ pub fn scene(case: &CaseFile, stem: Option<&str>) -> Result<Scene, SceneError> {
                     format!("must be a finite number >= 0, got {value}"),
                 );
             }
+            in_range(&format!("{field}.{coefficient_key}"), value)?;
             let nodes_of = |count: usize| -> Result<Vec<NodeId>, SceneError> {
                 if e.nodes.len() != count {
                     return err(
@@ -455,6 +510,7 @@ pub fn scene(case: &CaseFile, stem: Option<&str>) -> Result<Scene, SceneError> {
                 ),
             );
         }
+        identifier(&format!("{field}.id"), &c.id)?;
         if contacts.iter().any(|p: &ContactPair| p.name == c.id) {
             return err(
                 format!("{field}.id"),
@@ -653,6 +709,7 @@ pub fn scene(case: &CaseFile, stem: Option<&str>) -> Result<Scene, SceneError> {
             if !p.value.is_finite() {
                 return err(format!("{pf}.value"), "must be finite");
             }
+            in_range(&format!("{pf}.value"), p.value)?;
             add(
                 BoundaryCondition {
                     node,
@@ -862,6 +919,21 @@ pub fn scene(case: &CaseFile, stem: Option<&str>) -> Result<Scene, SceneError> {
                 reason: c.zero.clone().unwrap_or_default(),
             }
         };
+        identifier(&format!("{field}.name"), &c.name)?;
+        if c.name == "t"
+            || contract::ENERGY_COLUMNS.contains(&c.name.as_str())
+            || c.name == contract::VALID_COLUMN
+        {
+            return err(
+                format!("{field}.name"),
+                format!(
+                    "`{}` is a column an engine adds (t, {}, {}); choose another name",
+                    c.name,
+                    contract::ENERGY_COLUMNS.join(", "),
+                    contract::VALID_COLUMN
+                ),
+            );
+        }
         if columns.iter().any(|x: &Column| x.name == c.name) {
             return err(
                 format!("{field}.name"),
@@ -911,6 +983,7 @@ pub fn scene(case: &CaseFile, stem: Option<&str>) -> Result<Scene, SceneError> {
             if !(safety > 0.0 && safety <= 1.0) {
                 return err("time.safety", format!("must be in (0, 1], got {safety}"));
             }
+            in_range("time.safety", safety)?;
             IncrementRule::Stable { safety }
         }
     };

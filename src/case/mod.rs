@@ -53,6 +53,26 @@ pub enum CaseError {
         /// The message with the offending text.
         rendered: String,
     },
+    /// Not a regular file (a directory, FIFO, device, ...), or larger than [`MAX_FILE_BYTES`].
+    #[error("{}: cannot read: {reason}", path.display())]
+    Unreadable {
+        /// File.
+        path: PathBuf,
+        /// Why it is not read.
+        reason: String,
+    },
+    /// A byte sequence that is not UTF-8.
+    #[error("{}:{line}:{column}: the file is not valid UTF-8 (byte offset {offset})", path.display())]
+    NotUtf8 {
+        /// File.
+        path: PathBuf,
+        /// 1-based line of the first invalid byte.
+        line: usize,
+        /// 1-based column (in characters) of the first invalid byte.
+        column: usize,
+        /// Byte offset of the first invalid byte.
+        offset: usize,
+    },
     /// A case id or path that matches no file.
     #[error("no case `{0}`: give an id from cases/ or a path to a .toml file")]
     NotFound(String),
@@ -79,9 +99,61 @@ impl CaseError {
     }
 }
 
-/// The directory holding the shipped cases.
+/// The directory the cases are read from by default: `cases/` in the working directory.
 pub fn cases_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("cases")
+    PathBuf::from("cases")
+}
+
+/// The largest case file read, in bytes (the shipped ones are under 10 KiB).
+pub const MAX_FILE_BYTES: u64 = 1 << 20;
+
+/// Read a case file: a regular file of at most [`MAX_FILE_BYTES`], in UTF-8. Never blocks on a
+/// FIFO or reads a device.
+pub fn read_text(path: &Path) -> Result<String, CaseError> {
+    use std::io::Read;
+    let io = |source| CaseError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let unreadable = |reason: String| CaseError::Unreadable {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if !meta.is_file() {
+        return Err(unreadable(
+            "not a regular file (a case is a .toml file)".to_string(),
+        ));
+    }
+    if meta.len() > MAX_FILE_BYTES {
+        return Err(unreadable(format!(
+            "{} bytes; a case file may have at most {MAX_FILE_BYTES}",
+            meta.len()
+        )));
+    }
+    let file = std::fs::File::open(path).map_err(io)?;
+    // The size may change between the check and the read: read one byte past the limit.
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    file.take(MAX_FILE_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(io)?;
+    if bytes.len() as u64 > MAX_FILE_BYTES {
+        return Err(unreadable(format!(
+            "more than {MAX_FILE_BYTES} bytes; a case file may have at most that"
+        )));
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        let offset = e.utf8_error().valid_up_to();
+        let valid = std::str::from_utf8(&e.as_bytes()[..offset]).unwrap_or_default();
+        let line = valid.matches('\n').count() + 1;
+        let column = valid.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+        CaseError::NotUtf8 {
+            path: path.to_path_buf(),
+            line,
+            column,
+            offset,
+        }
+    })
 }
 
 /// Every case file in a directory, sorted by id.
@@ -118,10 +190,7 @@ pub fn load_checked(
     path: &Path,
     check: &dyn Fn(&Scene) -> Result<(), SceneError>,
 ) -> Result<Scene, CaseError> {
-    let text = std::fs::read_to_string(path).map_err(|source| CaseError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text = read_text(path)?;
     let scene = parse(&text, path)?;
     check(&scene).map_err(|e| invalid(&text, path, e))?;
     Ok(scene)

@@ -94,6 +94,11 @@ pub trait Engine: Send + Sync {
     fn needs(&self) -> Needs {
         Needs::Nothing
     }
+    /// The number of increments a run would take, estimated without running (`None`: the
+    /// engine does not step in time, or cannot tell before running). For bounding runs.
+    fn increments(&self, _scene: &Scene, _settings: &RunSettings) -> Option<f64> {
+        None
+    }
     /// Run a scene.
     fn run(&self, scene: &Scene, settings: &RunSettings) -> Result<RunOutput, EngineError>;
 }

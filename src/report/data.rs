@@ -15,6 +15,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 /// A history that could not be written or read.
 #[derive(Debug, thiserror::Error)]
 pub enum DataError {
+    /// A signal arrived: nothing more is written.
+    #[error("interrupted")]
+    Interrupted,
     /// Filesystem error.
     #[error("{path}: {source}")]
     Io {

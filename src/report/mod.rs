@@ -22,12 +22,24 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use summary::Summary;
 
+/// The report's own entries in its directory; nothing else there is the report's.
+pub const ENTRIES: [&str; 5] = [
+    "data",
+    "figures",
+    "summary.json",
+    "timings.json",
+    "REPORT.md",
+];
+
 /// Wall-clock seconds per case and engine.
 pub type Timings = BTreeMap<String, BTreeMap<String, f64>>;
 
 /// Write a run's report into `out` (the staging directory): each successful job's history as
 /// CSV, the figures, `summary.json`, `timings.json` and `REPORT.md`, keeping what the
 /// `previous` report had for cases and engines this run did not include. Returns the summary.
+///
+/// Checks for an interruption before every file ([`crate::interrupt::checkpoint`], phases
+/// `csv`, `figures`, `summary`, `report`) and stops with [`data::DataError::Interrupted`].
 pub fn write(
     out: &Path,
     plan: &Plan,
@@ -35,6 +47,7 @@ pub fn write(
     previous: &Path,
 ) -> Result<Summary, data::DataError> {
     write_histories(out, outcome)?;
+    checkpoint("summary")?;
     let mut summary = Summary::build(plan, outcome, out);
     let mut timings: Timings = read_json(&timings_path(previous)).unwrap_or_default();
     if let Some(old) = read_json::<Summary>(&summary_path(previous)) {
@@ -61,12 +74,14 @@ pub fn write(
             continue; // a case this run did not include keeps its previous figure
         };
         if let Some(svg) = figures::render(&case.id, contract::columns(scene.family), &histories) {
+            checkpoint("figures")?;
             data::write_atomic(&figures::figure_path(out, &case.id), svg.as_bytes())?;
         }
     }
     data::write_atomic(&summary_path(out), summary.to_json().as_bytes())?;
     let json = serde_json::to_string_pretty(&timings).expect("timings serialise") + "\n";
     data::write_atomic(&timings_path(out), json.as_bytes())?;
+    checkpoint("report")?;
     data::write_atomic(
         &report_path(out),
         markdown::render(&summary, &timings).as_bytes(),
@@ -82,8 +97,13 @@ pub fn write_histories(out: &Path, outcome: &Outcome) -> Result<(), data::DataEr
         .par_iter()
         .filter_map(|job| Some((job, job.result.as_ref().ok()?)))
         .try_for_each(|(job, s)| {
+            checkpoint("csv")?;
             data::write_history(out, &job.case, &job.engine, &s.history).map(|_| ())
         })
+}
+
+fn checkpoint(phase: &str) -> Result<(), data::DataError> {
+    crate::interrupt::checkpoint(phase).map_err(|_| data::DataError::Interrupted)
 }
 
 fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Option<T> {

@@ -25,16 +25,39 @@ pub fn check_scene(scene: &Scene) -> Result<(), SceneError> {
     check_increment(scene)
 }
 
-/// A case's given time increment must not exceed the stable increment of either explicit
-/// kinematics (finite rotation adds geometric stiffness, so the two can differ).
+/// The stable increment must be computable (finite and positive: no overflow or singular
+/// mass), and a case's given time increment must not exceed it for either explicit kinematics
+/// (finite rotation adds geometric stiffness, so the two can differ).
 pub fn check_increment(scene: &Scene) -> Result<(), SceneError> {
+    let settings = RunSettings::default();
+    let mut stable = Vec::new();
+    for engine in [ExplicitEngine::finite(), ExplicitEngine::small()] {
+        let computed = std::panic::catch_unwind(|| engine.stable_increment(scene, &settings));
+        match computed {
+            Ok(Some(s)) if s.increment.is_finite() && s.increment > 0.0 => stable.push(s),
+            Ok(None) => {}
+            Ok(Some(s)) => {
+                return Err(SceneError {
+                    field: "time".into(),
+                    message: format!(
+                        "the stable increment cannot be computed (highest frequency {:e} rad/s gives {:e}): the scene's numbers overflow; rescale its units",
+                        s.omega_max, s.increment
+                    ),
+                });
+            }
+            Err(_) => {
+                return Err(SceneError {
+                    field: "time".into(),
+                    message: "the stable increment cannot be computed (the linearised scene is singular or overflows); rescale its units".into(),
+                });
+            }
+        }
+    }
     let IncrementRule::Given(h) = scene.settings.increment else {
         return Ok(());
     };
-    let settings = RunSettings::default();
-    let stable = [ExplicitEngine::finite(), ExplicitEngine::small()]
-        .iter()
-        .filter_map(|e| e.stable_increment(scene, &settings))
+    let stable = stable
+        .into_iter()
         .min_by(|a, b| a.increment.total_cmp(&b.increment));
     match stable {
         Some(s) if h > s.increment * (1.0 + 1e-12) => Err(SceneError {
@@ -174,4 +197,57 @@ pub fn load_cases(args: &[String], dir: &Path) -> Result<Vec<Scene>, Vec<LoadErr
     } else {
         Err(errors)
     }
+}
+
+/// Validate the command line's overrides exactly as the same values in a case file: each
+/// scene with the override applied must pass [`check_scene`] (a given increment not above the
+/// stable one with the given penalty; a stable increment that can be computed). Returns one
+/// message per refusal, naming the option and the case.
+pub fn check_overrides(scenes: &[Scene], settings: &RunSettings) -> Vec<String> {
+    let mut errors = Vec::new();
+    let range = crate::case::build::MIN_MAGNITUDE..=crate::case::build::MAX_MAGNITUDE;
+    if let Some(IncrementRule::Given(h) | IncrementRule::Forced(h)) = settings.increment
+        && !(h.is_finite() && range.contains(&h))
+    {
+        errors.push(format!(
+            "--increment {h:e}: outside the supported range [{:e}, {:e}]",
+            range.start(),
+            range.end()
+        ));
+    }
+    if let Some(crate::scene::PenaltyRule::Stiffness(k) | crate::scene::PenaltyRule::Ratio(k)) =
+        settings.penalty
+        && !(k.is_finite() && range.contains(&k))
+    {
+        errors.push(format!(
+            "--penalty {k:e}: outside the supported range [{:e}, {:e}]",
+            range.start(),
+            range.end()
+        ));
+    }
+    if !errors.is_empty() {
+        return errors;
+    }
+    let option = match (settings.increment, settings.penalty) {
+        (Some(_), Some(_)) => "--increment/--penalty",
+        (Some(_), None) => "--increment",
+        (None, Some(_)) => "--penalty",
+        (None, None) => return errors,
+    };
+    for scene in scenes {
+        let mut s = scene.clone();
+        if let Some(rule) = settings.increment {
+            s.settings.increment = rule;
+        }
+        if let Some(rule) = settings.penalty {
+            s.settings.penalty = rule;
+        }
+        if let Some(d) = settings.damping {
+            s.settings.damping = d;
+        }
+        if let Err(e) = check_increment(&s) {
+            errors.push(format!("{option}: case {}: {e}", scene.id));
+        }
+    }
+    errors
 }

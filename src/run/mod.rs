@@ -18,14 +18,16 @@
 //! - [`load`]: resolve and validate the cases (with the checks that need an engine);
 //! - [`matching`]: what "matched settings" means: the settings one engine's job gets from
 //!   another engine's rules (rapier's increment is the explicit engine's);
+//! - [`budget`]: each job's increments, rows and memory estimated and bounded before it runs;
 //! - this module: the jobs, run in parallel, their results in plan order.
 
+pub mod budget;
 pub mod load;
 pub mod matching;
 
 pub use load::{
-    LoadError, UnknownEngine, check_increment, check_scene, engine_names, load_cases,
-    select_engines,
+    LoadError, UnknownEngine, check_increment, check_overrides, check_scene, engine_names,
+    load_cases, select_engines,
 };
 
 use crate::contract::{self, History};
@@ -197,6 +199,14 @@ pub fn execute(plan: &Plan, progress: bool) -> Outcome {
 fn run_job(scene: &Scene, engine: &dyn Engine, settings: &RunSettings) -> JobResult {
     let start = Instant::now();
     let name = engine.name().to_string();
+    if crate::interrupt::checkpoint("run").is_err() {
+        return JobResult {
+            case: scene.id.clone(),
+            engine: name,
+            elapsed: 0.0,
+            result: Err("interrupted before it ran".to_string()),
+        };
+    }
     let result = panic::catch_unwind(AssertUnwindSafe(|| {
         let settings = matching::job_settings(engine, scene, settings);
         engine.run(scene, &settings)
@@ -206,6 +216,7 @@ fn run_job(scene: &Scene, engine: &dyn Engine, settings: &RunSettings) -> JobRes
     .and_then(|output| {
         contract::check(scene, &output.history)
             .map_err(|e| format!("history breaks the output contract: {e}"))?;
+        contract::check_finite(&output.history)?;
         Ok(JobSuccess {
             info: output.info,
             history: output.history,

@@ -452,7 +452,7 @@ pub fn solve(scene: &Scene) -> Result<History, EngineError> {
             .map(|&i| times[i] - start)
             .chain(std::iter::once(duration))
             .collect();
-        let solved = exponential_states(&a, &s0, &offsets);
+        let solved = exponential_states(&a, &s0, &offsets)?;
         let expand = |s: &DVector<f64>| {
             let (mut qq, mut vv) = (q.clone(), qd.clone());
             for (i, &k) in free.iter().enumerate() {

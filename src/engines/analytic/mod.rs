@@ -53,8 +53,32 @@ impl Engine for AnalyticEngine {
 }
 
 /// The state `s(t) = exp(A t) s0` at each time (each from t = 0, so no error accumulates).
-pub fn exponential_states(a: &DMatrix<f64>, s0: &DVector<f64>, times: &[f64]) -> Vec<DVector<f64>> {
-    times.iter().map(|&t| (a * t).exp() * s0).collect()
+///
+/// A matrix or state with a non-finite entry (an overflowing scene) is refused rather than
+/// handed to the exponential, which would not terminate on it.
+pub fn exponential_states(
+    a: &DMatrix<f64>,
+    s0: &DVector<f64>,
+    times: &[f64],
+) -> Result<Vec<DVector<f64>>, EngineError> {
+    if !(a.iter().all(|x| x.is_finite()) && s0.iter().all(|x| x.is_finite())) {
+        return Err(EngineError::Failed(
+            "the state matrix has a non-finite entry (the scene's numbers overflow)".into(),
+        ));
+    }
+    times
+        .iter()
+        .map(|&t| {
+            let at = a * t;
+            if at.iter().all(|x| x.is_finite()) {
+                Ok(at.exp() * s0)
+            } else {
+                Err(EngineError::Failed(format!(
+                    "exp(A t) overflows at t = {t:e}"
+                )))
+            }
+        })
+        .collect()
 }
 
 /// A history with the contract columns of `scene` and a `valid` column.

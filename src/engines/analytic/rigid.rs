@@ -221,7 +221,7 @@ pub fn solve(scene: &Scene) -> Result<RigidSolution, EngineError> {
     s0[2 * nf] = 1.0;
 
     let times = scene.output_times();
-    let states = exponential_states(&a, &s0, &times);
+    let states = exponential_states(&a, &s0, &times)?;
     let full = |x: &[f64]| -> Vector3<f64> {
         let mut v = Vector3::zeros();
         for (i, &k) in free.iter().enumerate() {

@@ -202,7 +202,7 @@ pub fn solve(scene: &Scene) -> Result<History, EngineError> {
         a.view_mut((2, 2), (2, 2)).copy_from(&(-&minv * cmat));
         let u_mid0 = initial_stretch(scene, middle.unwrap(), &line);
         let z0 = DVector::from_vec(vec![u_mid0, u0, 0.0, 0.0]);
-        exponential_states(&a, &z0, &times)
+        exponential_states(&a, &z0, &times)?
             .into_iter()
             .map(|z| vec![z[1], z[0], z[3], z[2], 1.0])
             .collect()

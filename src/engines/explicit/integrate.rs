@@ -34,6 +34,9 @@ pub struct Integration {
 
 const MAX_DAMPING_ITERATIONS: usize = 100;
 
+/// Increments between two looks at the interruption flag.
+const INTERRUPT_STRIDE: u64 = 4096;
+
 /// The stable increment of the scene from configuration `cfg` under each remaining dynamic
 /// step's constraints (the smallest over them).
 pub fn stable_increment<S: Space, const FINITE: bool>(
@@ -281,6 +284,9 @@ pub fn integrate<S: Space, const FINITE: bool>(
         for n in first..=first + steps_here {
             if n == first + steps_here && !last_step {
                 break; // the next step starts from this configuration
+            }
+            if n % INTERRUPT_STRIDE == 0 && crate::interrupt::requested() {
+                return Err(EngineError::Failed(format!("interrupted at increment {n}")));
             }
             model.forces(&cfg, ContactMode::Unilateral, &mut forces, &mut counters);
             let mut power = 0.0;

@@ -49,6 +49,10 @@ impl Engine for ExplicitEngine {
             Kinematics::Small => "explicit_small",
         }
     }
+    fn increments(&self, scene: &Scene, settings: &RunSettings) -> Option<f64> {
+        let h = self.increment(scene, settings).ok()?;
+        Some(scene.duration() / h)
+    }
     fn run(&self, scene: &Scene, settings: &RunSettings) -> Result<RunOutput, EngineError> {
         let start = Instant::now();
         let run = self.integrate(scene, settings)?;

@@ -370,6 +370,11 @@ macro_rules! backend {
                         }
                         world.step();
                         steps += 1;
+                        if steps % 1024 == 0 && crate::interrupt::requested() {
+                            return Err(EngineError::Failed(format!(
+                                "interrupted at step {steps}"
+                            )));
+                        }
                         let bodies = read(&world);
                         let forces: Vec<f64> = plan
                             .contacts

@@ -260,6 +260,13 @@ impl Engine for RapierEngine {
             Configuration::Default => Needs::Nothing,
         }
     }
+    fn increments(&self, scene: &Scene, settings: &RunSettings) -> Option<f64> {
+        let dt = match self.configuration {
+            Configuration::Matched(_) => own_increment(scene, settings),
+            Configuration::Default => DEFAULT_INCREMENT,
+        };
+        Some(scene.duration() / dt)
+    }
     fn run(&self, scene: &Scene, settings: &RunSettings) -> Result<RunOutput, EngineError> {
         let (mut output, diagnostics) = self.run_with_diagnostics(scene, settings)?;
         for (k, contact) in scene.contacts.iter().enumerate() {

@@ -531,3 +531,38 @@ fn huge_directions_are_normalised_without_overflow() {
         );
     }
 }
+
+/// A write that fails part-way (here: a file-size limit, as a full disk would) gives a clear
+/// error and exit 1, and the previous report stays as it was.
+#[test]
+fn a_failing_write_keeps_the_previous_report() {
+    use std::os::unix::process::CommandExt;
+    let (root, out, before) = previous_report();
+    let mut cmd = bin();
+    cmd.args(["run", "-q", "springs_grounded_b", "--out"])
+        .arg(&out);
+    // SAFETY: only async-signal-safe calls between fork and exec.
+    unsafe {
+        cmd.pre_exec(|| {
+            libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+            let limit = libc::rlimit {
+                rlim_cur: 4096,
+                rlim_max: 4096,
+            };
+            if libc::setrlimit(libc::RLIMIT_FSIZE, &limit) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    let o = cmd.output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("cannot write the report (the previous one is unchanged)")
+            && stderr.contains("File too large"),
+        "{stderr}"
+    );
+    assert_eq!(snapshot(&out), before);
+    assert_eq!(names(root.path()), ["report"]);
+}

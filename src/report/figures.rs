@@ -52,7 +52,12 @@ pub fn render(case: &str, columns: &[&str], histories: &[(&str, History)]) -> Op
                     let (_, h) = histories.iter().find(|(e, _)| e == engine)?;
                     let t = h.column("t")?;
                     let v = h.column(column)?;
-                    Some((*engine, *colour, t.into_iter().zip(v).collect()))
+                    let finite = t
+                        .into_iter()
+                        .zip(v)
+                        .filter(|(t, y)| t.is_finite() && y.is_finite())
+                        .collect();
+                    Some((*engine, *colour, finite))
                 })
                 .collect();
             let (t0, t1) = series
@@ -66,15 +71,17 @@ pub fn render(case: &str, columns: &[&str], histories: &[(&str, History)]) -> Op
             let reference = series
                 .iter()
                 .find(|s| s.0 == "analytic")
-                .unwrap_or(&series[0]);
+                .or(series.first())?;
             let (lo, hi) = reference
                 .2
                 .iter()
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
                     (a.min(p.1), b.max(p.1))
                 });
-            let pad = 0.15 * (hi - lo).max(1e-12);
-            let (lo, hi) = (lo - pad, hi + pad);
+            let (lo, hi) = padded(lo, hi)?;
+            if !(t0.is_finite() && t1.is_finite() && t1 > t0) {
+                return None;
+            }
             let mut chart = ChartBuilder::on(panel)
                 .margin(8)
                 .x_label_area_size(30)
@@ -110,4 +117,43 @@ pub fn render(case: &str, columns: &[&str], histories: &[(&str, History)]) -> Op
         root.present().ok()?;
     }
     Some(svg)
+}
+
+/// A value range widened by 15 % (at least 1e-9 of its magnitude, at least 1e-12), or `None`
+/// when it is empty or not finite: the figure is skipped rather than drawn on a degenerate
+/// axis.
+fn padded(lo: f64, hi: f64) -> Option<(f64, f64)> {
+    if !(lo.is_finite() && hi.is_finite() && hi >= lo) {
+        return None;
+    }
+    let magnitude = lo.abs().max(hi.abs());
+    let pad = 0.15 * (hi - lo).max(1e-9 * magnitude).max(1e-12);
+    let (lo, hi) = (lo - pad, hi + pad);
+    (lo.is_finite() && hi.is_finite() && hi > lo).then_some((lo, hi))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn degenerate_and_non_finite_ranges_are_skipped_or_widened() {
+        assert_eq!(padded(f64::NAN, 1.0), None);
+        assert_eq!(padded(0.0, f64::INFINITY), None);
+        assert_eq!(padded(1.0, 0.0), None);
+        let (lo, hi) = padded(1e30, 1e30).unwrap();
+        assert!(lo < 1e30 && hi > 1e30);
+        let (lo, hi) = padded(0.0, 0.0).unwrap();
+        assert!(lo < 0.0 && hi > 0.0);
+        assert!(padded(f64::MAX, f64::MAX).is_none());
+    }
+
+    #[test]
+    fn a_history_of_nan_draws_no_figure_and_does_not_hang() {
+        let h = History {
+            columns: vec!["t".into(), "u_end".into()],
+            rows: (0..5).map(|i| vec![f64::from(i), f64::NAN]).collect(),
+        };
+        assert!(render("c", &["u_end"], &[("explicit", h)]).is_none());
+    }
 }

@@ -1,0 +1,50 @@
+//! Memory is independent of the number of steps: a run of 10^7 increments, explicit and rapier,
+//! keeps its peak resident set under 50 MB (the output is 501 rows whatever the step count).
+//!
+//! Long (about a minute, most of it rapier's 10^7 steps): `cargo test --release -- --ignored`,
+//! which `.ci/run` runs once.
+use std::process::Command;
+
+/// Peak resident set of the waited-for children so far, in bytes (Linux reports kilobytes).
+fn children_peak_rss() -> u64 {
+    // SAFETY: getrusage fills the struct we own.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    assert_eq!(
+        unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, &mut usage) },
+        0
+    );
+    usage.ru_maxrss as u64 * 1024
+}
+
+#[test]
+#[ignore = "long: 10^7 increments per engine; run by .ci/run with --ignored"]
+fn ten_million_increments_stay_under_50_mb() {
+    const LIMIT: u64 = 50 * 1024 * 1024;
+    let out = tempfile::tempdir().unwrap();
+    for engine in ["explicit", "rapier_f64"] {
+        let status = Command::new(env!("CARGO_BIN_EXE_crosscheck"))
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .args(["run", "-q", "springs_grounded_a", "--increment", "1e-7"])
+            .args(["--engines", engine, "--out"])
+            .arg(out.path())
+            .status()
+            .unwrap();
+        assert!(status.success(), "{engine}");
+        let summary: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(out.path().join("summary.json")).unwrap(),
+        )
+        .unwrap();
+        let steps = summary["cases"][0]["runs"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["engine"] == engine)
+            .unwrap()["steps"]
+            .as_u64()
+            .unwrap();
+        assert_eq!(steps, 10_000_000, "{engine}");
+        let peak = children_peak_rss();
+        println!("{engine}: 10^7 increments, peak RSS so far {peak} bytes");
+        assert!(peak < LIMIT, "{engine}: peak RSS {peak} bytes ≥ 50 MB");
+    }
+}

@@ -495,40 +495,46 @@ fn only_small_regular_utf8_files_are_read() {
 /// overflow, so the run gives the same answer as with a unit vector.
 #[test]
 fn huge_directions_are_normalised_without_overflow() {
-    let dir = tempfile::tempdir().unwrap();
-    let text = std::fs::read_to_string(cases_dir().join("springs_n2n_b.toml")).unwrap();
-    assert!(text.contains("direction = [1.0, 0.0]"));
-    let huge = text.replace("direction = [1.0, 0.0]", "direction = [1.0e300, 0.0]");
-    std::fs::write(dir.path().join("springs_n2n_b.toml"), huge).unwrap();
-    let out = dir.path().join("out");
-    let o = bin()
-        .args(["run", "-q", "--engines", "explicit,analytic", "--out"])
-        .arg(&out)
-        .arg(dir.path().join("springs_n2n_b.toml"))
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let reference = tempfile::tempdir().unwrap();
-    let o = bin()
-        .args([
-            "run",
-            "-q",
+    for (id, from, to) in [
+        (
             "springs_n2n_b",
-            "--engines",
-            "explicit,analytic",
-            "--out",
-        ])
-        .arg(reference.path())
-        .output()
-        .unwrap();
-    assert!(o.status.success());
-    for engine in ["explicit", "analytic"] {
-        let csv = format!("data/springs_n2n_b/{engine}.csv");
-        assert_eq!(
-            std::fs::read(out.join(&csv)).unwrap(),
-            std::fs::read(reference.path().join(&csv)).unwrap(),
-            "{engine}: the same history as with a unit direction"
-        );
+            "direction = [1.0, 0.0]",
+            "direction = [1.0e300, 0.0]",
+        ),
+        (
+            "springs_grounded_c",
+            "x_axis = [1.0, 1.0]",
+            "x_axis = [1.0e300, 1.0e300]",
+        ),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let text = std::fs::read_to_string(cases_dir().join(format!("{id}.toml"))).unwrap();
+        assert!(text.contains(from), "{id}");
+        let file = dir.path().join(format!("{id}.toml"));
+        std::fs::write(&file, text.replace(from, to)).unwrap();
+        let out = dir.path().join("out");
+        let o = bin()
+            .args(["run", "-q", "--engines", "explicit,analytic", "--out"])
+            .arg(&out)
+            .arg(&file)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let reference = tempfile::tempdir().unwrap();
+        let o = bin()
+            .args(["run", "-q", id, "--engines", "explicit,analytic", "--out"])
+            .arg(reference.path())
+            .output()
+            .unwrap();
+        assert!(o.status.success());
+        for engine in ["explicit", "analytic"] {
+            let csv = format!("data/{id}/{engine}.csv");
+            assert_eq!(
+                std::fs::read(out.join(&csv)).unwrap(),
+                std::fs::read(reference.path().join(&csv)).unwrap(),
+                "{id} / {engine}: the same history as with a unit vector"
+            );
+        }
     }
 }
 

@@ -7,6 +7,9 @@ use crosscheck::comparison::compare;
 use crosscheck::contract::check as check_contract;
 use crosscheck::engines::analytic::AnalyticEngine;
 use crosscheck::engines::explicit::ExplicitEngine;
+use crosscheck::engines::rapier::backend::Record;
+use crosscheck::engines::rapier::plan::BodyState;
+use crosscheck::engines::rapier::record::Recorder;
 use crosscheck::engines::rapier::{
     Configuration, MatchedSettings, Precision, RapierEngine, engines,
 };
@@ -419,5 +422,55 @@ fn unbalanced_static_step_is_unsupported() {
             assert!(m.contains("static"), "{m}");
         }
         other => panic!("expected Unsupported, got {:?}", other.map(|o| o.engine)),
+    }
+}
+
+/// A million steps through the recorder: its row buffer stays at the output rows, and the
+/// rows awaiting a contact force and the force samples held stay a handful, whatever the
+/// number of steps.
+#[test]
+fn memory_is_independent_of_the_number_of_steps() {
+    let scene = scene("rigid2d_pin_lumped");
+    let plan = crosscheck::engines::rapier::plan::plan(&scene).unwrap();
+    let states: Vec<BodyState> = plan
+        .bodies
+        .iter()
+        .map(|b| BodyState {
+            position: b.position,
+            rotation: b.rotation,
+            linvel: b.linvel,
+            angvel: b.angvel,
+        })
+        .collect();
+    let steps = 1_000_000u32;
+    let dt = scene.duration() / f64::from(steps);
+    let mut recorder = Recorder::new(&scene, &plan);
+    let mut most_middles = 0;
+    for k in 0..=steps {
+        let force = (k > 0).then(|| vec![f64::from(k); plan.contacts.len()]);
+        recorder
+            .push(Record {
+                time: f64::from(k) * dt,
+                bodies: states.clone(),
+                contact_force: force,
+            })
+            .unwrap();
+        most_middles = most_middles.max(recorder.middles_held());
+    }
+    assert_eq!(recorder.row_capacity(), scene.output_rows);
+    assert!(recorder.most_pending() <= 2, "{}", recorder.most_pending());
+    assert!(most_middles <= 3, "{most_middles}");
+    let (history, _) = recorder.finish().unwrap();
+    assert_eq!(history.rows.len(), scene.output_rows);
+    // The force is k at the middle (k − ½)·dt of step k: at output time t it is t/dt + ½
+    // (held at the last middle's value at the end).
+    let col = history
+        .columns
+        .iter()
+        .position(|c| c == "contact_force")
+        .unwrap();
+    for row in &history.rows[..history.rows.len() - 1] {
+        let expected = (row[0] / dt + 0.5).max(1.0);
+        assert!((row[col] - expected).abs() <= 1e-6 * expected, "{row:?}");
     }
 }

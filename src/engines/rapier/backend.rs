@@ -37,12 +37,10 @@ pub struct Record {
     pub contact_force: Option<Vec<f64>>,
 }
 
-/// Everything a run recorded.
+/// What a run was: its size and step count (the states themselves go to the recorder as they
+/// are produced; none is kept).
 #[derive(Debug, Clone)]
 pub struct Trace {
-    /// Records in time order (a step boundary appears twice: end of one step, start of the
-    /// next).
-    pub records: Vec<Record>,
     /// Steps taken.
     pub steps: u64,
     /// Colliders in the world.
@@ -241,8 +239,14 @@ macro_rules! backend {
                 p
             }
 
-            /// Build the world and step it through every dynamic step.
-            pub fn simulate(plan: &Plan, run: &Run) -> Result<Trace, EngineError> {
+            /// Build the world and step it through every dynamic step, handing each state to
+            /// `record` as it is produced (in time order; a step boundary comes twice: the end
+            /// of one step, then the start of the next).
+            pub fn simulate(
+                plan: &Plan,
+                run: &Run,
+                record: &mut dyn FnMut(Record) -> Result<(), EngineError>,
+            ) -> Result<Trace, EngineError> {
                 let mut world = PhysicsWorld::default();
                 world.gravity = rp::math::Vector::ZERO;
                 world.integration_parameters = parameters(run);
@@ -309,7 +313,6 @@ macro_rules! backend {
                     handles.iter().map(|h| state(&world.bodies[*h])).collect()
                 };
 
-                let mut records = Vec::new();
                 let mut step_joints: Vec<ImpulseJointHandle> = Vec::new();
                 let mut steps = 0u64;
                 let mut t0 = 0.0;
@@ -340,11 +343,11 @@ macro_rules! backend {
                             rb.set_angvel(angular(&s.angvel), true);
                         }
                     }
-                    records.push(Record {
+                    record(Record {
                         time: t0,
                         bodies: read(&world),
                         contact_force: None,
-                    });
+                    })?;
 
                     let n = ((step.duration / dt) - 1e-9).ceil().max(1.0) as u64;
                     for k in 1..=n {
@@ -397,16 +400,15 @@ macro_rules! backend {
                                 "rapier: the state became non-finite by t = {t:e} (dt = {dt:e})"
                             )));
                         }
-                        records.push(Record {
+                        record(Record {
                             time: t,
                             bodies,
                             contact_force: Some(forces),
-                        });
+                        })?;
                     }
                     t0 += step.duration;
                 }
                 Ok(Trace {
-                    records,
                     steps,
                     colliders: world.colliders.len(),
                     joints: world.impulse_joints.len(),

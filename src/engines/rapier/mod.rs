@@ -208,13 +208,19 @@ impl RapierEngine {
             dt,
             matched: solver,
         };
+        let mut recorder = record::Recorder::new(scene, &plan);
+        let mut sink = |r: backend::Record| recorder.push(r);
         let trace = match (scene.dimension, self.precision) {
-            (Dimension::Two, Precision::F32) => backend::r2_f32::simulate(&plan, &run)?,
-            (Dimension::Two, Precision::F64) => backend::r2_f64::simulate(&plan, &run)?,
-            (Dimension::Three, Precision::F32) => backend::r3_f32::simulate(&plan, &run)?,
-            (Dimension::Three, Precision::F64) => backend::r3_f64::simulate(&plan, &run)?,
+            (Dimension::Two, Precision::F32) => backend::r2_f32::simulate(&plan, &run, &mut sink)?,
+            (Dimension::Two, Precision::F64) => backend::r2_f64::simulate(&plan, &run, &mut sink)?,
+            (Dimension::Three, Precision::F32) => {
+                backend::r3_f32::simulate(&plan, &run, &mut sink)?
+            }
+            (Dimension::Three, Precision::F64) => {
+                backend::r3_f64::simulate(&plan, &run, &mut sink)?
+            }
         };
-        let (history, diagnostics) = record::history(scene, &plan, &trace)?;
+        let (history, diagnostics) = recorder.finish()?;
         let wall_seconds = start.elapsed().as_secs_f64();
         let (iterations, pgs) = match solver {
             Some(m) => (m.solver_iterations, m.pgs_iterations),

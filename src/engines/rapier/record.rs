@@ -15,8 +15,12 @@
 //! work F·(displacement of the load point since the start of the first dynamic step); balance =
 //! kinetic + elastic + viscous − work − (kinetic + elastic at the start). Since rapier's springs
 //! are implicit, the balance drifts negative: that drift is rapier's numerical energy loss.
+//!
+//! The [`Recorder`] receives the stepped states one at a time and keeps no per-step data: the
+//! previous state, running totals, the output rows, and the few rows whose contact force waits
+//! for the next step's middle. Its memory is that of the output, whatever the number of steps.
 
-use super::backend::Trace;
+use super::backend::Record;
 use super::plan::{BodyState, Plan, twist};
 use crate::contract::ENERGY_COLUMNS;
 use crate::engines::{EngineError, History};
@@ -152,129 +156,151 @@ impl Kinematics<'_> {
     }
 }
 
-/// Linear interpolation of a series (`x` ascending) at `t`, held constant outside.
-fn interpolate(x: &[f64], y: &[f64], t: f64) -> f64 {
-    match x.len() {
-        0 => 0.0,
-        1 => y[0],
-        _ => {
-            if t <= x[0] {
-                return y[0];
-            }
-            if t >= x[x.len() - 1] {
-                return y[y.len() - 1];
-            }
-            let i = x.partition_point(|&v| v <= t).max(1) - 1;
-            let s = (t - x[i]) / (x[i + 1] - x[i]);
-            y[i] + s * (y[i + 1] - y[i])
-        }
-    }
+/// The output history of a rapier run, built while the run steps.
+pub struct Recorder<'a> {
+    k: Kinematics<'a>,
+    columns: Vec<String>,
+    times: Vec<f64>,
+    /// Index of the next output time to emit.
+    next: usize,
+    tol: f64,
+    rows: Vec<Vec<f64>>,
+    /// The first record's states and energy (the work and balance are relative to them).
+    start: Option<(Vec<BodyState>, f64)>,
+    /// The previous record, its dissipated energy and dissipation rate.
+    previous: Option<(Record, f64, f64)>,
+    /// Contact-force samples (step middle, force per contact) that rows may still need.
+    middles: std::collections::VecDeque<(f64, Vec<f64>)>,
+    /// Whether a middle has been dropped (so the front one is not the first of the run).
+    dropped: bool,
+    /// Rows (indices) whose contact-force columns await a later middle.
+    pending: std::collections::VecDeque<usize>,
+    /// The most rows ever pending at once.
+    most_pending: usize,
+    /// (column index in a row, contact pair) of every contact-force column.
+    contact_columns: Vec<(usize, usize)>,
+    previous_rotation: Vec<f64>,
+    penetration_sum: Vec<f64>,
+    max_penetration: Vec<f64>,
+    max_separation: Vec<f64>,
+    counted: usize,
 }
 
-/// The history of a run, and its contact diagnostics.
-pub fn history(
-    scene: &Scene,
-    plan: &Plan,
-    trace: &Trace,
-) -> Result<(History, Diagnostics), EngineError> {
-    let k = Kinematics { scene, plan };
-    let records = &trace.records;
-    let Some(first) = records.first() else {
-        return Err(EngineError::Failed("rapier: nothing was recorded".into()));
-    };
-
-    // Dissipated energy at each record (trapezoid over steps).
-    let mut dissipated = Vec::with_capacity(records.len());
-    let mut previous: Option<(f64, f64)> = None;
-    let mut total = 0.0;
-    for r in records {
-        let power = k.dissipation_rate(&r.bodies);
-        if let Some((t, p)) = previous {
-            total += 0.5 * (r.time - t) * (p + power);
-        }
-        dissipated.push(total);
-        previous = Some((r.time, power));
-    }
-
-    // Contact forces at the middle of their steps; contact diagnostics.
-    let nc = plan.contacts.len();
-    let mut middles = Vec::new();
-    let mut forces: Vec<Vec<f64>> = vec![Vec::new(); nc];
-    let mut penetration_sum = vec![0.0; nc];
-    let mut max_penetration = vec![0.0f64; nc];
-    let mut max_separation = vec![0.0f64; nc];
-    let mut counted = 0usize;
-    for (i, r) in records.iter().enumerate() {
-        let Some(f) = &r.contact_force else { continue };
-        middles.push(0.5 * (records[i - 1].time + r.time));
-        counted += 1;
-        for c in 0..nc {
-            forces[c].push(f[c]);
-            let gap = k.gap(&r.bodies, c);
-            penetration_sum[c] += (-gap).max(0.0);
-            max_penetration[c] = max_penetration[c].max(-gap);
-            max_separation[c] = max_separation[c].max(gap);
-        }
-    }
-    let diagnostics = Diagnostics {
-        mean_penetration: penetration_sum
+impl<'a> Recorder<'a> {
+    /// An empty recorder for `scene` built as `plan`.
+    pub fn new(scene: &'a Scene, plan: &'a Plan) -> Self {
+        let columns: Vec<String> = std::iter::once("t".to_string())
+            .chain(scene.columns.iter().map(|c| c.name.clone()))
+            .chain(ENERGY_COLUMNS.iter().map(|s| s.to_string()))
+            .collect();
+        let contact_columns = scene
+            .columns
             .iter()
-            .map(|s| s / counted.max(1) as f64)
-            .collect(),
-        max_penetration,
-        max_separation,
-    };
+            .enumerate()
+            .filter_map(|(ci, c)| match c.probe {
+                Probe::ContactForce { contact } => Some((ci + 1, contact)),
+                _ => None,
+            })
+            .collect();
+        let nc = plan.contacts.len();
+        Recorder {
+            k: Kinematics { scene, plan },
+            columns,
+            times: scene.output_times(),
+            next: 0,
+            tol: 1e-9 * scene.duration().max(f64::MIN_POSITIVE),
+            rows: Vec::with_capacity(scene.output_rows),
+            start: None,
+            previous: None,
+            middles: std::collections::VecDeque::new(),
+            dropped: false,
+            pending: std::collections::VecDeque::new(),
+            most_pending: 0,
+            contact_columns,
+            previous_rotation: vec![0.0; scene.columns.len()],
+            penetration_sum: vec![0.0; nc],
+            max_penetration: vec![0.0; nc],
+            max_separation: vec![0.0; nc],
+            counted: 0,
+        }
+    }
 
-    let start = &first.bodies;
-    let energy0 = k.kinetic(start) + k.elastic(start);
-    let duration = scene.duration();
-    let tol = 1e-9 * duration.max(f64::MIN_POSITIVE);
-    let columns: Vec<String> = std::iter::once("t".to_string())
-        .chain(scene.columns.iter().map(|c| c.name.clone()))
-        .chain(ENERGY_COLUMNS.iter().map(|s| s.to_string()))
-        .collect();
-    let mut previous_rotation = vec![0.0; scene.columns.len()];
-    let mut rows = Vec::with_capacity(scene.output_rows);
-    for t in scene.output_times() {
-        let i = records.partition_point(|r| r.time <= t + tol).max(1) - 1;
-        let (state, dissipation): (Vec<BodyState>, f64) =
-            if (records[i].time - t).abs() <= tol || i + 1 >= records.len() {
-                (records[i].bodies.clone(), dissipated[i])
+    /// Take the next record (in time order; a step boundary comes twice, end then start).
+    pub fn push(&mut self, record: Record) -> Result<(), EngineError> {
+        let power = self.k.dissipation_rate(&record.bodies);
+        let dissipated = match &self.previous {
+            Some((p, d, pp)) => d + 0.5 * (record.time - p.time) * (pp + power),
+            None => 0.0,
+        };
+        if self.start.is_none() {
+            let energy0 = self.k.kinetic(&record.bodies) + self.k.elastic(&record.bodies);
+            self.start = Some((record.bodies.clone(), energy0));
+        }
+        if let (Some(f), Some((p, ..))) = (&record.contact_force, &self.previous) {
+            self.counted += 1;
+            for c in 0..f.len() {
+                let gap = self.k.gap(&record.bodies, c);
+                self.penetration_sum[c] += (-gap).max(0.0);
+                self.max_penetration[c] = self.max_penetration[c].max(-gap);
+                self.max_separation[c] = self.max_separation[c].max(gap);
+            }
+            self.middles
+                .push_back((0.5 * (p.time + record.time), f.clone()));
+        }
+        // Rows the new record has passed: the previous record is the last at or before them.
+        while self.next < self.times.len() && record.time > self.times[self.next] + self.tol {
+            let t = self.times[self.next];
+            let Some((p, pd, _)) = &self.previous else {
+                break;
+            };
+            let (state, dissipation) = if (p.time - t).abs() <= self.tol {
+                (p.bodies.clone(), *pd)
             } else {
-                let (a, b) = (&records[i], &records[i + 1]);
-                let s = ((t - a.time) / (b.time - a.time)).clamp(0.0, 1.0);
+                let s = ((t - p.time) / (record.time - p.time)).clamp(0.0, 1.0);
                 (
-                    a.bodies
+                    p.bodies
                         .iter()
-                        .zip(&b.bodies)
+                        .zip(&record.bodies)
                         .map(|(x, y)| x.lerp(y, s))
                         .collect(),
-                    dissipated[i] + s * (dissipated[i + 1] - dissipated[i]),
+                    pd + s * (dissipated - pd),
                 )
             };
-        let mut row = Vec::with_capacity(columns.len());
+            self.emit(t, &state, dissipation);
+        }
+        self.previous = Some((record, dissipated, power));
+        self.resolve(false);
+        Ok(())
+    }
+
+    /// One output row at `t` from `state`; its contact-force columns are filled later.
+    fn emit(&mut self, t: f64, state: &[BodyState], dissipation: f64) {
+        let (start, energy0) = self.start.as_ref().expect("a record came first");
+        let k = &self.k;
+        let mut row = Vec::with_capacity(self.columns.len());
         row.push(t);
-        for (ci, c) in scene.columns.iter().enumerate() {
+        for (ci, c) in k.scene.columns.iter().enumerate() {
             row.push(match &c.probe {
                 Probe::Displacement { node, direction } => {
-                    direction.dot(&k.displacement(&state, *node))
+                    direction.dot(&k.displacement(state, *node))
                 }
-                Probe::Velocity { node, direction } => direction.dot(&k.velocity(&state, *node)),
+                Probe::Velocity { node, direction } => direction.dot(&k.velocity(state, *node)),
                 Probe::Rotation { body, axis } => {
-                    let b = plan.nodes[scene.bodies[*body].reference].body;
+                    let b = k.plan.nodes[k.scene.bodies[*body].reference].body;
                     let raw = twist(&state[b].rotation, axis);
-                    let turns = ((previous_rotation[ci] - raw) / std::f64::consts::TAU).round();
+                    let turns =
+                        ((self.previous_rotation[ci] - raw) / std::f64::consts::TAU).round();
                     let unwrapped = raw + turns * std::f64::consts::TAU;
-                    previous_rotation[ci] = unwrapped;
+                    self.previous_rotation[ci] = unwrapped;
                     unwrapped
                 }
-                Probe::ContactForce { contact } => interpolate(&middles, &forces[*contact], t),
+                Probe::ContactForce { .. } => f64::NAN, // filled by `resolve`
                 Probe::Zero { .. } => 0.0,
             });
         }
-        let kinetic = k.kinetic(&state);
-        let elastic = k.elastic(&state);
-        let work = k.work(&state, start);
+        let kinetic = k.kinetic(state);
+        let elastic = k.elastic(state);
+        let work = k.work(state, start);
         row.extend([
             kinetic,
             elastic,
@@ -282,12 +308,109 @@ pub fn history(
             work,
             kinetic + elastic + dissipation - work - energy0,
         ]);
-        if row.iter().any(|x| !x.is_finite()) {
+        self.rows.push(row);
+        self.next += 1;
+        if !self.contact_columns.is_empty() {
+            self.pending.push_back(self.rows.len() - 1);
+            self.most_pending = self.most_pending.max(self.pending.len());
+        }
+    }
+
+    /// Fill the contact-force columns of pending rows that the known middles bracket (all of
+    /// them at the end of the run), then drop middles no row can need any more.
+    ///
+    /// The value at t is the force interpolated linearly between the step middles around t,
+    /// held constant before the first middle and after the last (the last middle at or before
+    /// t, then the next; exactly that middle's force when t falls on it).
+    fn resolve(&mut self, at_end: bool) {
+        while let Some(&row) = self.pending.front() {
+            let t = self.rows[row][0];
+            let Some(last) = self.middles.back() else {
+                if at_end {
+                    for &(col, _) in &self.contact_columns {
+                        self.rows[row][col] = 0.0; // no contact step at all
+                    }
+                    self.pending.pop_front();
+                    continue;
+                }
+                break;
+            };
+            if !(at_end || last.0 > t) {
+                break;
+            }
+            let i = self.middles.partition_point(|m| m.0 <= t);
+            for &(col, contact) in &self.contact_columns {
+                let y = |j: usize| self.middles[j].1[contact];
+                self.rows[row][col] = if i == 0 {
+                    debug_assert!(!self.dropped, "the middle before t was kept");
+                    y(0)
+                } else if i == self.middles.len() {
+                    y(i - 1)
+                } else {
+                    let (x0, x1) = (self.middles[i - 1].0, self.middles[i].0);
+                    let s = (t - x0) / (x1 - x0);
+                    y(i - 1) + s * (y(i) - y(i - 1))
+                };
+            }
+            self.pending.pop_front();
+        }
+        // Keep the last middle at or before the earliest time still to be filled.
+        let earliest = match self.pending.front() {
+            Some(&row) => self.rows[row][0],
+            None => self.times.get(self.next).copied().unwrap_or(f64::INFINITY),
+        };
+        while self.middles.len() >= 2 && self.middles[1].0 <= earliest {
+            self.middles.pop_front();
+            self.dropped = true;
+        }
+    }
+
+    /// The rows still pending their contact force, at most, over the run so far.
+    pub fn most_pending(&self) -> usize {
+        self.most_pending
+    }
+
+    /// Capacity of the row buffer (the output rows, reserved once).
+    pub fn row_capacity(&self) -> usize {
+        self.rows.capacity()
+    }
+
+    /// Contact-force samples held now.
+    pub fn middles_held(&self) -> usize {
+        self.middles.len()
+    }
+
+    /// The history and the contact diagnostics.
+    pub fn finish(mut self) -> Result<(History, Diagnostics), EngineError> {
+        let Some((last, ld, _)) = self.previous.take() else {
+            return Err(EngineError::Failed("rapier: nothing was recorded".into()));
+        };
+        while self.next < self.times.len() {
+            let t = self.times[self.next];
+            self.emit(t, &last.bodies, ld);
+        }
+        self.resolve(true);
+        if let Some(row) = self.rows.iter().find(|r| r.iter().any(|x| !x.is_finite())) {
             return Err(EngineError::Failed(format!(
-                "rapier: non-finite output at t = {t:e}"
+                "rapier: non-finite output at t = {:e}",
+                row[0]
             )));
         }
-        rows.push(row);
+        let diagnostics = Diagnostics {
+            mean_penetration: self
+                .penetration_sum
+                .iter()
+                .map(|s| s / self.counted.max(1) as f64)
+                .collect(),
+            max_penetration: self.max_penetration,
+            max_separation: self.max_separation,
+        };
+        Ok((
+            History {
+                columns: self.columns,
+                rows: self.rows,
+            },
+            diagnostics,
+        ))
     }
-    Ok((History { columns, rows }, diagnostics))
 }

@@ -2,6 +2,8 @@
 //! closed or full standard output, and resource refusals. Every test that runs against an
 //! existing report asserts it is byte-identical afterwards (or, where a run was meant to
 //! succeed, complete), and that no stray file is left beside it.
+mod common;
+use common::snapshot;
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -16,26 +18,6 @@ fn bin() -> Command {
 
 fn cases_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("cases")
-}
-
-/// Every file under `dir`, relative path → bytes.
-fn snapshot(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    fn walk(root: &Path, dir: &Path, out: &mut BTreeMap<String, Vec<u8>>) {
-        for e in std::fs::read_dir(dir).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                walk(root, &p, out);
-            } else {
-                out.insert(
-                    p.strip_prefix(root).unwrap().display().to_string(),
-                    std::fs::read(&p).unwrap(),
-                );
-            }
-        }
-    }
-    let mut out = BTreeMap::new();
-    walk(dir, dir, &mut out);
-    out
 }
 
 /// Names in `dir`, sorted.
@@ -319,6 +301,31 @@ fn closed_or_full_stdout_is_an_error_not_a_panic() {
     assert_eq!(names(root.path()), ["report"]);
 }
 
+/// `crosscheck run ARGS --out OUT` is refused with exit 2, saying `expected` and that nothing
+/// was run, and the report at `out` is still `before`.
+fn refused<A: AsRef<std::ffi::OsStr> + std::fmt::Debug>(
+    args: &[A],
+    expected: &str,
+    out: &Path,
+    before: &BTreeMap<String, Vec<u8>>,
+) {
+    let o = bin()
+        .args(["run", "-q"])
+        .args(args)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
+    assert!(
+        stderr.contains(expected),
+        "{args:?}: no `{expected}` in {stderr}"
+    );
+    assert!(stderr.contains("nothing was run"), "{args:?}: {stderr}");
+    assert_eq!(&snapshot(out), before, "{args:?}: the previous report");
+}
+
 /// A run above its resource limits is refused before anything runs, with the figures.
 #[test]
 fn runs_above_their_limits_are_refused_with_the_figures() {
@@ -365,21 +372,7 @@ fn runs_above_their_limits_are_refused_with_the_figures() {
         ),
     ];
     for (args, expected) in cases {
-        let o = bin()
-            .args(["run", "-q"])
-            .args(&args)
-            .arg("--out")
-            .arg(&out)
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
-        assert!(
-            stderr.contains(expected),
-            "{args:?}: no `{expected}` in {stderr}"
-        );
-        assert!(stderr.contains("nothing was run"), "{stderr}");
-        assert_eq!(snapshot(&out), before);
+        refused(&args, expected, &out, &before);
     }
     assert_eq!(names(root.path()), ["report"]);
 }
@@ -407,21 +400,9 @@ fn overrides_are_validated_like_case_values() {
             "--penalty: case rigid2d_pin_lumped: time.increment",
         ),
     ] {
-        let o = bin()
-            .args(["run", "-q"])
-            .args(SMALL)
-            .args(args)
-            .arg("--out")
-            .arg(&out)
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
-        assert!(
-            stderr.contains(expected),
-            "{args:?}: no `{expected}` in {stderr}"
-        );
-        assert_eq!(snapshot(&out), before);
+        let mut all: Vec<&str> = SMALL.to_vec();
+        all.extend(args);
+        refused(&all, expected, &out, &before);
     }
     assert_eq!(names(root.path()), ["report"]);
 }

@@ -5,6 +5,8 @@ use crosscheck::case;
 use crosscheck::engines::explicit::ExplicitEngine;
 use crosscheck::engines::{Engine, History, RunSettings};
 use crosscheck::scene::{IncrementRule, Scene};
+use std::collections::BTreeMap;
+use std::path::Path;
 
 /// Load a shipped case by id.
 pub fn scene(id: &str) -> Scene {
@@ -64,4 +66,24 @@ pub fn live_columns(scene: &Scene) -> Vec<String> {
         .filter(|(_, c)| !matches!(c.probe, crosscheck::scene::Probe::Zero { .. }))
         .map(|(n, _)| n.to_string())
         .collect()
+}
+
+/// Every file under `dir`, relative path → bytes.
+pub fn snapshot(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    fn walk(root: &Path, dir: &Path, out: &mut BTreeMap<String, Vec<u8>>) {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                walk(root, &p, out);
+            } else {
+                out.insert(
+                    p.strip_prefix(root).unwrap().display().to_string(),
+                    std::fs::read(&p).unwrap(),
+                );
+            }
+        }
+    }
+    let mut out = BTreeMap::new();
+    walk(dir, dir, &mut out);
+    out
 }

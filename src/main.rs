@@ -317,6 +317,7 @@ fn interrupted() -> ExitCode {
 }
 
 fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
+    let started = std::time::Instant::now();
     let engines = match run::select_engines(&args.engines) {
         Ok(e) => e,
         Err(e) => {
@@ -389,7 +390,9 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
+    let loaded = started.elapsed().as_secs_f64();
     let outcome = run::execute(&plan, !args.quiet);
+    let ran = started.elapsed().as_secs_f64();
     if interrupt::requested() {
         return interrupted();
     }
@@ -404,10 +407,12 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
     if interrupt::checkpoint("swap").is_err() {
         return interrupted();
     }
+    let written = started.elapsed().as_secs_f64();
     if let Err(e) = staging.commit() {
         eprintln!("error: cannot put the report in place (the previous one is unchanged): {e}");
         return ExitCode::FAILURE;
     }
+    let swapped = started.elapsed().as_secs_f64();
     let mut out = Stdout::default();
     out.print(&outcome.table());
     let checks = summary.tolerance_checks();
@@ -418,6 +423,14 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
         report::report_path(&args.out).display(),
         checks.iter().filter(|c| c.4).count(),
         checks.len()
+    ));
+    out.print(&format!(
+        "time: load and check {:.2} s, jobs {:.2} s, report {:.2} s, swap {:.2} s; total {:.2} s\n",
+        loaded,
+        ran - loaded,
+        written - ran,
+        swapped - written,
+        swapped
     ));
     if interrupt::requested() {
         eprintln!("interrupted after the new report was put in place");

@@ -240,6 +240,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
     let mut v_n = model.zero_rates();
     let mut v_guess = model.zero_rates();
     let mut v_half = model.zero_rates();
+    let mut v_next = model.zero_rates();
     let mut carry = model.zero_rates();
 
     for (si, step) in scene.steps.iter().enumerate() {
@@ -363,7 +364,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
             if n > 0 {
                 dissipated += 0.5 * h * (last_power + power);
             }
-            let v_next = v_half.plus(h, &acc);
+            v_next.set_plus(&v_half, h, &acc);
             if n % stride == 0 {
                 if !velocity_pass && n > 0 {
                     v_n.set_plus(&v_half, 0.5 * h, &acc);
@@ -426,7 +427,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 break;
             }
             model.advance(&mut cfg, &mut carry, h, &v_next, &held, &mut counters);
-            v_half = v_next;
+            std::mem::swap(&mut v_half, &mut v_next);
             std::mem::swap(&mut acc_prev, &mut acc);
         }
         n_global = first + steps_here;

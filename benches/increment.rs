@@ -1,0 +1,75 @@
+//! What one increment costs, per seed case and engine, and what a run costs before its first
+//! increment (the setup: compiling the scene, the stable increment, the static steps).
+//!
+//! `increment/<case>/<engine>`: a whole run at the increment the job planner gives that engine
+//! (the case's own; rapier's matched configuration takes the explicit engine's, its default
+//! configuration 1/60 s), with criterion's throughput set to the increments the run takes, so
+//! the report's "elem/s" is increments per second (ns per increment = 1e9 / that). The runs are
+//! 10^4 to 2·10^4 increments long, so the setup (measured apart below) is a few per cent of
+//! them at most. `analytic` is left out: it does not step in time.
+//!
+//! `setup/<case>/explicit`: the explicit engine's stable-increment analysis, which compiles the
+//! scene, runs its static steps and linearises it (what a run does before stepping).
+//!
+//! Run with `cargo bench --bench increment`; `BENCHMARKS.md` gives the table.
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use crosscheck::case;
+use crosscheck::engines::explicit::ExplicitEngine;
+use crosscheck::engines::{self, RunSettings};
+use crosscheck::run::matching;
+use std::hint::black_box;
+use std::time::Duration;
+
+fn seed_cases() -> Vec<crosscheck::scene::Scene> {
+    case::discover(&case::cases_dir())
+        .expect("cases/")
+        .iter()
+        .map(|p| case::load(p).expect("a valid seed case"))
+        .collect()
+}
+
+fn increment(c: &mut Criterion) {
+    let mut group = c.benchmark_group("increment");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(300))
+        .measurement_time(Duration::from_secs(2));
+    for scene in seed_cases() {
+        for engine in engines::all() {
+            if engine.name() == "analytic" {
+                continue;
+            }
+            let settings = matching::job_settings(engine.as_ref(), &scene, &RunSettings::default());
+            let steps = engine
+                .run(&scene, &settings)
+                .expect("a seed case runs")
+                .info
+                .steps;
+            group.throughput(Throughput::Elements(steps));
+            group.bench_function(format!("{}/{}", scene.id, engine.name()), |b| {
+                b.iter(|| engine.run(black_box(&scene), &settings).expect("runs"))
+            });
+        }
+    }
+    group.finish();
+}
+
+fn setup(c: &mut Criterion) {
+    let mut group = c.benchmark_group("setup");
+    group
+        .sample_size(20)
+        .warm_up_time(Duration::from_millis(200))
+        .measurement_time(Duration::from_secs(1));
+    for scene in seed_cases() {
+        for engine in [ExplicitEngine::finite(), ExplicitEngine::small()] {
+            use crosscheck::engines::Engine;
+            group.bench_function(format!("{}/{}", scene.id, engine.name()), |b| {
+                b.iter(|| engine.stable_increment(black_box(&scene), &RunSettings::default()))
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, increment, setup);
+criterion_main!(benches);

@@ -21,13 +21,18 @@ pub fn columns(family: Family) -> &'static [&'static str] {
 /// Energy columns an engine that keeps energies appends after the contract columns: kinetic,
 /// elastic (springs and penalty), viscous dissipation, external work since the dynamic start,
 /// and their balance (kinetic + elastic + viscous − work − initial energy; zero when exact).
-pub const ENERGY_COLUMNS: [&str; 5] = [
-    "e_kinetic",
-    "e_elastic",
-    "e_viscous",
-    "w_external",
-    "e_balance",
-];
+pub const ENERGY_COLUMNS: [&str; 5] = [E_KINETIC, E_ELASTIC, E_VISCOUS, W_EXTERNAL, E_BALANCE];
+
+/// Kinetic energy.
+pub const E_KINETIC: &str = "e_kinetic";
+/// Elastic energy of springs and penalty contact.
+pub const E_ELASTIC: &str = "e_elastic";
+/// Energy dissipated by dashpots since the dynamic start.
+pub const E_VISCOUS: &str = "e_viscous";
+/// Work of the loads since the dynamic start.
+pub const W_EXTERNAL: &str = "w_external";
+/// Kinetic + elastic + viscous − work − the initial energy (zero for an exact integration).
+pub const E_BALANCE: &str = "e_balance";
 
 /// Column of a closed form marking the rows where its assumptions hold (1) or not (0).
 pub const VALID_COLUMN: &str = "valid";

@@ -105,9 +105,9 @@ pub fn compare(scene: &Scene, reference: &History, candidate: &History) -> Compa
 
 /// Largest |e_balance| divided by the largest kinetic + elastic energy.
 pub fn energy_balance(h: &History) -> Option<f64> {
-    let balance = h.column("e_balance")?;
-    let kinetic = h.column("e_kinetic")?;
-    let elastic = h.column("e_elastic")?;
+    let balance = h.column(contract::E_BALANCE)?;
+    let kinetic = h.column(contract::E_KINETIC)?;
+    let elastic = h.column(contract::E_ELASTIC)?;
     let scale = kinetic
         .iter()
         .zip(&elastic)

@@ -37,6 +37,20 @@ enum Command {
     List,
     /// Run cases through engines and write `OUT/data/<case>/<engine>.csv`.
     Run(RunArgs),
+    /// Scaling study: ns per increment of `explicit` and `rapier_f64` on a chain of N masses
+    /// (N = 10, 100, …), against the machine's memory-bandwidth limit; writes
+    /// `OUT/scaling.csv` and `OUT/figures/scaling.svg`.
+    Scaling {
+        /// Largest chain (masses).
+        #[arg(long, value_name = "N", default_value_t = 1_000_000, value_parser = clap::value_parser!(u64).range(10..=10_000_000))]
+        max_n: u64,
+        /// Output directory.
+        #[arg(long, value_name = "DIR", default_value = "report/scaling")]
+        out: PathBuf,
+        /// Do not show the progress bar.
+        #[arg(long, short)]
+        quiet: bool,
+    },
     /// Validate case files without running them (the same validation every `run` does first).
     Check {
         /// Case files (default: every case in cases/).
@@ -169,7 +183,101 @@ fn main() -> ExitCode {
         Some(Command::List) => list(&dir),
         Some(Command::Run(args)) => run_command(args, &dir),
         Some(Command::Check { files }) => check(files, &dir),
+        Some(Command::Scaling { max_n, out, quiet }) => scaling(max_n as usize, &out, quiet),
     }
+}
+
+fn scaling(max_n: usize, out: &Path, quiet: bool) -> ExitCode {
+    use crosscheck::report::scaling as written;
+    use crosscheck::run::scaling;
+    let target = match staging::resolve_output(out) {
+        Ok(t) => t,
+        Err(e) => {
+            eprintln!("error: {e}; nothing was run");
+            return ExitCode::from(2);
+        }
+    };
+    let _lock = match staging::OutputLock::acquire(&target, true) {
+        Ok(l) => l,
+        Err(staging::OutputError::Interrupted) => return interrupted(),
+        Err(e) => {
+            eprintln!("error: cannot lock {}: {e}", target.display());
+            return ExitCode::FAILURE;
+        }
+    };
+    let sizes = scaling::sizes(max_n);
+    let bar = if quiet || !std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+        indicatif::ProgressBar::hidden()
+    } else {
+        indicatif::ProgressBar::new(2 * sizes.len() as u64)
+    };
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} points  {msg}")
+            .expect("a valid template"),
+    );
+    let study = scaling::study(max_n, |engine, n| {
+        bar.set_message(format!("{engine}, N = {n}"));
+        bar.inc(1);
+    });
+    bar.finish_and_clear();
+    let study = match study {
+        Ok(s) => s,
+        Err(_) if interrupt::requested() => return interrupted(),
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let mut stdout = Stdout::default();
+    stdout.print(&format!(
+        "{:<12} {:>9} {:>7} {:>14} {:>10} {:>10} {:>12} {:>10} {:>10}\n",
+        "engine", "n", "steps", "ns/increment", "ns/DOF", "limit", "peak RSS", "error", "predicted"
+    ));
+    for p in &study.points {
+        stdout.print(&format!(
+            "{:<12} {:>9} {:>7} {:>14.0} {:>10.2} {:>10.2} {:>9.1} MB {:>10.3e} {:>10.3e}\n",
+            p.engine,
+            p.n,
+            p.steps,
+            p.ns_per_step,
+            p.ns_per_dof_step,
+            p.limit_ns_per_dof_step,
+            p.peak_rss_bytes as f64 / 1e6,
+            p.error,
+            p.predicted_error
+        ));
+    }
+    for s in &study.skipped {
+        stdout.print(&format!(
+            "{} at N = {}: not run: {}\n",
+            s.engine, s.n, s.reason
+        ));
+    }
+    for (engine, slope) in written::exponents(&study) {
+        stdout.print(&format!(
+            "{engine}: fitted exponent {slope:.3} over N >= {}\n",
+            written::FIT_FROM_N
+        ));
+    }
+    let csv = written::csv(&study);
+    let result =
+        report::data::write_atomic(&written::csv_path(&target), csv.as_bytes()).and_then(|_| {
+            match written::render(&study) {
+                Some(svg) => {
+                    report::data::write_atomic(&written::figure_path(&target), svg.as_bytes())
+                }
+                None => Ok(()),
+            }
+        });
+    if let Err(e) = result {
+        eprintln!("error: {e}");
+        return stdout.finish(ExitCode::FAILURE);
+    }
+    stdout.print(&format!(
+        "written: {}\n",
+        written::csv_path(&target).display()
+    ));
+    stdout.finish(ExitCode::SUCCESS)
 }
 
 /// Standard output that may be closed (`| head`) or full: the first failure is kept and

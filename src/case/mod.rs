@@ -1,6 +1,7 @@
 //! Case files: finding them, reading them, and turning them into validated scenes.
 
 pub mod build;
+pub mod chain;
 pub mod diagnostic;
 pub mod file;
 

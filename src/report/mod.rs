@@ -12,6 +12,7 @@
 pub mod data;
 pub mod figures;
 pub mod markdown;
+pub mod scaling;
 pub mod staging;
 pub mod summary;
 

@@ -24,6 +24,7 @@
 pub mod budget;
 pub mod load;
 pub mod matching;
+pub mod scaling;
 
 pub use load::{
     LoadError, UnknownEngine, check_increment, check_overrides, check_scene, engine_names,

@@ -162,6 +162,29 @@ impl<S: Space> Linearised<S> {
 }
 
 impl StableIncrement {
+    /// From bounds instead of modes: λ ≥ every eigenvalue of M⁻¹K and γ ≥ 2ζω of every mode
+    /// (the row-sum bound on M⁻¹C), so the limits are safe: `2/√λ` undamped and
+    /// `2/(√(λ + γ²/4) + γ/2)` lagged, which is below (2/ω)(√(1+ζ²) − ζ) for every mode.
+    pub fn from_bound(lambda: f64, gamma: f64, treatment: DampingTreatment) -> Option<Self> {
+        if lambda.is_nan() || lambda <= 0.0 {
+            return None;
+        }
+        let omega = lambda.sqrt();
+        let undamped = 2.0 / omega;
+        let lagged = 2.0 / ((lambda + 0.25 * gamma * gamma).sqrt() + 0.5 * gamma);
+        Some(StableIncrement {
+            omega_max: omega,
+            zeta: 0.5 * gamma / omega,
+            undamped,
+            lagged,
+            increment: match treatment {
+                DampingTreatment::Centred => undamped,
+                DampingTreatment::Lagged => lagged,
+            },
+            omega_structure: omega,
+        })
+    }
+
     /// From the modes with contact closed and the modes of the structure alone.
     pub fn from_modes(
         modes: &[Mode],

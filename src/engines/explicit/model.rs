@@ -5,7 +5,7 @@
 //! `FINITE` const parameter selects finite rotation (`explicit`) or the benchmark's
 //! small-rotation idealisation (`explicit_small`); it is resolved at compile time.
 
-use super::space::{BodyInertia, Lin, Space};
+use super::space::{BodyInertia, Lin, Space, solve_body};
 use crate::scene::{Attachment, BoundaryCondition, Connection, Dof, Scene, Step};
 use std::marker::PhantomData;
 
@@ -46,6 +46,10 @@ pub struct Config<S: Space> {
     pub br: Vec<S::R>,
     /// Body rotation vectors (small rotation).
     pub bth: Vec<S::W>,
+    /// Mass properties of each body in world axes at this configuration, kept in step with
+    /// `br` by every method that rotates a body (finite rotation; the body-frame ones under
+    /// small rotation).
+    pub inertia: Vec<BodyInertia<S>>,
 }
 
 /// Velocities or accelerations of every particle and body.
@@ -244,6 +248,8 @@ pub struct Particle<S: Space> {
     pub node: usize,
     /// Mass.
     pub mass: f64,
+    /// 1 / mass.
+    pub inverse_mass: f64,
     /// Position at t = 0.
     pub x0: S::V,
     /// Frame axes (DOF directions).
@@ -276,6 +282,8 @@ pub struct Constraints<S: Space> {
     pub body_held_t: Vec<Vec<S::V>>,
     /// Held rotation axes per body.
     pub body_held_r: Vec<Vec<S::W>>,
+    /// Free rotation axes per body (orthonormal complement of the held ones).
+    pub body_free_r: Vec<Vec<S::W>>,
     /// Prescribed values: (target, value) applied at the start of a static step.
     pub prescribed: Vec<(Target<S>, f64)>,
     /// Bodies whose rotation can change in this step.
@@ -352,22 +360,24 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 rot_axes: rot_axes(&node.frame),
             });
         }
-        let fixed: Vec<bool> = scene
-            .nodes
-            .iter()
-            .enumerate()
-            .map(|(i, n)| {
-                n.attachment == Attachment::Free
-                    && n.mass == 0.0
-                    && scene.steps.iter().all(|s| {
-                        Dof::all(scene.dimension, false).iter().all(|d| {
-                            s.conditions
-                                .iter()
-                                .any(|c| c.node == i && c.dof == *d && c.value.is_none())
-                        })
-                    })
-            })
-            .collect();
+        // A node is ground when it has no mass and every step holds all its DOFs.
+        let all = Dof::all(scene.dimension, false);
+        let mask = |d: &Dof| 1u8 << all.iter().position(|x| x == d).unwrap_or(7);
+        let full: u8 = all.iter().map(mask).fold(0, |a, b| a | b);
+        let mut fixed = vec![true; scene.nodes.len()];
+        let mut held = vec![0u8; scene.nodes.len()];
+        for s in &scene.steps {
+            held.iter_mut().for_each(|h| *h = 0);
+            for c in s.conditions.iter().filter(|c| c.value.is_none()) {
+                held[c.node] |= mask(&c.dof);
+            }
+            for (f, h) in fixed.iter_mut().zip(&held) {
+                *f &= *h & full == full;
+            }
+        }
+        for (f, n) in fixed.iter_mut().zip(&scene.nodes) {
+            *f &= n.attachment == Attachment::Free && n.mass == 0.0;
+        }
         let mut points = Vec::with_capacity(scene.nodes.len());
         for (i, n) in scene.nodes.iter().enumerate() {
             let x = S::v(&n.position);
@@ -377,6 +387,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                     particles.push(Particle {
                         node: i,
                         mass: n.mass,
+                        inverse_mass: 1.0 / n.mass,
                         x0: x,
                         axes: axes(&n.frame),
                     });
@@ -509,6 +520,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             bu: vec![S::V::zero(); self.bodies.len()],
             br: vec![S::identity(); self.bodies.len()],
             bth: vec![S::W::zero(); self.bodies.len()],
+            inertia: self.bodies.iter().map(|b| b.inertia).collect(),
         }
     }
 
@@ -722,17 +734,17 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
 
     /// Mass properties of a body in world axes at `cfg`.
     #[inline]
-    pub fn body_inertia(&self, cfg: &Config<S>, b: usize) -> BodyInertia<S> {
+    pub fn body_inertia<'c>(&self, cfg: &'c Config<S>, b: usize) -> &'c BodyInertia<S> {
+        &cfg.inertia[b]
+    }
+
+    /// Mass properties of a body in world axes at orientation `r` (finite rotation).
+    fn oriented(&self, b: usize, r: &S::R) -> BodyInertia<S> {
         let i = &self.bodies[b].inertia;
-        if FINITE {
-            let r = &cfg.br[b];
-            BodyInertia {
-                mass: i.mass,
-                centre: S::rotate(r, &i.centre),
-                inertia: S::rotate_inertia(r, &i.inertia),
-            }
-        } else {
-            *i
+        BodyInertia {
+            mass: i.mass,
+            centre: S::rotate(r, &i.centre),
+            inertia: S::rotate_inertia(r, &i.inertia),
         }
     }
 
@@ -753,7 +765,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 out.p[i] = S::V::zero();
                 continue;
             }
-            let mut a = forces.p[i] * (1.0 / p.mass);
+            let mut a = forces.p[i] * p.inverse_mass;
             for d in h {
                 a -= *d * d.dot(&a);
             }
@@ -770,7 +782,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             }
             counters.body_solves += 1;
             let (a, alpha) =
-                S::solve_body(&inertia, &held.body_held_t[b], &held.body_held_r[b], &f, &m);
+                solve_body(inertia, &held.body_held_t[b], &held.body_free_r[b], &f, &m);
             out.b[b] = a;
             out.w[b] = alpha;
         }
@@ -825,6 +837,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             counters.rotation_updates += 1;
             if FINITE {
                 cfg.br[b] = S::advance(&cfg.br[b], &(vel.w[b] * h));
+                cfg.inertia[b] = self.oriented(b, &cfg.br[b]);
             } else {
                 compensated_add(&mut cfg.bth[b], &mut carry.w[b], vel.w[b] * h);
             }
@@ -858,6 +871,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             particle_held: vec![Vec::new(); np],
             body_held_t: vec![Vec::new(); nb],
             body_held_r: vec![Vec::new(); nb],
+            body_free_r: vec![Vec::new(); nb],
             prescribed: Vec::new(),
             rotating: vec![false; nb],
             velocity_terms: vec![false; nb],
@@ -888,6 +902,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         }
         let _ = scene;
         for b in 0..nb {
+            c.body_free_r[b] = S::free_rotations(&c.body_held_r[b]);
             let free_r = S::ROT - c.body_held_r[b].len();
             let free_t = S::DIM - c.body_held_t[b].len();
             c.rotating[b] = free_r > 0;
@@ -906,6 +921,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             Target::Rotation(b, g) => {
                 if FINITE {
                     cfg.br[*b] = S::advance(&cfg.br[*b], &(*g * delta));
+                    cfg.inertia[*b] = self.oriented(*b, &cfg.br[*b]);
                 } else {
                     cfg.bth[*b] += *g * delta;
                 }
@@ -947,6 +963,103 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 g.dot(&m)
             }
         }
+    }
+
+    /// Upper bounds `(λ, γ)` on the eigenvalues of M⁻¹K and on the row sums of M⁻¹C in the
+    /// free DOFs at `cfg`, from the elements alone (Gershgorin: every eigenvalue of M⁻¹K lies
+    /// within the largest absolute row sum), without assembling a matrix; O(elements). `None`
+    /// for scenes with bodies or contact (they take the assembled linearisation).
+    ///
+    /// An axial spring's tangent stiffness is `c ddᵀ + (T/L)(I − ddᵀ)`, T its tension; each
+    /// entry between unit axes e, f is bounded by `c|e·d||d·f| + (|T|/L)(|e·f| + |e·d||d·f|)`.
+    pub fn frequency_bound(&self, cfg: &Config<S>, held: &Constraints<S>) -> Option<(f64, f64)> {
+        if !self.bodies.is_empty() || !self.contacts.is_empty() {
+            return None;
+        }
+        let free: Vec<Vec<S::V>> = self
+            .particles
+            .iter()
+            .zip(&held.particle_held)
+            .map(|(p, h)| {
+                p.axes
+                    .iter()
+                    .copied()
+                    .filter(|a| h.iter().all(|d| d.dot(a).abs() < 0.5))
+                    .collect()
+            })
+            .collect();
+        let mut stiffness = vec![0.0; self.particles.len() * S::DIM];
+        let mut damping = vec![0.0; self.particles.len() * S::DIM];
+        let entry = |e: &S::V, f: &S::V, d: &S::V, c: f64, t: f64| {
+            let along = e.dot(d).abs() * d.dot(f).abs();
+            c * along + t * (e.dot(f).abs() + along)
+        };
+        // Add one element's row sums to the rows of its particle ends.
+        let add = |rows: &mut Vec<f64>, ends: [&Point<S>; 2], d: &S::V, c: f64, t: f64| {
+            for end in ends {
+                let Point::Particle(i) = end else { continue };
+                for (a, e) in free[*i].iter().enumerate() {
+                    let mut sum = 0.0;
+                    for other in ends {
+                        if let Point::Particle(j) = other {
+                            sum += free[*j].iter().map(|f| entry(e, f, d, c, t)).sum::<f64>();
+                        }
+                    }
+                    rows[*i * S::DIM + a] += sum;
+                }
+            }
+        };
+        for s in &self.grounded_springs {
+            if let Some(d) = s.direction {
+                add(
+                    &mut stiffness,
+                    [&s.point, &Point::Ground(S::V::zero())],
+                    &d,
+                    s.c,
+                    0.0,
+                );
+            }
+        }
+        for s in &self.grounded_dashpots {
+            if let Some(d) = s.direction {
+                add(
+                    &mut damping,
+                    [&s.point, &Point::Ground(S::V::zero())],
+                    &d,
+                    s.c,
+                    0.0,
+                );
+            }
+        }
+        let direction = |s: &TwoPoint<S>| {
+            if s.axial && FINITE {
+                let l = s.span0 + (self.displacement(cfg, &s.b) - self.displacement(cfg, &s.a));
+                let len = l.dot(&l).sqrt();
+                (l * (1.0 / len), len)
+            } else {
+                (s.direction, s.length0)
+            }
+        };
+        for s in &self.springs {
+            let (d, len) = direction(s);
+            let tension = if s.axial && FINITE {
+                (s.c * (len - s.length0) / len).abs()
+            } else {
+                0.0
+            };
+            add(&mut stiffness, [&s.a, &s.b], &d, s.c, tension);
+        }
+        for s in &self.dashpots {
+            let (d, _) = direction(s);
+            add(&mut damping, [&s.a, &s.b], &d, s.c, 0.0);
+        }
+        let largest = |rows: &[f64]| {
+            rows.iter()
+                .enumerate()
+                .map(|(r, x)| x / self.particles[r / S::DIM].mass)
+                .fold(0.0, f64::max)
+        };
+        Some((largest(&stiffness), largest(&damping)))
     }
 
     /// Free generalised DOFs under a step's constraints.
@@ -1027,7 +1140,14 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 })
                 .collect(),
             bth: (0..cfg.bth.len()).map(|b| cfg.bth[b] + turn(b)).collect(),
+            inertia: cfg.inertia.clone(),
         };
+        let mut cfg = cfg;
+        if FINITE {
+            for b in 0..cfg.br.len() {
+                cfg.inertia[b] = self.oriented(b, &cfg.br[b]);
+            }
+        }
         (cfg, vel.plus(s, acc).plus(s2, jerk))
     }
 

@@ -1,7 +1,7 @@
 //! Planar and spatial kinematics behind one trait, so the engine is written once and a 2D case
 //! compiles to 2D arithmetic only (no 3D rotation, no 6×6 solve).
 
-use nalgebra::{Matrix3, Matrix6, UnitComplex, UnitQuaternion, Vector2, Vector3, Vector6};
+use nalgebra::{Matrix3, UnitComplex, UnitQuaternion, Vector2, Vector3};
 use std::fmt::Debug;
 use std::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
 
@@ -104,17 +104,38 @@ pub trait Space: Copy + Debug + Send + Sync + 'static {
     fn moment(x: &Self::V, f: &Self::V) -> Self::W;
     /// Gyroscopic moment ω × (I ω) (zero in 2D).
     fn gyroscopic(w: &Self::W, i: &Self::Inertia) -> Self::W;
-    /// Solve the rigid-body equations at the reference node,
-    /// `[m, −m[c]×; m[c]×, I] [a; α] = [f; m_O]`, with the accelerations along the held
-    /// translation and rotation axes (orthonormal) forced to zero. Non-finite input gives
-    /// non-finite accelerations.
-    fn solve_body(
-        inertia: &BodyInertia<Self>,
-        held_translations: &[Self::V],
-        held_rotations: &[Self::W],
-        force: &Self::V,
-        moment: &Self::W,
-    ) -> (Self::V, Self::W);
+    /// An orthonormal basis of the rotation axes left free by the held ones (orthonormal).
+    fn free_rotations(held: &[Self::W]) -> Vec<Self::W>;
+}
+
+/// Below this angle (rad) the increment's rotation takes its sine and cosine from their
+/// Taylor series (exact to round-off there) instead of the library functions.
+const SMALL_ANGLE: f64 = 1e-2;
+
+/// `(sin x, cos x)`, from the Taylor series for |x| < [`SMALL_ANGLE`] (the first neglected
+/// terms, x^11/11! and x^10/10!, are below 1e-25 there).
+#[inline]
+fn sin_cos(x: f64) -> (f64, f64) {
+    if x.abs() < SMALL_ANGLE {
+        let y = x * x;
+        (x * sinc_series(y), cos_series(y))
+    } else {
+        x.sin_cos()
+    }
+}
+
+/// sin(a)/a as a polynomial in y = a² (Taylor, through a⁸).
+#[inline]
+fn sinc_series(y: f64) -> f64 {
+    const C: [f64; 5] = [1.0, -1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362_880.0];
+    C[0] + y * (C[1] + y * (C[2] + y * (C[3] + y * C[4])))
+}
+
+/// cos(a) as a polynomial in y = a² (Taylor, through a⁸).
+#[inline]
+fn cos_series(y: f64) -> f64 {
+    const C: [f64; 5] = [1.0, -0.5, 1.0 / 24.0, -1.0 / 720.0, 1.0 / 40_320.0];
+    C[0] + y * (C[1] + y * (C[2] + y * (C[3] + y * C[4])))
 }
 
 /// 2D: x, y and rotation about z.
@@ -161,7 +182,11 @@ impl Space for Planar {
         i * w
     }
     fn advance(r: &Self::R, dtheta: &Self::W) -> Self::R {
-        UnitComplex::new(r.angle() + dtheta)
+        let (s, c) = sin_cos(*dtheta);
+        let z = (UnitComplex::from_cos_sin_unchecked(c, s) * r).into_inner();
+        // Keep the unit norm against round-off drift: one Newton step for 1/|z| from 1 (|z|²
+        // is 1 within a few ulps, so the step leaves an error of their square).
+        UnitComplex::new_unchecked(z * (1.5 - 0.5 * z.norm_sqr()))
     }
     fn twist(r: &Self::R, axis: &Self::W) -> f64 {
         r.angle() * axis
@@ -175,59 +200,13 @@ impl Space for Planar {
     fn gyroscopic(_: &Self::W, _: &Self::Inertia) -> Self::W {
         0.0
     }
-    fn solve_body(
-        b: &BodyInertia<Self>,
-        held_translations: &[Self::V],
-        held_rotations: &[Self::W],
-        force: &Self::V,
-        moment: &Self::W,
-    ) -> (Self::V, Self::W) {
-        let (m, c) = (b.mass, b.centre);
-        // Work in a translation basis whose leading axes are the held ones.
-        let (e0, e1) = match held_translations {
-            [] | [_, _] => (Vector2::x(), Vector2::y()),
-            [h] => (*h, Vector2::new(-h.y, h.x)),
-            _ => unreachable!("at most two held translations in 2D"),
-        };
-        let basis = [e0, e1];
-        let held = [
-            !held_translations.is_empty(),
-            held_translations.len() == 2,
-            !held_rotations.is_empty(),
-        ];
-        // Coupling column: the force row's α-coefficient is m (ẑ × c) = m(−c_y, c_x).
-        let coupling = Vector2::new(-c.y, c.x) * m;
-        let mut a = nalgebra::Matrix3::zeros();
-        let mut rhs = nalgebra::Vector3::new(basis[0].dot(force), basis[1].dot(force), *moment);
-        for i in 0..2 {
-            a[(i, i)] = m;
-            a[(i, 2)] = basis[i].dot(&coupling);
-            a[(2, i)] = a[(i, 2)];
+    fn free_rotations(held: &[Self::W]) -> Vec<Self::W> {
+        if held.is_empty() {
+            vec![1.0]
+        } else {
+            Vec::new()
         }
-        a[(2, 2)] = b.inertia;
-        for (k, h) in held.iter().enumerate() {
-            if *h {
-                for j in 0..3 {
-                    a[(k, j)] = 0.0;
-                    a[(j, k)] = 0.0;
-                }
-                a[(k, k)] = 1.0;
-                rhs[k] = 0.0;
-            }
-        }
-        // The matrix is positive definite on the free DOFs (validated); only a diverged,
-        // non-finite state fails here, and it yields non-finite accelerations that the time
-        // loop reports as a failed run.
-        let Some(chol) = a.cholesky() else {
-            return (Vector2::repeat(f64::NAN), f64::NAN);
-        };
-        let x = chol.solve(&rhs);
-        (basis[0] * x[0] + basis[1] * x[1], x[2])
     }
-}
-
-fn skew(c: &Vector3<f64>) -> Matrix3<f64> {
-    Matrix3::new(0.0, -c.z, c.y, c.z, 0.0, -c.x, -c.y, c.x, 0.0)
 }
 
 /// An orthonormal basis whose leading vectors are the given orthonormal ones.
@@ -285,9 +264,22 @@ impl Space for Spatial {
         i * w
     }
     fn advance(r: &Self::R, dtheta: &Self::W) -> Self::R {
-        let q = UnitQuaternion::from_scaled_axis(*dtheta) * r;
-        // Keep the unit norm exact against round-off drift.
-        UnitQuaternion::new_normalize(q.into_inner())
+        // exp(dθ/2) = (cos(|dθ|/2), sin(|dθ|/2)/|dθ| · dθ).
+        let angle2 = dtheta.norm_squared();
+        let (w, s) = if angle2 < SMALL_ANGLE * SMALL_ANGLE {
+            // Taylor series at a = |dθ|/2 < 5e-3; the first neglected terms, a^10/10! and
+            // a^10/11!, are below 1e-29.
+            let y = 0.25 * angle2; // a²
+            (cos_series(y), 0.5 * sinc_series(y))
+        } else {
+            let angle = angle2.sqrt();
+            let (s, c) = (0.5 * angle).sin_cos();
+            (c, s / angle)
+        };
+        let step = nalgebra::Quaternion::from_parts(w, dtheta * s);
+        let q = (UnitQuaternion::new_unchecked(step) * r).into_inner();
+        // Keep the unit norm against round-off drift: one Newton step for 1/|q| from 1.
+        UnitQuaternion::new_unchecked(q * (1.5 - 0.5 * q.norm_squared()))
     }
     fn twist(r: &Self::R, axis: &Self::W) -> f64 {
         let q = r.quaternion();
@@ -302,48 +294,114 @@ impl Space for Spatial {
     fn gyroscopic(w: &Self::W, i: &Self::Inertia) -> Self::W {
         w.cross(&(i * w))
     }
-    fn solve_body(
-        b: &BodyInertia<Self>,
-        held_translations: &[Self::V],
-        held_rotations: &[Self::W],
-        force: &Self::V,
-        moment: &Self::W,
-    ) -> (Self::V, Self::W) {
-        let m = b.mass;
-        let sc = skew(&b.centre);
-        let tb = basis_with(held_translations);
-        let rb = basis_with(held_rotations);
-        // Full matrix in world axes, then in the (held-first) bases.
-        let mut full = Matrix6::zeros();
-        full.fixed_view_mut::<3, 3>(0, 0)
-            .copy_from(&(Matrix3::identity() * m));
-        full.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-sc * m));
-        full.fixed_view_mut::<3, 3>(3, 0).copy_from(&(sc * m));
-        full.fixed_view_mut::<3, 3>(3, 3).copy_from(&b.inertia);
-        let mut t = Matrix6::zeros();
-        t.fixed_view_mut::<3, 3>(0, 0).copy_from(&tb);
-        t.fixed_view_mut::<3, 3>(3, 3).copy_from(&rb);
-        let mut a = t.transpose() * full * t;
-        let mut rhs =
-            t.transpose() * Vector6::new(force.x, force.y, force.z, moment.x, moment.y, moment.z);
-        let held: Vec<usize> = (0..held_translations.len())
-            .chain((0..held_rotations.len()).map(|k| 3 + k))
-            .collect();
-        for &k in &held {
-            for j in 0..6 {
-                a[(k, j)] = 0.0;
-                a[(j, k)] = 0.0;
-            }
-            a[(k, k)] = 1.0;
-            rhs[k] = 0.0;
-        }
-        let Some(chol) = a.cholesky() else {
-            return (Vector3::repeat(f64::NAN), Vector3::repeat(f64::NAN));
-        };
-        let x = t * chol.solve(&rhs);
-        (
-            Vector3::new(x[0], x[1], x[2]),
-            Vector3::new(x[3], x[4], x[5]),
-        )
+    fn free_rotations(held: &[Self::W]) -> Vec<Self::W> {
+        let basis = basis_with(held);
+        (held.len()..3)
+            .map(|i| basis.column(i).into_owned())
+            .collect()
     }
+}
+
+/// Solve the rigid-body equations at the reference node,
+/// `m a + m α×c = f`, `m c×a + I_O α = m_O`, with the accelerations along the held translation
+/// axes (orthonormal, `held_translations`) forced to zero and α confined to the span of
+/// `free_rotations` (orthonormal).
+///
+/// Block elimination: with Q the projector onto the free translations, `a = Q(f/m − α×c)`, and
+/// α solves the reduced rotational system `(I_O − m [c]× Q [c]×) α = m_O − c × Q f` on the free
+/// axes (at most 3×3, positive definite for a body with mass; about the centre of mass when no
+/// translation is held). A non-positive pivot (only a diverged, non-finite state gives one)
+/// yields non-finite accelerations, which the time loop reports as a failed run.
+#[inline]
+pub fn solve_body<S: Space>(
+    b: &BodyInertia<S>,
+    held_translations: &[S::V],
+    free_rotations: &[S::W],
+    force: &S::V,
+    moment: &S::W,
+) -> (S::V, S::W) {
+    let project = |v: S::V| {
+        let mut v = v;
+        for d in held_translations {
+            v -= *d * d.dot(&v);
+        }
+        v
+    };
+    let c = b.centre;
+    let operator = |alpha: &S::W| {
+        S::inertia_apply(&b.inertia, alpha) - S::moment(&c, &project(S::cross(alpha, &c))) * b.mass
+    };
+    let rhs = *moment - S::moment(&c, &project(*force));
+    let alpha = solve_small::<S::W>(free_rotations, operator, &rhs);
+    let a = project(*force * (1.0 / b.mass) - S::cross(&alpha, &c));
+    (a, alpha)
+}
+
+/// Solve `Gᵀ A G x = Gᵀ r` for x on at most three orthonormal axes G, with A given as an
+/// operator (symmetric positive definite on the axes), by a hand-written Cholesky
+/// factorisation; returns `G x`.
+#[inline]
+#[allow(clippy::needless_range_loop)] // index notation of the factorisation
+fn solve_small<W: Lin>(axes: &[W], operator: impl Fn(&W) -> W, rhs: &W) -> W {
+    let n = axes.len();
+    if n == 0 {
+        return W::zero();
+    }
+    if n == 1 {
+        let a = axes[0].dot(&operator(&axes[0]));
+        if a.is_nan() || a <= 0.0 {
+            return W::zero() * f64::NAN;
+        }
+        return axes[0] * (axes[0].dot(rhs) / a);
+    }
+    let mut a = [[0.0; 3]; 3];
+    let mut r = [0.0; 3];
+    for j in 0..n {
+        let column = operator(&axes[j]);
+        for i in 0..n {
+            a[i][j] = axes[i].dot(&column);
+        }
+        r[j] = axes[j].dot(rhs);
+    }
+    // Cholesky of the symmetric part, L Lᵀ.
+    let mut l = [[0.0; 3]; 3];
+    for j in 0..n {
+        let mut d = a[j][j];
+        for k in 0..j {
+            d -= l[j][k] * l[j][k];
+        }
+        if d.is_nan() || d <= 0.0 {
+            return W::zero() * f64::NAN;
+        }
+        let d = d.sqrt();
+        l[j][j] = d;
+        for i in j + 1..n {
+            let mut s = 0.5 * (a[i][j] + a[j][i]);
+            for k in 0..j {
+                s -= l[i][k] * l[j][k];
+            }
+            l[i][j] = s / d;
+        }
+    }
+    let mut y = [0.0; 3];
+    for i in 0..n {
+        let mut s = r[i];
+        for k in 0..i {
+            s -= l[i][k] * y[k];
+        }
+        y[i] = s / l[i][i];
+    }
+    let mut x = [0.0; 3];
+    for i in (0..n).rev() {
+        let mut s = y[i];
+        for k in i + 1..n {
+            s -= l[k][i] * x[k];
+        }
+        x[i] = s / l[i][i];
+    }
+    let mut out = W::zero();
+    for i in 0..n {
+        out += axes[i] * x[i];
+    }
+    out
 }

@@ -1,0 +1,280 @@
+//! The scaling study: what one increment costs as the scene grows, against what the machine's
+//! memory can deliver.
+//!
+//! For N = 10, 100, …, `max_n` masses of the chain family ([`crate::case::chain`]), the study
+//! runs `explicit` (every N) and `rapier_f64` in its matched configuration (while a run is
+//! predicted to finish within [`RAPIER_BUDGET_SECONDS`]), and measures per point:
+//! - the marginal wall time per increment: runs of S and 2S increments (each repeated so that
+//!   it takes a measurable time, the mean taken), (t₂ − t₁)/S, so the setup (building the
+//!   scene's model, the static step, the stable increment) drops out;
+//! - the peak resident memory of the longer run (the kernel's high-water mark, reset before
+//!   it);
+//! - the error of the probed displacements against the exact solution, with the error that
+//!   central differences must give ([`Chain::predicted_error`]) beside it;
+//! - the memory-bandwidth limit: a plain streaming loop over arrays of N values that reads
+//!   and writes the bytes per DOF one increment must (position, velocity, inverse mass and
+//!   spring stiffness read; position and velocity written: 48 bytes), timed the same way.
+
+use crate::case::chain::Chain;
+use crate::engines::explicit::ExplicitEngine;
+use crate::engines::rapier::{Precision, RapierEngine};
+use crate::engines::{Engine, RunSettings};
+use crate::run::matching;
+use std::time::Instant;
+
+/// `rapier_f64` is run at the next N only while its run is predicted (from the last N, linearly
+/// in N) to take at most this long, seconds.
+pub const RAPIER_BUDGET_SECONDS: f64 = 60.0;
+
+/// Increments of the shorter of the two timed runs at every N (the longer takes twice as
+/// many): about 2.5 periods of the mode at h = 0.1·√(m/k).
+pub const STEPS: u64 = 400;
+
+/// DOF-increments each timed run is repeated up to (R·S·N ≥ this), so that even the smallest
+/// chain is timed over a measurable interval.
+const WORK_PER_POINT: f64 = 2.0e7;
+
+/// One measured point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Point {
+    /// Engine name.
+    pub engine: String,
+    /// Masses in the chain (= free DOFs).
+    pub n: usize,
+    /// Increments of the shorter run (the longer takes twice as many).
+    pub steps: u64,
+    /// Times each run was repeated (the timings are means over the repeats).
+    pub repeats: u64,
+    /// Marginal wall time per increment, ns.
+    pub ns_per_step: f64,
+    /// `ns_per_step / n`.
+    pub ns_per_dof_step: f64,
+    /// Peak resident memory of the longer run, bytes (0 where the platform does not say).
+    pub peak_rss_bytes: u64,
+    /// Largest error of the probed displacements against the exact solution, over the
+    /// amplitude, in the longer run.
+    pub error: f64,
+    /// The error central differences must give (same measure); the engine's own model of its
+    /// error applies to `explicit` only.
+    pub predicted_error: f64,
+    /// The streaming loop's ns per DOF and increment at this N.
+    pub limit_ns_per_dof_step: f64,
+}
+
+/// A point the study did not run, and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Skipped {
+    /// Engine name.
+    pub engine: String,
+    /// Masses.
+    pub n: usize,
+    /// Why.
+    pub reason: String,
+}
+
+/// The study's outcome.
+#[derive(Debug, Clone, Default)]
+pub struct Study {
+    /// Measured points, by engine then N.
+    pub points: Vec<Point>,
+    /// Points not run.
+    pub skipped: Vec<Skipped>,
+}
+
+/// The chain sizes of a study up to `max_n`: powers of ten from 10.
+pub fn sizes(max_n: usize) -> Vec<usize> {
+    std::iter::successors(Some(10usize), |n| n.checked_mul(10))
+        .take_while(|n| *n <= max_n)
+        .collect()
+}
+
+/// Times each run is repeated at N.
+pub fn repeats_for(n: usize) -> u64 {
+    ((WORK_PER_POINT / (n as f64 * STEPS as f64)).ceil() as u64).max(1)
+}
+
+/// Run the study; `progress` is told each point as it starts (engine, N).
+pub fn study(max_n: usize, mut progress: impl FnMut(&str, usize)) -> Result<Study, String> {
+    let mut out = Study::default();
+    let engines: [Box<dyn Engine>; 2] = [
+        Box::new(ExplicitEngine::finite()),
+        Box::new(RapierEngine::matched(Precision::F64)),
+    ];
+    for engine in &engines {
+        // Seconds of one longer run at the last N.
+        let mut last: Option<(usize, f64)> = None;
+        for n in sizes(max_n) {
+            crate::interrupt::checkpoint("scaling").map_err(|_| "interrupted".to_string())?;
+            let name = engine.name().to_string();
+            let is_rapier = name.starts_with("rapier");
+            if is_rapier && let Some((n0, seconds)) = last {
+                let predicted = seconds * n as f64 / n0 as f64;
+                if predicted > RAPIER_BUDGET_SECONDS {
+                    out.skipped.push(Skipped {
+                        engine: name,
+                        n,
+                        reason: format!(
+                            "predicted {predicted:.0} s (from {seconds:.1} s at N = {n0}), over the {RAPIER_BUDGET_SECONDS:.0} s budget"
+                        ),
+                    });
+                    break;
+                }
+            }
+            progress(&name, n);
+            let point = measure(engine.as_ref(), n)?;
+            last = Some((n, 1e-9 * point.ns_per_step * 2.0 * point.steps as f64));
+            out.points.push(point);
+        }
+    }
+    Ok(out)
+}
+
+/// Measure one engine at one N.
+pub fn measure(engine: &dyn Engine, n: usize) -> Result<Point, String> {
+    let repeats = repeats_for(n);
+    // Mean seconds of a run of `steps` increments, its peak RSS and error.
+    let timed = |steps: u64| -> Result<(f64, u64, f64, Chain), String> {
+        let chain = Chain::new(n, steps);
+        let scene = chain.scene();
+        let settings = matching::job_settings(engine, &scene, &RunSettings::default());
+        reset_peak_rss();
+        let mut seconds = 0.0;
+        let mut output = None;
+        for _ in 0..repeats {
+            let start = Instant::now();
+            let run = engine
+                .run(&scene, &settings)
+                .map_err(|e| format!("{} on chain N = {n}: {e}", engine.name()))?;
+            seconds += start.elapsed().as_secs_f64();
+            output = Some(run);
+        }
+        let output = output.expect("at least one repeat");
+        let rss = peak_rss_bytes();
+        if output.info.steps != chain.steps {
+            return Err(format!(
+                "{} on chain N = {n}: took {} increments, expected {}",
+                engine.name(),
+                output.info.steps,
+                chain.steps
+            ));
+        }
+        let error = displacement_error(&chain, &output.history)?;
+        Ok((seconds / repeats as f64, rss, error, chain))
+    };
+    let (short, _, _, chain) = timed(STEPS)?;
+    let (long, rss, error, long_chain) = timed(2 * chain.steps)?;
+    let ns_per_step = (long - short).max(0.0) * 1e9 / chain.steps as f64;
+    Ok(Point {
+        engine: engine.name().to_string(),
+        n,
+        steps: chain.steps,
+        repeats,
+        ns_per_step,
+        ns_per_dof_step: ns_per_step / n as f64,
+        peak_rss_bytes: rss,
+        error,
+        predicted_error: long_chain.predicted_error(long_chain.increment),
+        limit_ns_per_dof_step: streaming_limit(n, chain.steps, repeats),
+    })
+}
+
+/// Largest error of the displacement columns against the exact solution, over the amplitude.
+fn displacement_error(chain: &Chain, history: &crate::contract::History) -> Result<f64, String> {
+    let t = history.column("t").ok_or("history without t")?;
+    let mut worst: f64 = 0.0;
+    for (name, node) in chain.probes() {
+        let column = format!("u_{name}");
+        let u = history
+            .column(&column)
+            .ok_or_else(|| format!("history without {column}"))?;
+        for (t, u) in t.iter().zip(&u) {
+            let e = (u - chain.displacement(node, *t)).abs() / chain.amplitude;
+            if !e.is_finite() {
+                return Err(format!("non-finite {column} at t = {t:e}"));
+            }
+            worst = worst.max(e);
+        }
+    }
+    Ok(worst)
+}
+
+/// The streaming loop's marginal ns per DOF and increment at N: central differences of the
+/// chain over plain arrays (x, v, 1/m, k), `steps` and `2·steps` increments timed, the
+/// difference taken, so it reads and writes what one increment of the chain must and nothing
+/// more.
+pub fn streaming_limit(n: usize, steps: u64, repeats: u64) -> f64 {
+    let run = |steps: u64| {
+        let h = 1e-3;
+        let mut x: Vec<f64> = (0..n).map(|i| (i as f64 * 0.1).sin() * 1e-3).collect();
+        let mut v = vec![0.0; n];
+        let inverse_mass = vec![1.0; n];
+        let stiffness = vec![1.0e4; n + 1];
+        let start = Instant::now();
+        for _ in 0..steps {
+            let mut left = 0.0;
+            for i in 0..n {
+                let right = if i + 1 < n { x[i + 1] } else { 0.0 };
+                let xi = x[i];
+                let force = stiffness[i] * (left - xi) + stiffness[i + 1] * (right - xi);
+                v[i] += h * inverse_mass[i] * force;
+                left = xi;
+                x[i] = xi + h * v[i];
+            }
+        }
+        let seconds = start.elapsed().as_secs_f64();
+        std::hint::black_box((&x, &v));
+        seconds
+    };
+    let mean = |steps: u64| (0..repeats).map(|_| run(steps)).sum::<f64>() / repeats as f64;
+    let short = mean(steps);
+    let long = mean(2 * steps);
+    (long - short).max(0.0) * 1e9 / (steps as f64 * n as f64)
+}
+
+/// Reset the process's peak resident set size (Linux: `/proc/self/clear_refs`, value 5);
+/// elsewhere a no-op.
+fn reset_peak_rss() {
+    // Hand freed memory back to the kernel first (glibc keeps it otherwise), so the mark
+    // restarts from what is live now, not from the last point's peak.
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: malloc_trim only releases free heap pages; it has no preconditions.
+    unsafe {
+        libc::malloc_trim(0);
+    }
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+}
+
+/// The process's peak resident set size since the last reset, bytes (`VmHWM`; 0 where the
+/// platform does not say).
+pub fn peak_rss_bytes() -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok())
+        })
+        .map_or(0, |kib| kib * 1024)
+}
+
+/// Least-squares slope of log(y) against log(x), and its intercept (natural logs).
+pub fn fitted_exponent(points: &[(f64, f64)]) -> Option<(f64, f64)> {
+    let logs: Vec<(f64, f64)> = points
+        .iter()
+        .filter(|(x, y)| *x > 0.0 && *y > 0.0)
+        .map(|(x, y)| (x.ln(), y.ln()))
+        .collect();
+    if logs.len() < 2 {
+        return None;
+    }
+    let k = logs.len() as f64;
+    let (mx, my) = logs
+        .iter()
+        .fold((0.0, 0.0), |(a, b), (x, y)| (a + x / k, b + y / k));
+    let sxx: f64 = logs.iter().map(|(x, _)| (x - mx) * (x - mx)).sum();
+    let sxy: f64 = logs.iter().map(|(x, y)| (x - mx) * (y - my)).sum();
+    (sxx > 0.0).then(|| {
+        let slope = sxy / sxx;
+        (slope, my - slope * mx)
+    })
+}

@@ -134,12 +134,19 @@ pub fn render(study: &Study) -> Option<String> {
                 .filter(|p| p.engine == *engine)
                 .map(|p| (p.n as f64, p.ns_per_step))
                 .collect();
-            let label = match exponents.iter().find(|(e, _)| e == engine) {
+            let mut label = match exponents.iter().find(|(e, _)| e == engine) {
                 Some((_, slope)) => {
                     format!("{engine}: fitted exponent {slope:.2} (N ≥ {FIT_FROM_N})")
                 }
                 None => format!("{engine}: too few points to fit"),
             };
+            if let Some(skip) = study.skipped.iter().find(|s| s.engine == *engine) {
+                label += &format!(
+                    "; N ≥ {} not run (over {:.0} s)",
+                    skip.n,
+                    crate::run::scaling::RAPIER_BUDGET_SECONDS
+                );
+            }
             chart
                 .draw_series(LineSeries::new(line.clone(), colour.stroke_width(2)))
                 .ok()?
@@ -175,17 +182,20 @@ pub fn render(study: &Study) -> Option<String> {
     Some(svg)
 }
 
-/// Tick label for a log axis: `10^k` written out for exact powers of ten, else 2 significant
-/// figures.
+/// Tick label for a log axis: exact powers of ten as 10 with a superscript exponent, other
+/// values with 2 significant figures.
 fn power_of_ten(x: f64) -> String {
     let k = x.log10();
     if (k - k.round()).abs() < 1e-9 {
+        const SUPERSCRIPT: [char; 10] = ['⁰', '¹', '²', '³', '⁴', '⁵', '⁶', '⁷', '⁸', '⁹'];
         let k = k.round() as i32;
-        if (0..=6).contains(&k) {
-            format!("{}", 10f64.powi(k))
-        } else {
-            format!("1e{k}")
-        }
+        let digits: String = k
+            .unsigned_abs()
+            .to_string()
+            .chars()
+            .map(|c| SUPERSCRIPT[c.to_digit(10).unwrap_or(0) as usize])
+            .collect();
+        format!("10{}{digits}", if k < 0 { "⁻" } else { "" })
     } else {
         format!("{x:.2}")
     }

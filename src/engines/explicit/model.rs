@@ -107,7 +107,8 @@ impl<S: Space> Rates<S> {
             *o = *x + *y * s;
         }
     }
-    /// Largest absolute difference of any component, and the largest component.
+    /// Largest Euclidean norm of any particle's, body's or angular difference, and the largest
+    /// such norm of `self` (square roots taken once, of the maxima).
     pub fn max_difference(&self, other: &Self) -> (f64, f64) {
         let mut d: f64 = 0.0;
         let mut m: f64 = 0.0;
@@ -118,15 +119,15 @@ impl<S: Space> Rates<S> {
             .chain(self.b.iter().zip(&other.b))
         {
             let e = *a - *b;
-            d = d.max(e.dot(&e).sqrt());
-            m = m.max(a.dot(a).sqrt());
+            d = d.max(e.dot(&e));
+            m = m.max(a.dot(a));
         }
         for (a, b) in self.w.iter().zip(&other.w) {
             let e = *a - *b;
-            d = d.max(e.dot(&e).sqrt());
-            m = m.max(a.dot(a).sqrt());
+            d = d.max(e.dot(&e));
+            m = m.max(a.dot(a));
         }
-        (d, m)
+        (d.sqrt(), m.sqrt())
     }
 }
 
@@ -221,6 +222,21 @@ struct TwoPoint<S: Space> {
     c: f64,
 }
 
+/// A spring of fixed direction between particles or ground (the bulk of large scenes), in
+/// the compact form the force pass streams through.
+#[derive(Debug, Clone, Copy)]
+struct LineSpring<S: Space> {
+    /// Particle at end a, or [`GROUND`].
+    a: usize,
+    /// Particle at end b, or [`GROUND`].
+    b: usize,
+    direction: S::V,
+    c: f64,
+}
+
+/// A [`LineSpring`] end that does not move.
+const GROUND: usize = usize::MAX;
+
 #[derive(Debug, Clone, Copy)]
 struct Contact<S: Space> {
     particle: usize,
@@ -278,6 +294,9 @@ pub struct Body<S: Space> {
 pub struct Constraints<S: Space> {
     /// Held directions per particle (orthonormal).
     pub particle_held: Vec<Vec<S::V>>,
+    /// The same, as the projection each particle's acceleration takes (no indirection in the
+    /// time loop).
+    pub particle_motion: Vec<Motion<S>>,
     /// Held translation axes per body.
     pub body_held_t: Vec<Vec<S::V>>,
     /// Held rotation axes per body.
@@ -296,6 +315,45 @@ impl<S: Space> Constraints<S> {
     /// Whether any velocity-dependent term acts (dashpots aside).
     pub fn any_velocity_terms(&self) -> bool {
         self.velocity_terms.iter().any(|x| *x)
+    }
+}
+
+/// How a particle's acceleration is projected onto its free directions in a step.
+#[derive(Debug, Clone, Copy)]
+pub enum Motion<S: Space> {
+    /// No direction held.
+    Free,
+    /// Every direction held.
+    Held,
+    /// One direction held (unit): the component along it removed.
+    Across(S::V),
+    /// Two orthonormal directions held (3D): both components removed.
+    AcrossTwo(S::V, S::V),
+}
+
+impl<S: Space> Motion<S> {
+    fn of(held: &[S::V]) -> Self {
+        match held {
+            [] => Motion::Free,
+            _ if held.len() == S::DIM => Motion::Held,
+            [d] => Motion::Across(*d),
+            [d, e] => Motion::AcrossTwo(*d, *e),
+            _ => Motion::Held,
+        }
+    }
+
+    /// `a` with its held components removed (in the order they were held).
+    #[inline]
+    pub fn project(&self, a: S::V) -> S::V {
+        match self {
+            Motion::Free => a,
+            Motion::Held => S::V::zero(),
+            Motion::Across(d) => a - *d * d.dot(&a),
+            Motion::AcrossTwo(d, e) => {
+                let a = a - *d * d.dot(&a);
+                a - *e * e.dot(&a)
+            }
+        }
     }
 }
 
@@ -320,8 +378,14 @@ pub struct Model<S: Space, const FINITE: bool> {
     grounded_springs: Vec<Grounded<S>>,
     grounded_dashpots: Vec<Grounded<S>>,
     springs: Vec<TwoPoint<S>>,
+    /// The springs that are [`LineSpring`]s, compact.
+    line_springs: Vec<LineSpring<S>>,
+    /// Indices in `springs` of the others (body ends, or axial under finite rotation).
+    other_springs: Vec<usize>,
     dashpots: Vec<TwoPoint<S>>,
     contacts: Vec<Contact<S>>,
+    /// 1 / mass per particle (apart, so the time loop streams 8 bytes per particle).
+    inverse_masses: Vec<f64>,
     loads: Vec<Load<S>>,
     /// Penalty stiffness.
     pub penalty: f64,
@@ -488,12 +552,34 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 force: S::v(&l.force),
             })
             .collect();
+        let springs = two_point(&scene.springs);
+        let end = |p: &Point<S>| match p {
+            Point::Particle(i) => Some(*i),
+            Point::Ground(_) => Some(GROUND),
+            Point::Body { .. } => None,
+        };
+        let mut line_springs = Vec::new();
+        let mut other_springs = Vec::new();
+        for (k, s) in springs.iter().enumerate() {
+            match (end(&s.a), end(&s.b)) {
+                (Some(a), Some(b)) if !(s.axial && FINITE) => line_springs.push(LineSpring {
+                    a,
+                    b,
+                    direction: s.direction,
+                    c: s.c,
+                }),
+                _ => other_springs.push(k),
+            }
+        }
         Model {
+            inverse_masses: particles.iter().map(|p| p.inverse_mass).collect(),
             particles,
             bodies,
             grounded_springs: grounded(&scene.springs),
             grounded_dashpots: grounded(&scene.dashpots),
-            springs: two_point(&scene.springs),
+            springs,
+            line_springs,
+            other_springs,
             dashpots: two_point(&scene.dashpots),
             contacts,
             loads,
@@ -639,7 +725,21 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 out.m[b] -= axis * (s.c * angle);
             }
         }
-        for s in &self.springs {
+        for s in &self.line_springs {
+            let at = |i: usize| {
+                if i == GROUND { S::V::zero() } else { cfg.u[i] }
+            };
+            let e = s.direction.dot(&(at(s.b) - at(s.a)));
+            elastic += 0.5 * s.c * e * e;
+            let f = s.direction * (s.c * e);
+            if s.a != GROUND {
+                out.p[s.a] += f;
+            }
+            if s.b != GROUND {
+                out.p[s.b] -= f;
+            }
+        }
+        for s in self.other_springs.iter().map(|k| &self.springs[*k]) {
             let stretch = self.displacement(cfg, &s.b) - self.displacement(cfg, &s.a);
             let (e, dir) = if s.axial && FINITE {
                 let l = s.span0 + stretch;
@@ -691,6 +791,36 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         out: &mut Forces<S>,
         counters: &mut Counters,
     ) {
+        let mut directions = Vec::new();
+        self.dashpot_directions(cfg, &mut directions);
+        self.damping_along(cfg, &directions, vel, out, counters);
+    }
+
+    /// The line of action of every two-point dashpot at `cfg` (axial ones turn with their
+    /// nodes under finite rotation), for [`Model::damping_along`]: a configuration's
+    /// directions serve every velocity iterate of an increment.
+    pub fn dashpot_directions(&self, cfg: &Config<S>, out: &mut Vec<S::V>) {
+        out.clear();
+        out.extend(self.dashpots.iter().map(|s| {
+            if s.axial && FINITE {
+                let l = s.span0 + (self.displacement(cfg, &s.b) - self.displacement(cfg, &s.a));
+                l * (1.0 / l.dot(&l).sqrt())
+            } else {
+                s.direction
+            }
+        }));
+    }
+
+    /// [`Model::damping`] with the two-point dashpots' directions given (from
+    /// [`Model::dashpot_directions`] at the same `cfg`).
+    pub fn damping_along(
+        &self,
+        cfg: &Config<S>,
+        directions: &[S::V],
+        vel: &Rates<S>,
+        out: &mut Forces<S>,
+        counters: &mut Counters,
+    ) {
         counters.damping_evaluations += 1;
         let mut power = 0.0;
         for s in &self.grounded_dashpots {
@@ -705,16 +835,10 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 out.m[b] -= axis * (s.c * rate);
             }
         }
-        for s in &self.dashpots {
-            let dir = if s.axial && FINITE {
-                let l = s.span0 + (self.displacement(cfg, &s.b) - self.displacement(cfg, &s.a));
-                l * (1.0 / l.dot(&l).sqrt())
-            } else {
-                s.direction
-            };
+        for (s, dir) in self.dashpots.iter().zip(directions) {
             let rate = dir.dot(&(self.velocity(cfg, vel, &s.b) - self.velocity(cfg, vel, &s.a)));
             power += s.c * rate * rate;
-            let f = dir * (s.c * rate);
+            let f = *dir * (s.c * rate);
             self.apply(cfg, &s.a, f, out);
             self.apply(cfg, &s.b, -f, out);
         }
@@ -759,18 +883,27 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         out: &mut Rates<S>,
         counters: &mut Counters,
     ) {
-        for (i, p) in self.particles.iter().enumerate() {
-            let h = &held.particle_held[i];
-            if h.len() == S::DIM {
-                out.p[i] = S::V::zero();
-                continue;
-            }
-            let mut a = forces.p[i] * p.inverse_mass;
-            for d in h {
-                a -= *d * d.dot(&a);
-            }
-            out.p[i] = a;
+        for ((a, f), (inverse_mass, motion)) in out
+            .p
+            .iter_mut()
+            .zip(&forces.p)
+            .zip(self.inverse_masses.iter().zip(&held.particle_motion))
+        {
+            *a = motion.project(*f * *inverse_mass);
         }
+        self.accelerate_bodies(cfg, forces, vel, held, out, counters);
+    }
+
+    /// The bodies' part of [`Model::accelerations`].
+    fn accelerate_bodies(
+        &self,
+        cfg: &Config<S>,
+        forces: &Forces<S>,
+        vel: &Rates<S>,
+        held: &Constraints<S>,
+        out: &mut Rates<S>,
+        counters: &mut Counters,
+    ) {
         for b in 0..self.bodies.len() {
             let inertia = self.body_inertia(cfg, b);
             let mut f = forces.b[b];
@@ -786,6 +919,43 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             out.b[b] = a;
             out.w[b] = alpha;
         }
+    }
+
+    /// One increment of a step without velocity-dependent forces, fused: the accelerations
+    /// from `forces` (into `acc`), `v_next = v_half + h·acc`, and the configuration advanced
+    /// by `h·v_next`, each particle in one pass over memory. The same arithmetic in the same
+    /// order as [`Model::accelerations`], [`Rates::set_plus`] and [`Model::advance`] in turn,
+    /// so the result is bit-identical; for the increments that write no output row.
+    #[allow(clippy::too_many_arguments)]
+    pub fn step(
+        &self,
+        cfg: &mut Config<S>,
+        carry: &mut Rates<S>,
+        h: f64,
+        forces: &Forces<S>,
+        v_half: &Rates<S>,
+        held: &Constraints<S>,
+        acc: &mut Rates<S>,
+        v_next: &mut Rates<S>,
+        counters: &mut Counters,
+    ) {
+        // Bodies first: their accelerations read the orientation before it moves.
+        self.accelerate_bodies(cfg, forces, v_half, held, acc, counters);
+        for b in 0..self.bodies.len() {
+            v_next.b[b] = v_half.b[b] + acc.b[b] * h;
+            v_next.w[b] = v_half.w[b] + acc.w[b] * h;
+        }
+        let n = self.particles.len();
+        let (u, c) = (&mut cfg.u[..n], &mut carry.p[..n]);
+        let (a, v) = (&mut acc.p[..n], &mut v_next.p[..n]);
+        let (f, w) = (&forces.p[..n], &v_half.p[..n]);
+        let (inverse, motion) = (&self.inverse_masses[..n], &held.particle_motion[..n]);
+        for i in 0..n {
+            a[i] = motion[i].project(f[i] * inverse[i]);
+            v[i] = w[i] + a[i] * h;
+            compensated_add(&mut u[i], &mut c[i], v[i] * h);
+        }
+        self.advance_bodies(cfg, carry, h, v_next, held, counters);
     }
 
     /// Kinetic energy at velocities `vel`.
@@ -827,6 +997,19 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         for ((x, c), v) in cfg.u.iter_mut().zip(carry.p.iter_mut()).zip(&vel.p) {
             compensated_add(x, c, *v * h);
         }
+        self.advance_bodies(cfg, carry, h, vel, held, counters);
+    }
+
+    /// The bodies' part of [`Model::advance`].
+    fn advance_bodies(
+        &self,
+        cfg: &mut Config<S>,
+        carry: &mut Rates<S>,
+        h: f64,
+        vel: &Rates<S>,
+        held: &Constraints<S>,
+        counters: &mut Counters,
+    ) {
         for ((x, c), v) in cfg.bu.iter_mut().zip(carry.b.iter_mut()).zip(&vel.b) {
             compensated_add(x, c, *v * h);
         }
@@ -869,6 +1052,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         let nb = self.bodies.len();
         let mut c = Constraints {
             particle_held: vec![Vec::new(); np],
+            particle_motion: Vec::new(),
             body_held_t: vec![Vec::new(); nb],
             body_held_r: vec![Vec::new(); nb],
             body_free_r: vec![Vec::new(); nb],
@@ -901,6 +1085,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             }
         }
         let _ = scene;
+        c.particle_motion = c.particle_held.iter().map(|h| Motion::of(h)).collect();
         for b in 0..nb {
             c.body_free_r[b] = S::free_rotations(&c.body_held_r[b]);
             let free_r = S::ROT - c.body_held_r[b].len();

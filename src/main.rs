@@ -41,8 +41,8 @@ enum Command {
     /// (N = 10, 100, …), against the machine's memory-bandwidth limit; writes
     /// `OUT/scaling.csv` and `OUT/figures/scaling.svg`.
     Scaling {
-        /// Largest chain (masses).
-        #[arg(long, value_name = "N", default_value_t = 1_000_000, value_parser = clap::value_parser!(u64).range(10..=10_000_000))]
+        /// Largest chain (masses; at most 10^6, which holds about 1.3 GB).
+        #[arg(long, value_name = "N", default_value_t = 1_000_000, value_parser = clap::value_parser!(u64).range(10..=1_000_000))]
         max_n: u64,
         /// Output directory.
         #[arg(long, value_name = "DIR", default_value = "report/scaling")]

@@ -312,22 +312,20 @@ pub fn integrate<S: Space, const FINITE: bool>(
             model.forces(&cfg, ContactMode::Unilateral, &mut forces, &mut counters);
             let restart = !started || n == first;
             // An increment that restarts nothing, has no velocity-dependent force, writes no
-            // row and is not the last: accelerations, velocities and positions in one pass.
-            if !restart && !velocity_pass && n % stride != 0 && n != first + steps_here {
+            // row and is neither the step's last nor the one before it (whose acceleration
+            // starts the next step): accelerations, velocities and positions in one pass.
+            if !restart && !velocity_pass && n % stride != 0 && n + 1 < first + steps_here {
                 model.step(
                     &mut cfg,
                     &mut carry,
                     h,
                     &forces,
-                    &v_half,
+                    &mut v_half,
                     &held,
                     &mut acc,
-                    &mut v_next,
                     &mut counters,
                 );
                 last_power = 0.0;
-                std::mem::swap(&mut v_half, &mut v_next);
-                std::mem::swap(&mut acc_prev, &mut acc);
                 continue;
             }
             let mut power = 0.0;

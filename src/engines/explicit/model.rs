@@ -922,10 +922,12 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     }
 
     /// One increment of a step without velocity-dependent forces, fused: the accelerations
-    /// from `forces` (into `acc`), `v_next = v_half + h·acc`, and the configuration advanced
-    /// by `h·v_next`, each particle in one pass over memory. The same arithmetic in the same
-    /// order as [`Model::accelerations`], [`Rates::set_plus`] and [`Model::advance`] in turn,
-    /// so the result is bit-identical; for the increments that write no output row.
+    /// from `forces`, the half-step velocities `vel` advanced in place by `h·a`, and the
+    /// configuration advanced by `h·vel`, each particle in one pass over memory. The same
+    /// arithmetic in the same order as [`Model::accelerations`], [`Rates::set_plus`] and
+    /// [`Model::advance`] in turn, so the result is bit-identical. The particles'
+    /// accelerations are not stored (`acc` receives the bodies' only): for the increments that
+    /// write no output row and end no step, after which nothing reads them.
     #[allow(clippy::too_many_arguments)]
     pub fn step(
         &self,
@@ -933,29 +935,27 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         carry: &mut Rates<S>,
         h: f64,
         forces: &Forces<S>,
-        v_half: &Rates<S>,
+        vel: &mut Rates<S>,
         held: &Constraints<S>,
         acc: &mut Rates<S>,
-        v_next: &mut Rates<S>,
         counters: &mut Counters,
     ) {
         // Bodies first: their accelerations read the orientation before it moves.
-        self.accelerate_bodies(cfg, forces, v_half, held, acc, counters);
+        self.accelerate_bodies(cfg, forces, vel, held, acc, counters);
         for b in 0..self.bodies.len() {
-            v_next.b[b] = v_half.b[b] + acc.b[b] * h;
-            v_next.w[b] = v_half.w[b] + acc.w[b] * h;
+            vel.b[b] += acc.b[b] * h;
+            vel.w[b] += acc.w[b] * h;
         }
         let n = self.particles.len();
-        let (u, c) = (&mut cfg.u[..n], &mut carry.p[..n]);
-        let (a, v) = (&mut acc.p[..n], &mut v_next.p[..n]);
-        let (f, w) = (&forces.p[..n], &v_half.p[..n]);
-        let (inverse, motion) = (&self.inverse_masses[..n], &held.particle_motion[..n]);
+        let (u, c, v) = (&mut cfg.u[..n], &mut carry.p[..n], &mut vel.p[..n]);
+        let (f, inverse) = (&forces.p[..n], &self.inverse_masses[..n]);
+        let motion = &held.particle_motion[..n];
         for i in 0..n {
-            a[i] = motion[i].project(f[i] * inverse[i]);
-            v[i] = w[i] + a[i] * h;
+            let a = motion[i].project(f[i] * inverse[i]);
+            v[i] += a * h;
             compensated_add(&mut u[i], &mut c[i], v[i] * h);
         }
-        self.advance_bodies(cfg, carry, h, v_next, held, counters);
+        self.advance_bodies(cfg, carry, h, vel, held, counters);
     }
 
     /// Kinetic energy at velocities `vel`.

@@ -2,8 +2,34 @@
 //! keeps its peak resident set under 50 MB (the output is 501 rows whatever the step count).
 //!
 //! Long (about a minute, most of it rapier's 10^7 steps): `cargo test --release -- --ignored`,
-//! which `.ci/run` runs once.
+//! which `.ci/run` runs once. The buffers' capacities are asserted in process, on the explicit
+//! engine (about a second); rapier's recorder has the same test in `tests/rapier.rs`.
+use crosscheck::engines::explicit::ExplicitEngine;
+use crosscheck::engines::{Engine, RunSettings};
+use crosscheck::scene::IncrementRule;
 use std::process::Command;
+
+/// 10^7 explicit increments leave the output buffers at the size the output rows need: the
+/// history holds `output_rows` rows of one value per column, allocated once (capacity equal to
+/// length), whatever the step count.
+#[test]
+fn ten_million_explicit_increments_keep_buffers_at_the_output_size() {
+    let path = crosscheck::case::cases_dir().join("springs_grounded_a.toml");
+    let scene = crosscheck::case::load(&path).unwrap();
+    let settings = RunSettings {
+        increment: Some(IncrementRule::Given(scene.duration() / 1e7)),
+        ..RunSettings::default()
+    };
+    let out = ExplicitEngine::finite().run(&scene, &settings).unwrap();
+    assert_eq!(out.info.steps, 10_000_000);
+    let history = &out.history;
+    assert_eq!(history.rows.len(), scene.output_rows);
+    assert_eq!(history.rows.capacity(), scene.output_rows);
+    for row in &history.rows {
+        assert_eq!(row.len(), history.columns.len());
+        assert_eq!(row.capacity(), history.columns.len());
+    }
+}
 
 /// Peak resident set of the waited-for children so far, in bytes (Linux reports kilobytes).
 fn children_peak_rss() -> u64 {

@@ -80,7 +80,8 @@ pub fn exponents(study: &Study) -> Vec<(String, f64)> {
 }
 
 /// The figure: ns per increment against N, log–log, one marked line per engine (legend: its
-/// fitted exponent), and the streaming limit × N as a dashed line.
+/// fitted exponent), and the streaming limit × N as a dashed line; the legend sits lower right,
+/// below the lines (every line rises to the right).
 pub fn render(study: &Study) -> Option<String> {
     let finite = |x: f64| x.is_finite() && x > 0.0;
     let points: Vec<_> = study
@@ -174,7 +175,7 @@ pub fn render(study: &Study) -> Option<String> {
             .configure_series_labels()
             .background_style(WHITE.mix(0.9))
             .border_style(BLACK)
-            .position(SeriesLabelPosition::UpperLeft)
+            .position(SeriesLabelPosition::LowerRight)
             .draw()
             .ok()?;
         root.present().ok()?;

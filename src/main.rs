@@ -529,7 +529,7 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
         outcome.jobs.len(),
         outcome.failures(),
         report::report_path(&args.out).display(),
-        checks.iter().filter(|c| c.4).count(),
+        checks.iter().filter(|c| c.met).count(),
         checks.len()
     ));
     out.print(&format!(

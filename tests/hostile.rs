@@ -48,7 +48,7 @@ fn previous_report() -> (tempfile::TempDir, PathBuf, BTreeMap<String, Vec<u8>>) 
     let before = snapshot(&out);
     assert_eq!(
         before.len(),
-        2 * 7 + 2 + 3,
+        2 * crosscheck::engines::all().len() + 2 + 3,
         "CSVs, figures, summary, timings, REPORT.md"
     );
     (root, out, before)
@@ -179,7 +179,7 @@ fn one_writer_per_output() {
     let after = snapshot(&out);
     assert_eq!(
         after.len(),
-        before.len() + 7 + 1,
+        before.len() + crosscheck::engines::all().len() + 1,
         "the new case's CSVs and figure"
     );
     for (name, bytes) in &before {
@@ -296,7 +296,11 @@ fn closed_or_full_stdout_is_an_error_not_a_panic() {
             "{stderr}"
         );
         let after = snapshot(&out);
-        assert_eq!(after.len(), before.len() + 7 + 1, "the report is in place");
+        assert_eq!(
+            after.len(),
+            before.len() + crosscheck::engines::all().len() + 1,
+            "the report is in place"
+        );
     }
     assert_eq!(names(root.path()), ["report"]);
 }

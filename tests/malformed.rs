@@ -464,7 +464,7 @@ const CORPUS: &[(&str, usize, &str, &str)] = &[
         "tolerance_unknown_engine",
         133,
         "tolerances.explicit_smal",
-        "`explicit_smal` is not an engine; valid names: analytic, exp",
+        "`explicit_smal` is not an engine; valid names: analytic, reference, exp",
     ),
     (
         "safety_with_increment",

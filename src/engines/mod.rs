@@ -6,6 +6,7 @@
 pub mod analytic;
 pub mod explicit;
 pub mod rapier;
+pub mod reference;
 
 pub use crate::contract::History;
 use crate::scene::{ContactStart, DampingTreatment, IncrementRule, PenaltyRule, Scene};
@@ -107,6 +108,7 @@ pub trait Engine: Send + Sync {
 pub fn all() -> Vec<Box<dyn Engine>> {
     vec![
         Box::new(analytic::AnalyticEngine),
+        Box::new(reference::ReferenceEngine),
         Box::new(explicit::ExplicitEngine::finite()),
         Box::new(explicit::ExplicitEngine::small()),
         Box::new(rapier::RapierEngine::matched(rapier::Precision::F64)),

@@ -6,11 +6,12 @@ use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 
 /// Engines drawn, with their colours, in drawing order (the closed form last, on top).
-const DRAWN: [(&str, RGBColor); 5] = [
+const DRAWN: [(&str, RGBColor); 6] = [
     ("rapier_f64_default", RGBColor(200, 160, 0)),
     ("rapier_f64", RGBColor(214, 39, 40)),
     ("explicit", RGBColor(31, 119, 180)),
     ("explicit_small", RGBColor(44, 160, 44)),
+    ("reference", RGBColor(148, 103, 189)),
     ("analytic", RGBColor(0, 0, 0)),
 ];
 

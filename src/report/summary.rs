@@ -1,7 +1,7 @@
 //! `summary.json`: every metric of a run, per case and engine, with what each run used and
 //! cost. REPORT.md is rendered from the same [`Summary`], so their numbers agree.
 
-use crate::comparison::{self, Comparison, ContactValidity, REFERENCE_ENGINE};
+use crate::comparison::{self, CLOSED_FORM, Comparison, ContactValidity};
 use crate::contract::History;
 use crate::report::data::{csv_path, read_history};
 use crate::run::{JobResult, Outcome, Plan};
@@ -87,11 +87,18 @@ pub struct EngineSummary {
     /// Quantities the engine measured about its own run (e.g. contact penetration).
     #[serde(default)]
     pub measures: BTreeMap<String, f64>,
-    /// Errors against the closed form.
+    /// Errors against the closed form (the total error, model form included).
     pub against_analytic: Option<Comparison>,
-    /// The tolerance the case declares for this engine.
+    /// The exact solution this engine is judged against: its own model's
+    /// ([`comparison::baseline`]), or the closed form where that did not run.
+    #[serde(default)]
+    pub baseline: Option<String>,
+    /// Errors against the baseline.
+    #[serde(default)]
+    pub against_baseline: Option<Comparison>,
+    /// The tolerance the case declares for this engine (on the error against its baseline).
     pub tolerance: Option<f64>,
-    /// Whether `against_analytic.worst_max` ≤ `tolerance`.
+    /// Whether `against_baseline.worst_max` ≤ `tolerance`.
     pub meets_tolerance: Option<bool>,
 }
 
@@ -116,7 +123,7 @@ impl Summary {
             .cases
             .iter()
             .map(|scene| {
-                let reference = history(&scene.id, REFERENCE_ENGINE);
+                let reference = history(&scene.id, CLOSED_FORM);
                 let reference = reference.as_ref();
                 let runs = outcome
                     .jobs
@@ -124,7 +131,18 @@ impl Summary {
                     .filter(|j| j.case == scene.id)
                     .map(|j| {
                         let stale = !j.is_ok() && csv_path(out, &j.case, &j.engine).exists();
-                        engine_summary(scene, j, reference, stale)
+                        // The engine's own model's exact solution, or the closed form where
+                        // that is missing (the reference refused the scene, or did not run).
+                        let baseline = comparison::baseline(&j.engine).and_then(|b| {
+                            if b == CLOSED_FORM {
+                                reference.map(|h| (b, h.clone()))
+                            } else {
+                                history(&scene.id, b)
+                                    .map(|h| (b, h))
+                                    .or_else(|| reference.map(|h| (CLOSED_FORM, h.clone())))
+                            }
+                        });
+                        engine_summary(scene, j, reference, baseline.as_ref(), stale)
                     })
                     .collect();
                 CaseSummary {
@@ -224,30 +242,48 @@ impl Summary {
         serde_json::to_string_pretty(self).expect("a summary serialises") + "\n"
     }
 
-    /// Every (case, engine, tolerance, measured) check, and whether it passed.
-    pub fn tolerance_checks(&self) -> Vec<(&str, &str, f64, f64, bool)> {
+    /// Every declared tolerance, checked.
+    pub fn tolerance_checks(&self) -> Vec<ToleranceCheck<'_>> {
         self.cases
             .iter()
             .flat_map(|c| {
                 c.runs.iter().filter_map(move |r| {
-                    let measured = r.against_analytic.as_ref()?.worst_max;
-                    Some((
-                        c.id.as_str(),
-                        r.engine.as_str(),
-                        r.tolerance?,
-                        measured,
-                        r.meets_tolerance?,
-                    ))
+                    Some(ToleranceCheck {
+                        case: &c.id,
+                        engine: &r.engine,
+                        baseline: r.baseline.as_deref()?,
+                        tolerance: r.tolerance?,
+                        measured: r.against_baseline.as_ref()?.worst_max,
+                        met: r.meets_tolerance?,
+                    })
                 })
             })
             .collect()
     }
 }
 
+/// One declared tolerance, checked.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ToleranceCheck<'a> {
+    /// Case id.
+    pub case: &'a str,
+    /// Engine.
+    pub engine: &'a str,
+    /// The exact solution the error is measured against.
+    pub baseline: &'a str,
+    /// Declared tolerance (max error over the peak).
+    pub tolerance: f64,
+    /// Measured worst max error over the peak.
+    pub measured: f64,
+    /// Whether measured ≤ tolerance.
+    pub met: bool,
+}
+
 fn engine_summary(
     scene: &Scene,
     job: &JobResult,
     reference: Option<&History>,
+    baseline: Option<&(&str, History)>,
     stale_csv: bool,
 ) -> EngineSummary {
     let tolerance = comparison::tolerance(scene, &job.engine);
@@ -266,14 +302,17 @@ fn engine_summary(
             counters: BTreeMap::new(),
             measures: BTreeMap::new(),
             against_analytic: None,
+            baseline: baseline.map(|b| b.0.to_string()),
+            against_baseline: None,
             tolerance,
             meets_tolerance: tolerance.map(|_| false),
         },
         Ok(s) => {
-            let against = (job.engine != REFERENCE_ENGINE)
+            let against = (job.engine != CLOSED_FORM)
                 .then(|| reference.map(|r| comparison::compare(scene, r, &s.history)))
                 .flatten();
-            let meets = match (&against, tolerance) {
+            let judged = baseline.map(|(_, b)| comparison::compare(scene, b, &s.history));
+            let meets = match (&judged, tolerance) {
                 (Some(c), Some(t)) => Some(c.worst_max <= t),
                 _ => None,
             };
@@ -287,6 +326,8 @@ fn engine_summary(
                 counters: s.info.counters.clone(),
                 measures: s.info.measures.clone(),
                 against_analytic: against,
+                baseline: baseline.map(|b| b.0.to_string()),
+                against_baseline: judged,
                 tolerance,
                 meets_tolerance: meets,
             }

@@ -1,0 +1,381 @@
+//! `reference`: the converged solution of each case's own finite-rotation model, the one the
+//! finite-rotation engines approximate as the increment goes to 0 and the penalty stiffness to
+//! infinity: finite rotation, rigid and persistent contact (the contact node slaved to the
+//! rotating face), every other element as the scene says.
+//!
+//! The equations ([`mechanism`]) are written from Newton–Euler's laws with the contact as a
+//! constraint solved with its multiplier at every evaluation, independently of the explicit
+//! engine's force assembly, and integrated by Dormand–Prince 8(5,3) with error control
+//! (`ode_solvers::Dop853`) at a relative tolerance of [`TOLERANCE`], restarted at every output
+//! time so no row is interpolated. The whole solution is computed twice, the second time at
+//! half the tolerance and with steps of at most half an output interval (so it takes another
+//! path even where one step per row meets both tolerances); the largest change of any column over its peak is reported as the
+//! measure `tolerance_halving_change` (summary.json), with `constraint_drift` (the largest
+//! departure of a contact gap from its initial value, in length units).
+//!
+//! Like `analytic`, it reports the contact force, its smallest margin (`contact_margin`, the
+//! smallest compressive force over the largest) and its validity window: rows after the first
+//! tensile contact force are marked invalid (`valid` = 0) and `valid_until` is that time.
+//!
+//! Static steps set the prescribed DOFs and solve the equilibrium of the free ones by Newton's
+//! method (a finite-difference Jacobian; the converged point does not depend on it). Not
+//! solved (refused with a reason): a contact node that is a body point, a held DOF on a body
+//! point other than the reference node, a static step with both free DOFs and contact, a free
+//! DOF without mass.
+
+pub mod mechanism;
+
+use super::{Engine, EngineError, History, RunInfo, RunOutput, RunSettings};
+use crate::contract::VALID_COLUMN;
+use crate::scene::{Probe, Scene, StepKind};
+use mechanism::{Mechanism, Placement, twist};
+use nalgebra::{DMatrix, DVector, Vector3};
+use std::cell::RefCell;
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+/// Relative tolerance of the integration (the absolute one is this × 10^-3).
+pub const TOLERANCE: f64 = 1e-12;
+
+/// Most integration steps between two output rows (each run is bounded in time).
+const MAX_STEPS_PER_ROW: u32 = 1_000_000;
+
+/// The converged finite-rotation reference.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ReferenceEngine;
+
+/// One solution at one tolerance.
+struct Solution {
+    history: History,
+    contact: Vec<f64>,
+    drift: f64,
+    steps: u64,
+    evaluations: u64,
+}
+
+impl Engine for ReferenceEngine {
+    fn name(&self) -> &str {
+        "reference"
+    }
+
+    fn run(&self, scene: &Scene, _settings: &RunSettings) -> Result<RunOutput, EngineError> {
+        let start = Instant::now();
+        let mechanism = Mechanism::new(scene)?;
+        let fine = solve(scene, &mechanism, TOLERANCE, 1.0)?;
+        let finer = solve(scene, &mechanism, TOLERANCE / 2.0, 0.5)?;
+        let mut measures = BTreeMap::new();
+        measures.insert(
+            "tolerance_halving_change".into(),
+            largest_change(&fine.history, &finer.history),
+        );
+        if mechanism.contact_count() > 0 {
+            measures.insert("constraint_drift".into(), fine.drift);
+            let valid = valid_rows(&fine.history);
+            let forces: Vec<f64> = fine.contact.iter().take(valid).copied().collect();
+            let largest = forces.iter().fold(0.0_f64, |a, f| a.max(*f));
+            let smallest = forces.iter().fold(f64::INFINITY, |a, f| a.min(*f));
+            measures.insert("initial_contact_force".into(), fine.contact[0]);
+            if largest > 0.0 {
+                measures.insert("contact_margin".into(), smallest / largest);
+            }
+            if valid < fine.history.rows.len() {
+                measures.insert("valid_until".into(), fine.history.rows[valid][0]);
+            }
+        }
+        let mut counters = BTreeMap::new();
+        counters.insert("integration_steps".into(), fine.steps);
+        counters.insert("evaluations".into(), fine.evaluations);
+        Ok(RunOutput {
+            engine: self.name().into(),
+            history: fine.history,
+            info: RunInfo {
+                increment: 0.0,
+                steps: fine.steps,
+                stable_increment: None,
+                penalty_stiffness: None,
+                wall_seconds: start.elapsed().as_secs_f64(),
+                counters,
+                measures,
+            },
+        })
+    }
+}
+
+/// Rows before the first invalid one.
+fn valid_rows(history: &History) -> usize {
+    let column = history.columns.len() - 1;
+    history
+        .rows
+        .iter()
+        .position(|r| r[column] == 0.0)
+        .unwrap_or(history.rows.len())
+}
+
+/// The largest change of any column between two histories, over that column's peak.
+fn largest_change(a: &History, b: &History) -> f64 {
+    let mut largest = 0.0_f64;
+    for c in 1..a.columns.len() - 1 {
+        let peak = a.rows.iter().fold(0.0_f64, |m, r| m.max(r[c].abs()));
+        if peak == 0.0 {
+            continue;
+        }
+        let change = a
+            .rows
+            .iter()
+            .zip(&b.rows)
+            .fold(0.0_f64, |m, (x, y)| m.max((x[c] - y[c]).abs()));
+        largest = largest.max(change / peak);
+    }
+    largest
+}
+
+/// The equations for the ODE solver over one dynamic step (fixed free basis).
+struct Motion<'a> {
+    mechanism: &'a Mechanism,
+    basis: &'a DMatrix<f64>,
+    error: &'a RefCell<Option<EngineError>>,
+}
+
+impl ode_solvers::System<f64, ode_solvers::DVector<f64>> for Motion<'_> {
+    fn system(&self, _t: f64, y: &ode_solvers::DVector<f64>, dy: &mut ode_solvers::DVector<f64>) {
+        let m = self.mechanism;
+        let np = m.position_len();
+        let at = m.unpack(y.as_slice());
+        let w = DVector::from_column_slice(&y.as_slice()[np..]);
+        match m.evaluate(&at, self.basis, &w) {
+            Ok(e) => {
+                let u = self.basis * &w;
+                m.position_rate(&at, &u, &mut dy.as_mut_slice()[..np]);
+                dy.as_mut_slice()[np..].copy_from_slice(e.acceleration.as_slice());
+            }
+            Err(e) => {
+                dy.fill(0.0);
+                self.error.borrow_mut().get_or_insert(e);
+            }
+        }
+    }
+
+    fn solout(
+        &mut self,
+        _t: f64,
+        _y: &ode_solvers::DVector<f64>,
+        _dy: &ode_solvers::DVector<f64>,
+    ) -> bool {
+        self.error.borrow().is_some()
+    }
+}
+
+/// Newton's method on the equilibrium of the free DOFs of a static step.
+fn equilibrium(
+    mechanism: &Mechanism,
+    basis: &DMatrix<f64>,
+    at: &mut Placement,
+    length: f64,
+) -> Result<(), EngineError> {
+    let nf = basis.ncols();
+    if nf == 0 {
+        return Ok(());
+    }
+    if mechanism.contact_count() > 0 {
+        return Err(EngineError::Unsupported(
+            "reference: a static step with free DOFs and contact".into(),
+        ));
+    }
+    let still = DVector::zeros(mechanism.velocity_len());
+    let residual = |p: &Placement| -> Result<DVector<f64>, EngineError> {
+        Ok(basis.transpose() * mechanism.applied(p, &still)?)
+    };
+    let displaced = |p: &Placement, d: &DVector<f64>| {
+        let du = basis * d;
+        let mut q = p.clone();
+        let n = q.particles.len();
+        for (i, x) in q.particles.iter_mut().enumerate() {
+            *x += du.fixed_rows::<3>(3 * i);
+        }
+        for (b, (x, r)) in q.origins.iter_mut().zip(&mut q.orientations).enumerate() {
+            let k = 3 * n + 6 * b;
+            *x += du.fixed_rows::<3>(k);
+            let turn: Vector3<f64> = du.fixed_rows::<3>(k + 3).into_owned();
+            *r = nalgebra::UnitQuaternion::from_scaled_axis(turn) * *r;
+        }
+        q
+    };
+    let h = 1e-6 * length;
+    for _ in 0..100 {
+        let r = residual(at)?;
+        let mut jacobian = DMatrix::zeros(nf, nf);
+        for j in 0..nf {
+            let mut d = DVector::zeros(nf);
+            d[j] = h;
+            let plus = residual(&displaced(at, &d))?;
+            let minus = residual(&displaced(at, &(-&d)))?;
+            jacobian.set_column(j, &((plus - minus) / (2.0 * h)));
+        }
+        let step = jacobian.lu().solve(&(-r)).ok_or_else(|| {
+            EngineError::Unsupported(
+                "reference: static step: the free DOFs are not restrained (singular stiffness)"
+                    .into(),
+            )
+        })?;
+        *at = displaced(at, &step);
+        if step.amax() <= 1e-15 * length {
+            return Ok(());
+        }
+    }
+    Err(EngineError::Failed(
+        "reference: static step: Newton's method did not converge in 100 iterations".into(),
+    ))
+}
+
+/// The whole solution at one relative tolerance.
+///
+/// `max_step` is the largest integration step as a fraction of the output interval: 1 for the
+/// solution, ½ for the check (otherwise, where one step per row already meets both tolerances,
+/// halving the tolerance would retrace the same steps and prove nothing).
+fn solve(
+    scene: &Scene,
+    mechanism: &Mechanism,
+    rtol: f64,
+    max_step: f64,
+) -> Result<Solution, EngineError> {
+    let times = scene.output_times();
+    let duration = scene.duration();
+    let tol = 1e-12 * duration.max(f64::MIN_POSITIVE);
+    let length = scene
+        .nodes
+        .iter()
+        .fold(1.0_f64, |m, n| m.max(n.position.amax()));
+    let mut at = mechanism.initial_placement();
+    let mut u = DVector::zeros(mechanism.velocity_len());
+    let mut first_dynamic = true;
+    let mut t0 = 0.0;
+    let mut next = 0;
+    let mut rows: Vec<Vec<f64>> = Vec::with_capacity(times.len());
+    let mut contact_history = Vec::with_capacity(times.len());
+    let mut previous_rotation = vec![0.0; scene.columns.len()];
+    let mut valid = true;
+    let mut drift = 0.0_f64;
+    let (mut steps, mut evaluations) = (0_u64, 0_u64);
+    let dynamic_count = scene
+        .steps
+        .iter()
+        .filter(|s| matches!(s.kind, StepKind::Dynamic { .. }))
+        .count();
+    let mut dynamic_index = 0;
+    for step in &scene.steps {
+        let basis = mechanism.free_basis(step)?;
+        mechanism.prescribe(step, &mut at);
+        let duration = match step.kind {
+            StepKind::Static => {
+                equilibrium(mechanism, &basis, &mut at, length)?;
+                continue;
+            }
+            StepKind::Dynamic { duration } => duration,
+        };
+        if first_dynamic {
+            u = mechanism.initial_velocity(scene);
+            first_dynamic = false;
+        }
+        let mut w = mechanism.admissible(&at, &basis, &u)?;
+        dynamic_index += 1;
+        let end = t0 + duration;
+        let np = mechanism.position_len();
+        let mut t = t0;
+        // This step reports the output times up to its end (the last step: all the rest);
+        // a time on a boundary belongs to the later step.
+        while next < times.len() && (dynamic_index == dynamic_count || times[next] < end - tol) {
+            let target = times[next];
+            if target > t + tol {
+                let mut y = ode_solvers::DVector::zeros(np + w.len());
+                mechanism.pack(&at, &mut y.as_mut_slice()[..np]);
+                y.as_mut_slice()[np..].copy_from_slice(w.as_slice());
+                let failure = RefCell::new(None);
+                let motion = Motion {
+                    mechanism,
+                    basis: &basis,
+                    error: &failure,
+                };
+                let mut stepper = ode_solvers::Dop853::from_param(
+                    motion,
+                    t,
+                    target,
+                    target - t,
+                    y,
+                    rtol,
+                    rtol * 1e-3,
+                    0.9,
+                    0.0,
+                    0.333,
+                    6.0,
+                    (target - t) * max_step,
+                    0.0,
+                    MAX_STEPS_PER_ROW,
+                    1000,
+                    ode_solvers::dop_shared::OutputType::Sparse,
+                );
+                let stats = stepper.integrate().map_err(|e| {
+                    EngineError::Failed(format!("reference: integration to t = {target:e}: {e}"))
+                });
+                if let Some(e) = failure.take() {
+                    return Err(e);
+                }
+                let stats = stats?;
+                steps += u64::from(stats.accepted_steps);
+                evaluations += u64::from(stats.num_eval);
+                let y = stepper.y_out().last().expect("the end state").clone();
+                at = mechanism.unpack(y.as_slice());
+                w = DVector::from_column_slice(&y.as_slice()[np..]);
+                t = target;
+            }
+            let full = &basis * &w;
+            let evaluation = mechanism.evaluate(&at, &basis, &w)?;
+            let (gaps, _, _) = mechanism.constraints(&at, &full);
+            drift = gaps.iter().fold(drift, |m, g| m.max(g.abs()));
+            if evaluation.contact.iter().any(|&f| f < 0.0) {
+                valid = false;
+            }
+            contact_history.push(evaluation.contact.first().copied().unwrap_or(0.0));
+            let mut row = Vec::with_capacity(scene.columns.len() + 2);
+            row.push(target);
+            for (ci, column) in scene.columns.iter().enumerate() {
+                row.push(match &column.probe {
+                    Probe::Displacement { node, direction } => direction
+                        .dot(&(mechanism.position(&at, *node) - scene.nodes[*node].position)),
+                    Probe::Velocity { node, direction } => {
+                        direction.dot(&mechanism.velocity(&at, &full, *node))
+                    }
+                    Probe::Rotation { body, axis } => {
+                        let raw = twist(&at.orientations[*body], axis);
+                        let turns = ((previous_rotation[ci] - raw) / std::f64::consts::TAU).round();
+                        let unwrapped = raw + turns * std::f64::consts::TAU;
+                        previous_rotation[ci] = unwrapped;
+                        unwrapped
+                    }
+                    Probe::ContactForce { contact } => evaluation.contact[*contact],
+                    Probe::Zero { .. } => 0.0,
+                });
+            }
+            row.push(if valid { 1.0 } else { 0.0 });
+            if row.iter().any(|x| !x.is_finite()) {
+                return Err(EngineError::Failed(format!(
+                    "reference: a non-finite value at t = {target:e}"
+                )));
+            }
+            rows.push(row);
+            next += 1;
+        }
+        u = &basis * &w;
+        t0 = end;
+    }
+    let columns = std::iter::once("t".to_string())
+        .chain(scene.columns.iter().map(|c| c.name.clone()))
+        .chain(std::iter::once(VALID_COLUMN.to_string()))
+        .collect();
+    Ok(Solution {
+        history: History { columns, rows },
+        contact: contact_history,
+        drift,
+        steps,
+        evaluations,
+    })
+}

@@ -15,6 +15,49 @@ const DRAWN: [(&str, RGBColor); 6] = [
     ("analytic", RGBColor(0, 0, 0)),
 ];
 
+/// Width of the legend column on the right of every panel (outside the data).
+const LEGEND_WIDTH: u32 = 170;
+
+/// The unit of a contract column, in the cases' consistent units (N, m, kg, s, rad).
+pub fn unit(column: &str) -> &'static str {
+    match column {
+        "t" => "s",
+        "contact_force" => "N",
+        c if c.starts_with('r') => "rad",
+        c if c.starts_with('u') => "m",
+        c if c.starts_with('v') => "m/s",
+        c if c.starts_with('e') || c.starts_with('w') => "J",
+        _ => "",
+    }
+}
+
+/// A tick label: at most 3 significant digits, trailing zeros dropped, and a value within
+/// 1e-6 of the axis span of zero printed as 0 (no round-off noise such as `-1.388e-17`).
+pub fn tick(y: f64, span: f64) -> String {
+    if y.abs() <= 1e-6 * span.abs() || y == 0.0 {
+        return "0".into();
+    }
+    let a = y.abs();
+    if (1e-3..1e4).contains(&a) {
+        let decimals = (2 - a.log10().floor() as i32).max(0) as usize;
+        let text = format!("{y:.decimals$}");
+        if text.contains('.') {
+            text.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            text
+        }
+    } else {
+        let text = format!("{y:.2e}");
+        let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
+        let mantissa = if mantissa.contains('.') {
+            mantissa.trim_end_matches('0').trim_end_matches('.')
+        } else {
+            mantissa
+        };
+        format!("{mantissa}e{exponent}")
+    }
+}
+
 /// One engine's line in a panel: name, colour, (t, value) points.
 type Series<'a> = (&'a str, RGBColor, Vec<(f64, f64)>);
 
@@ -41,12 +84,14 @@ pub fn render(case: &str, columns: &[&str], histories: &[(&str, History)]) -> Op
     let mut svg = String::new();
     {
         let height = 220 * live.len() as u32 + 40;
-        let root = SVGBackend::with_string(&mut svg, (900, height)).into_drawing_area();
+        let root =
+            SVGBackend::with_string(&mut svg, (900 + LEGEND_WIDTH, height)).into_drawing_area();
         root.fill(&WHITE).ok()?;
         let (title, body) = root.split_vertically(40);
         title.titled(case, ("sans-serif", 22)).ok()?;
         let panels = body.split_evenly((live.len(), 1));
-        for (panel, column) in panels.iter().zip(&live) {
+        for (whole, column) in panels.iter().zip(&live) {
+            let (panel, legend) = whole.split_horizontally(900);
             let series: Vec<Series> = DRAWN
                 .iter()
                 .filter_map(|(engine, colour)| {
@@ -83,37 +128,47 @@ pub fn render(case: &str, columns: &[&str], histories: &[(&str, History)]) -> Op
             if !(t0.is_finite() && t1.is_finite() && t1 > t0) {
                 return None;
             }
-            let mut chart = ChartBuilder::on(panel)
+            let mut chart = ChartBuilder::on(&panel)
                 .margin(8)
-                .x_label_area_size(30)
-                .y_label_area_size(70)
+                .x_label_area_size(36)
+                .y_label_area_size(80)
                 .build_cartesian_2d(t0..t1, lo..hi)
                 .ok()?;
+            let (x_span, y_span) = (t1 - t0, hi - lo);
             chart
                 .configure_mesh()
-                .x_desc("t")
-                .y_desc(*column)
-                .y_label_formatter(&|y| format!("{y:.3e}"))
+                .x_desc("t [s]")
+                .y_desc(format!("{column} [{}]", unit(column)))
+                .x_label_formatter(&|x| tick(*x, x_span))
+                .y_label_formatter(&|y| tick(*y, y_span))
                 .light_line_style(WHITE)
                 .draw()
                 .ok()?;
-            for (engine, colour, points) in &series {
+            for (row, (engine, colour, points)) in series.iter().enumerate() {
                 let clipped = points.iter().map(|(t, y)| (*t, y.clamp(lo, hi)));
                 chart
                     .draw_series(LineSeries::new(clipped, colour.stroke_width(1)))
-                    .ok()?
-                    .label(*engine)
-                    .legend(move |(x, y)| {
-                        PathElement::new([(x, y), (x + 18, y)], colour.stroke_width(2))
-                    });
+                    .ok()?;
+                // The legend, in its own column right of the data. A run that leaves the
+                // closed form's range is clipped at the panel edge, and says so.
+                let outside = points.iter().any(|(_, y)| *y < lo || *y > hi);
+                let y = 20 + 18 * row as i32;
+                legend
+                    .draw(&PathElement::new([(4, y), (24, y)], colour.stroke_width(2)))
+                    .ok()?;
+                let label = if outside {
+                    format!("{engine} (clipped)")
+                } else {
+                    engine.to_string()
+                };
+                legend
+                    .draw(&Text::new(
+                        label,
+                        (30, y - 6),
+                        ("sans-serif", 12).into_font(),
+                    ))
+                    .ok()?;
             }
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .position(SeriesLabelPosition::UpperRight)
-                .draw()
-                .ok()?;
         }
         root.present().ok()?;
     }
@@ -136,6 +191,21 @@ fn padded(lo: f64, hi: f64) -> Option<(f64, f64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn tick_labels_have_three_significant_digits_and_no_round_off_noise() {
+        assert_eq!(tick(-1.388e-17, 0.3), "0");
+        assert_eq!(tick(0.05, 0.3), "0.05");
+        assert_eq!(tick(0.125, 0.3), "0.125");
+        assert_eq!(tick(-0.2, 0.3), "-0.2");
+        assert_eq!(tick(250_000.0, 3e5), "2.5e5");
+        assert_eq!(tick(1.2345e-5, 1e-4), "1.23e-5");
+        assert_eq!(tick(37.0, 100.0), "37");
+        assert_eq!(unit("contact_force"), "N");
+        assert_eq!(unit("rz"), "rad");
+        assert_eq!(unit("ux_node"), "m");
+        assert_eq!(unit("v_end"), "m/s");
+    }
 
     #[test]
     fn degenerate_and_non_finite_ranges_are_skipped_or_widened() {

@@ -222,3 +222,107 @@ fn contact_margins_are_reported() {
         assert!((got / f0 - 1.0).abs() < 0.005, "{id}: {got}");
     }
 }
+
+/// A shipped case with some of its text replaced (each pattern must occur).
+fn variant(id: &str, edits: &[(&str, &str)]) -> crosscheck::scene::Scene {
+    let path = crosscheck::case::cases_dir().join(format!("{id}.toml"));
+    let mut text = std::fs::read_to_string(&path).unwrap();
+    for (from, to) in edits {
+        assert!(text.contains(from), "{id}: no `{from}`");
+        text = text.replace(from, to);
+    }
+    crosscheck::case::parse(&text, &path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The grounded oscillator at ζ = 0.5, 1 and 3 (and a hair either side of critical, where the
+/// under- and over-damped forms divide by ωd → 0 and r₁ − r₂ → 0): the hand-derived forms
+/// against the reference, an ODE solution (Dop853 at rtol 1e-12) that shares no formula with
+/// them, and against the general exact linear solver (matrix exponential). Both bounds are
+/// 1e-10 of the column's peak: 1e-12 integration tolerance over the 1 s run, with margin.
+#[test]
+fn every_damping_ratio_matches_an_independent_ode_solution() {
+    use crosscheck::comparison::compare;
+    use crosscheck::engines::Engine;
+    use crosscheck::engines::analytic::{linear, springs};
+    use crosscheck::engines::reference::ReferenceEngine;
+    let (m, k): (f64, f64) = (0.02588, 30.0);
+    for zeta in [0.5, 1.0 - 1e-9, 1.0, 1.0 + 1e-9, 3.0] {
+        let c = 2.0 * zeta * (k * m).sqrt();
+        let scene = variant(
+            "springs_grounded_a",
+            &[("damping = 0.12", &format!("damping = {c:e}"))],
+        );
+        let hand = springs::solve(&scene).unwrap();
+        let reference = ReferenceEngine
+            .run(&scene, &RunSettings::default())
+            .unwrap()
+            .history;
+        let against_ode = compare(&scene, &reference, &hand);
+        assert!(
+            against_ode.worst_max <= 1e-10,
+            "ζ = {zeta}: {:e}",
+            against_ode.worst_max
+        );
+        let against_linear = compare(&scene, &linear::solve(&scene).unwrap(), &hand);
+        assert!(
+            against_linear.worst_max <= 1e-10,
+            "ζ = {zeta}: {:e}",
+            against_linear.worst_max
+        );
+    }
+    // Critical damping by hand at t = 0.1 s: u = e^(−ωn t)(1 + ωn t), u̇ = −ωn² t e^(−ωn t).
+    let wn = (k / m).sqrt();
+    let c = 2.0 * (k * m).sqrt();
+    let scene = variant(
+        "springs_grounded_a",
+        &[("damping = 0.12", &format!("damping = {c:e}"))],
+    );
+    let h = run(&AnalyticEngine, &scene, RunSettings::default());
+    let t = 0.1;
+    let decay = (-wn * t).exp();
+    assert!((at(&h, "u_end", t) - decay * (1.0 + wn * t)).abs() <= 1e-12);
+    assert!((at(&h, "v_end", t) + wn * wn * t * decay).abs() <= 1e-12 * wn);
+}
+
+/// System C turned to 30°, exactly, but with the probes' line of action given to 4 digits,
+/// (0.866, 0.5): 1.3e-5 rad off the elements, so no hand-derived form applies (they assume one
+/// line; 1 − cos θ = 8e-11 is far above round-off). `check` accepts the case, and the run
+/// does not refuse it either: `analytic` solves it with the exact linear solver, which equals
+/// the independent ODE solution (`reference`) to 1e-10 of the peak. (The elements themselves
+/// lie on the motion's line, so the reference's finite geometry adds nothing here.)
+#[test]
+fn a_line_given_to_four_digits_passes_check_and_is_solved() {
+    use crosscheck::comparison::compare;
+    use crosscheck::engines::Engine;
+    use crosscheck::engines::analytic::springs;
+    use crosscheck::engines::reference::ReferenceEngine;
+    let scene = variant(
+        "springs_grounded_c",
+        &[
+            ("direction = [1.0, 1.0]", "direction = [0.866, 0.5]"),
+            ("x_axis = [1.0, 1.0]", "x_axis = [0.8660254037844387, 0.5]"),
+            (
+                "[0.7071067811865476, 0.7071067811865476]",
+                "[0.8660254037844387, 0.5]",
+            ),
+            (
+                "[1.4142135623730951, 1.4142135623730951]",
+                "[1.7320508075688772, 1.0]",
+            ),
+        ],
+    );
+    crosscheck::run::check_scene(&scene).unwrap();
+    assert!(
+        springs::solve(&scene).is_err(),
+        "the hand form assumes one line"
+    );
+    let out = AnalyticEngine
+        .run(&scene, &RunSettings::default())
+        .unwrap_or_else(|e| panic!("refused at run time: {e}"));
+    let reference = ReferenceEngine
+        .run(&scene, &RunSettings::default())
+        .unwrap()
+        .history;
+    let c = compare(&scene, &reference, &out.history);
+    assert!(c.worst_max <= 1e-10, "{:e}", c.worst_max);
+}

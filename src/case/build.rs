@@ -248,11 +248,10 @@ pub fn scene(case: &CaseFile, stem: Option<&str>) -> Result<Scene, SceneError> {
             }
             (Dimension::Three, Some(y)) => {
                 let y = b.unit(&format!("{field}.y_axis"), y)?;
-                let y = y - x * x.dot(&y);
-                if y.norm() < 1e-12 {
+                if parallel(&x, &y) {
                     return err(format!("{field}.y_axis"), "is parallel to x_axis");
                 }
-                let y = y.normalize();
+                let y = (y - x * x.dot(&y)).normalize();
                 (y, x.cross(&y))
             }
             (Dimension::Three, None) => {
@@ -458,7 +457,7 @@ pub fn scene(case: &CaseFile, stem: Option<&str>) -> Result<Scene, SceneError> {
                 }
                 "axial" => {
                     let ns = nodes_of(2)?;
-                    if (nodes[ns[0]].position - nodes[ns[1]].position).norm() < 1e-12 {
+                    if coincident(&nodes[ns[0]].position, &nodes[ns[1]].position) {
                         return err(
                             format!("{field}.nodes"),
                             "an axial element needs two nodes at different positions",

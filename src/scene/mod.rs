@@ -378,6 +378,23 @@ pub struct SceneSettings {
 pub const DEFAULT_PENALTY_RATIO: f64 = 1.0e4;
 /// Default fraction of the stable increment.
 pub const DEFAULT_SAFETY: f64 = 0.9;
+/// Relative round-off tolerance of the scene's geometry, the one `check` and the engines share:
+/// two unit directions are parallel when 1 − |cos θ| ≤ this, and two points coincide when their
+/// distance is at most this times their size (the larger of 1 and their distance from the
+/// origin). It is round-off, not a modelling allowance: a direction given to 4 digits is not
+/// parallel to the exact one, and `analytic` then solves the scene with its general linear
+/// solver instead of a hand-derived form that assumes the elements lie on one line.
+pub const GEOMETRY_TOLERANCE: f64 = 1e-12;
+
+/// Whether unit vectors `a` and `b` are parallel (or anti-parallel) to [`GEOMETRY_TOLERANCE`].
+pub fn parallel(a: &Vector3<f64>, b: &Vector3<f64>) -> bool {
+    1.0 - a.dot(b).abs() <= GEOMETRY_TOLERANCE
+}
+
+/// Whether points `a` and `b` coincide to [`GEOMETRY_TOLERANCE`] of their size.
+pub fn coincident(a: &Vector3<f64>, b: &Vector3<f64>) -> bool {
+    (a - b).norm() <= GEOMETRY_TOLERANCE * a.norm().max(b.norm()).max(1.0)
+}
 
 /// A validated scene.
 #[derive(Debug, Clone)]

@@ -8,7 +8,9 @@
 //!   contact force, its smallest compressive margin and its validity window.
 //! - [`linear`]: a general exact solver for any linear scene without contact (springs,
 //!   dashpots, masses, small-rotation bodies); the seed cases keep their hand-derived forms so
-//!   the two cross-check each other.
+//!   the two cross-check each other. [`AnalyticEngine`] falls back to it for every scene
+//!   without contact that no hand-derived form covers, so it refuses only contact scenes
+//!   outside the rigid-contact form.
 
 pub mod linear;
 pub mod rigid;
@@ -32,9 +34,15 @@ impl Engine for AnalyticEngine {
 
     fn run(&self, scene: &Scene, _settings: &RunSettings) -> Result<RunOutput, EngineError> {
         let start = Instant::now();
-        let history = match scene.family {
-            Family::Springs => springs::solve(scene)?,
-            Family::RigidBody => rigid::solve(scene)?.history,
+        let hand = match scene.family {
+            Family::Springs => springs::solve(scene),
+            Family::RigidBody => rigid::solve(scene).map(|s| s.history),
+        };
+        // A scene without contact that no hand-derived form covers (another topology, an
+        // element off the line of action, any damping) is linear: solve it exactly.
+        let history = match hand {
+            Err(EngineError::Unsupported(_)) if scene.contacts.is_empty() => linear::solve(scene)?,
+            other => other?,
         };
         Ok(RunOutput {
             engine: self.name().into(),

@@ -4,9 +4,8 @@
 //! `u_end`/`u_mid` columns), the springs and dashpots between ground, middle and end along the
 //! line of action, the static step's initial stretch and which masses the dynamic step holds.
 //!
-//! - Middle mass held (grounded test): m ü + c u̇ + k u = 0, u(0) = u0, u̇(0) = 0, so with
-//!   ωn = √(k/m), ζ = c/(2 m ωn), ωd = ωn √(1−ζ²):
-//!   u = u0 e^(−ζωn t) (cos ωd t + ζωn/ωd sin ωd t), u̇ = −u0 (ωn²/ωd) e^(−ζωn t) sin ωd t.
+//! - Middle mass held (grounded test): m ü + c u̇ + k u = 0, u(0) = u0, u̇(0) = 0, with
+//!   ωn = √(k/m), ζ = c/(2 m ωn): under-, critically and over-damped ([`single_dof`]).
 //! - Both masses free (node-to-node test): M ü + C u̇ + K u = 0 with
 //!   M = diag(m1, m2), K = [[k1+k2, −k2], [−k2, k2]], C = [[c1+c2, −c2], [−c2, c2]]
 //!   (the dashpot between the masses only: non-proportional), exact as
@@ -14,7 +13,9 @@
 
 use super::{exponential_states, history, unsupported};
 use crate::engines::{EngineError, History};
-use crate::scene::{Attachment, Connection, Dof, Element, NodeId, Probe, Scene, StepKind};
+use crate::scene::{
+    Attachment, Connection, Dof, Element, NodeId, Probe, Scene, StepKind, parallel,
+};
 use nalgebra::{DMatrix, DVector, Vector3};
 
 /// Where an element end sits in the system.
@@ -50,7 +51,7 @@ impl System {
 
     /// The pair of roles an element joins (ground first), checking it acts along the line.
     fn ends(&self, scene: &Scene, e: &Element) -> Result<(Role, Role), EngineError> {
-        let along = |d: Vector3<f64>| (d.normalize().dot(&self.line).abs() - 1.0).abs() < 1e-12;
+        let along = |d: Vector3<f64>| parallel(&d.normalize(), &self.line);
         let (a, b) = match &e.connection {
             Connection::Grounded { node, dof } => {
                 let Dof::Translation(axis) = dof else {
@@ -92,7 +93,10 @@ fn held_along(scene: &Scene, step: usize, node: NodeId, line: &Vector3<f64>) -> 
     scene.steps[step].conditions.iter().any(|c| {
         c.node == node
             && matches!(c.dof, Dof::Translation(_))
-            && scene.nodes[node].frame.column(c.dof.axis()).dot(line).abs() > 1.0 - 1e-12
+            && parallel(
+                &scene.nodes[node].frame.column(c.dof.axis()).into_owned(),
+                line,
+            )
     })
 }
 
@@ -158,18 +162,14 @@ pub fn solve(scene: &Scene) -> Result<History, EngineError> {
         let cc = c[g][en] + c[mid][en];
         let wn = (kk / m_end).sqrt();
         let zeta = cc / (2.0 * m_end * wn);
-        if zeta >= 1.0 {
-            return unsupported("over-damped single-DOF system");
+        if !(wn > 0.0 && wn.is_finite() && zeta.is_finite()) {
+            return unsupported("no stiffness on the end mass");
         }
-        let wd = wn * (1.0 - zeta * zeta).sqrt();
         let u_mid = middle.map_or(0.0, |m| initial_stretch(scene, m, &line));
         times
             .iter()
             .map(|&t| {
-                let decay = (-zeta * wn * t).exp();
-                let (s, co) = (wd * t).sin_cos();
-                let u = u0 * decay * (co + zeta * wn / wd * s);
-                let v = -u0 * wn * wn / wd * decay * s;
+                let (u, v) = single_dof(u0, wn, zeta, t);
                 vec![u, u_mid, v, 0.0, 1.0]
             })
             .collect()
@@ -208,4 +208,36 @@ pub fn solve(scene: &Scene) -> Result<History, EngineError> {
             .collect()
     };
     Ok(history(scene, &times, rows))
+}
+
+/// Displacement and velocity of m ü + c u̇ + k u = 0 released from `u0` at rest, for any
+/// damping ratio `zeta` ≥ 0 (ωn = √(k/m) = `wn`).
+///
+/// - ζ < 1: u = u0 e^(−ζωn t) (cos ωd t + ζωn/ωd sin ωd t), u̇ = −u0 (ωn²/ωd) e^(−ζωn t) sin ωd t.
+/// - ζ ≥ 1: the roots r₁ = −ωn²/(ζωn + s) (the slow one, written without cancellation) and
+///   r₂ = −ζωn − s, s = ωn √(ζ² − 1), give u = u0 (r₁ e^(r₂t) − r₂ e^(r₁t))/(r₁ − r₂) and
+///   u̇ = u0 ωn² (e^(r₂t) − e^(r₁t))/(r₁ − r₂). With g = (e^(−2st) − 1)/(2s) (= −t at s = 0,
+///   and through `exp_m1` accurate as s → 0) they read u = u0 e^(r₁t) (1 + r₁ g) and
+///   u̇ = u0 ωn² e^(r₁t) g: one expression for critical (ζ = 1: u0 e^(−ωn t)(1 + ωn t)) and
+///   overdamped motion, with no 0/0 near ζ = 1.
+pub fn single_dof(u0: f64, wn: f64, zeta: f64, t: f64) -> (f64, f64) {
+    if zeta < 1.0 {
+        let wd = wn * (1.0 - zeta * zeta).sqrt();
+        let decay = (-zeta * wn * t).exp();
+        let (s, co) = (wd * t).sin_cos();
+        (
+            u0 * decay * (co + zeta * wn / wd * s),
+            -u0 * wn * wn / wd * decay * s,
+        )
+    } else {
+        let s = wn * ((zeta - 1.0) * (zeta + 1.0)).sqrt();
+        let r1 = -wn * wn / (zeta * wn + s);
+        let g = if s > 0.0 {
+            (-2.0 * s * t).exp_m1() / (2.0 * s)
+        } else {
+            -t
+        };
+        let slow = (r1 * t).exp();
+        (u0 * slow * (1.0 + r1 * g), u0 * wn * wn * slow * g)
+    }
 }

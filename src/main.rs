@@ -8,9 +8,11 @@
 
 use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand, ValueEnum};
 use crosscheck::case;
+use crosscheck::comparison::discrepancy;
 use crosscheck::engines::RunSettings;
 use crosscheck::interrupt;
 use crosscheck::report::{self, staging};
+use crosscheck::run::refinement::Depth;
 use crosscheck::run::{self, LoadError, Plan, budget};
 use crosscheck::scene::{ContactStart, DampingTreatment, Dimension, IncrementRule, PenaltyRule};
 use std::io::Write;
@@ -504,7 +506,12 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
     if interrupt::requested() {
         return interrupted();
     }
-    let summary = match report::write(staging.path(), &plan, &outcome, staging.target()) {
+    let budgets = discrepancy::measure(&plan, &outcome, Depth::Basic, !args.quiet);
+    let budgeted = started.elapsed().as_secs_f64();
+    if interrupt::requested() {
+        return interrupted();
+    }
+    let summary = match report::write(staging.path(), &plan, &outcome, &budgets, staging.target()) {
         Ok(s) => s,
         Err(report::data::DataError::Interrupted) => return interrupted(),
         Err(e) => {
@@ -533,10 +540,11 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
         checks.len()
     ));
     out.print(&format!(
-        "time: load and check {:.2} s, jobs {:.2} s, report {:.2} s, swap {:.2} s; total {:.2} s\n",
+        "time: load and check {:.2} s, jobs {:.2} s, budget {:.2} s, report {:.2} s, swap {:.2} s; total {:.2} s\n",
         loaded,
         ran - loaded,
-        written - ran,
+        budgeted - ran,
+        written - budgeted,
         swapped - written,
         swapped
     ));

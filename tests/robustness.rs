@@ -60,7 +60,8 @@ fn a_failed_case_does_not_stop_the_others() {
             .all(|j| j.is_ok())
     );
     let summary =
-        crosscheck::report::write(out.path(), &plan, &outcome, &out.path().join("none")).unwrap();
+        crosscheck::report::write(out.path(), &plan, &outcome, &[], &out.path().join("none"))
+            .unwrap();
     let bad_runs = &summary
         .cases
         .iter()

@@ -12,6 +12,8 @@
 //! balance error of an engine that writes `e_balance` is its largest magnitude divided by the
 //! largest kinetic + elastic energy of the run.
 
+pub mod discrepancy;
+
 use crate::contract::{self, History, VALID_COLUMN};
 use crate::scene::Scene;
 use serde::{Deserialize, Serialize};

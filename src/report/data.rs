@@ -65,6 +65,14 @@ pub fn csv_path(out: &Path, case_id: &str, engine: &str) -> PathBuf {
     out.join("data").join(case_id).join(format!("{engine}.csv"))
 }
 
+/// The path of a case's discrepancy budget for one engine:
+/// `out/data/<case_id>/<engine>.budget.csv`.
+pub fn budget_path(out: &Path, case_id: &str, engine: &str) -> PathBuf {
+    out.join("data")
+        .join(case_id)
+        .join(format!("{engine}.budget.csv"))
+}
+
 /// Write `history` to `out/data/<case_id>/<engine>.csv` (creating directories as needed,
 /// atomically replacing any previous file) and return the path written.
 pub fn write_history(

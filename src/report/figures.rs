@@ -3,6 +3,7 @@
 
 use crate::contract::History;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::path::{Path, PathBuf};
 
 /// Engines drawn, with their colours, in drawing order (the closed form last, on top).
@@ -170,6 +171,115 @@ pub fn render(case: &str, columns: &[&str], histories: &[(&str, History)]) -> Op
                     .ok()?;
             }
         }
+        root.present().ok()?;
+    }
+    Some(svg)
+}
+
+/// `out/figures/budget-<family>.svg`.
+pub fn budget_figure_path(out: &Path, family: &str) -> PathBuf {
+    out.join("figures").join(format!("budget-{family}.svg"))
+}
+
+/// The budget's parts, with their colours, in stacking order.
+const PARTS: [(&str, RGBColor); 4] = [
+    ("model_form", RGBColor(150, 150, 150)),
+    ("time_step", RGBColor(31, 119, 180)),
+    ("penalty", RGBColor(255, 127, 14)),
+    ("solver", RGBColor(214, 39, 40)),
+];
+
+/// One bar of the budget figure: its label, the four parts' norms (model form, time step,
+/// penalty, solver) of the run's worst column, and that column's total.
+pub struct BudgetBar {
+    /// `case / engine (column)`.
+    pub label: String,
+    /// The parts' norms, in [`PARTS`] order.
+    pub parts: [f64; 4],
+    /// The total's norm.
+    pub total: f64,
+}
+
+/// Render a family's budget: one horizontal bar per case and engine, each part's share of the
+/// sum of the parts' norms (the norms are maxima over time, so they need not add up to the
+/// total's; the shares show which source dominates), the total's norm printed at its end.
+pub fn render_budget(family: &str, bars: &[BudgetBar]) -> Option<String> {
+    if bars.is_empty() {
+        return None;
+    }
+    const ROW: i32 = 18;
+    const TOP: i32 = 70;
+    let (label_w, bar_x, bar_w) = (380, 390, 440);
+    let height = (TOP + ROW * bars.len() as i32 + 50) as u32;
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (1000, height)).into_drawing_area();
+        root.fill(&WHITE).ok()?;
+        let font = |size| ("sans-serif", size).into_font();
+        root.draw(&Text::new(
+            format!("Discrepancy budget, {family}: share of each source (worst column per run)"),
+            (10, 8),
+            font(18),
+        ))
+        .ok()?;
+        for (k, (name, colour)) in PARTS.iter().enumerate() {
+            let x = bar_x + 110 * k as i32;
+            root.draw(&Rectangle::new([(x, 40), (x + 14, 54)], colour.filled()))
+                .ok()?;
+            root.draw(&Text::new(name.to_string(), (x + 18, 41), font(12)))
+                .ok()?;
+        }
+        root.draw(&Text::new(
+            "total error / peak".to_string(),
+            (bar_x + bar_w + 12, 41),
+            font(12),
+        ))
+        .ok()?;
+        for (i, bar) in bars.iter().enumerate() {
+            let y = TOP + ROW * i as i32;
+            let right = TextStyle::from(font(11)).pos(Pos::new(HPos::Right, VPos::Top));
+            root.draw(&Text::new(bar.label.clone(), (label_w, y + 3), right))
+                .ok()?;
+            let sum: f64 = bar.parts.iter().sum();
+            let mut x = bar_x as f64;
+            if sum > 0.0 && sum.is_finite() {
+                for (part, (_, colour)) in bar.parts.iter().zip(PARTS) {
+                    let w = bar_w as f64 * part / sum;
+                    root.draw(&Rectangle::new(
+                        [
+                            (x.round() as i32, y + 2),
+                            ((x + w).round() as i32, y + ROW - 2),
+                        ],
+                        colour.filled(),
+                    ))
+                    .ok()?;
+                    x += w;
+                }
+            }
+            root.draw(&Text::new(
+                crate::report::markdown::sci(bar.total),
+                (bar_x + bar_w + 12, y + 3),
+                font(11),
+            ))
+            .ok()?;
+        }
+        // Axis: share in per cent.
+        let y = TOP + ROW * bars.len() as i32 + 4;
+        root.draw(&PathElement::new([(bar_x, y), (bar_x + bar_w, y)], BLACK))
+            .ok()?;
+        for k in 0..=4 {
+            let x = bar_x + bar_w * k / 4;
+            root.draw(&PathElement::new([(x, y), (x, y + 5)], BLACK))
+                .ok()?;
+            root.draw(&Text::new(format!("{}", 25 * k), (x - 8, y + 8), font(11)))
+                .ok()?;
+        }
+        root.draw(&Text::new(
+            "share of the parts' norms [%]".to_string(),
+            (bar_x + bar_w / 2 - 80, y + 24),
+            font(12),
+        ))
+        .ok()?;
         root.present().ok()?;
     }
     Some(svg)

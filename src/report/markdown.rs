@@ -2,6 +2,7 @@
 
 use super::Timings;
 use super::summary::{CaseSummary, EngineSummary, Summary};
+use crate::comparison::discrepancy::Order;
 use std::fmt::Write;
 
 /// A number as the report prints it.
@@ -405,6 +406,7 @@ fn case_section(w: &mut String, c: &CaseSummary) {
         };
         let _ = writeln!(w, "\n{kind}");
     }
+    budget_table(w, c);
     let _ = writeln!(
         w,
         "\n| engine | against | column | peak | max | rms | end |"
@@ -430,5 +432,54 @@ fn case_section(w: &mut String, c: &CaseSummary) {
                 );
             }
         }
+    }
+}
+
+fn order(o: Option<&Order>) -> String {
+    match o {
+        None => "–".into(),
+        Some(Order::Observed(p)) => format!("{p:.2}"),
+        Some(Order::Converged) => "converged".into(),
+        Some(Order::NotAsymptotic) => "not asymptotic".into(),
+    }
+}
+
+/// The discrepancy budget of each engine's worst column.
+fn budget_table(w: &mut String, c: &CaseSummary) {
+    let rows: Vec<_> = c
+        .runs
+        .iter()
+        .filter_map(|r| Some((r, r.dominant_source()?)))
+        .collect();
+    if rows.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        w,
+        "\nDiscrepancy budget against the closed form, each engine's worst column (largest value over \
+         the column's peak; the histories, which add up row by row, are in \
+         `data/{}/<engine>.budget.csv`):\n",
+        c.id
+    );
+    let _ = writeln!(
+        w,
+        "| engine | column | total | model form | time step | penalty | solver | order in h | order in 1/k_p | dominant |"
+    );
+    let _ = writeln!(w, "|---|---|---:|---:|---:|---:|---:|---:|---:|---|");
+    for (r, (b, dominant, _)) in rows {
+        let _ = writeln!(
+            w,
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            r.engine,
+            b.column,
+            sci(b.total),
+            sci(b.model_form),
+            sci(b.time_step),
+            sci(b.penalty),
+            sci(b.solver),
+            order(Some(&b.time_order)),
+            order(b.penalty_order.as_ref()),
+            dominant.replace('_', " ")
+        );
     }
 }

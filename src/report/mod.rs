@@ -16,8 +16,10 @@ pub mod scaling;
 pub mod staging;
 pub mod summary;
 
+use crate::comparison::discrepancy::JobBudget;
 use crate::contract::{self, History};
 use crate::run::{Outcome, Plan};
+use crate::scene::Family;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -45,11 +47,14 @@ pub fn write(
     out: &Path,
     plan: &Plan,
     outcome: &Outcome,
+    budgets: &[JobBudget],
     previous: &Path,
 ) -> Result<Summary, data::DataError> {
     write_histories(out, outcome)?;
+    write_budgets(out, budgets)?;
     checkpoint("summary")?;
     let mut summary = Summary::build(plan, outcome, out);
+    summary.attach_budgets(budgets);
     let mut timings: Timings = read_json(&timings_path(previous)).unwrap_or_default();
     if let Some(old) = read_json::<Summary>(&summary_path(previous)) {
         summary.merge_previous(old);
@@ -79,6 +84,29 @@ pub fn write(
             data::write_atomic(&figures::figure_path(out, &case.id), svg.as_bytes())?;
         }
     }
+    for family in [Family::RigidBody, Family::Springs] {
+        let bars: Vec<figures::BudgetBar> = summary
+            .cases
+            .iter()
+            .filter(|c| c.family == family.name())
+            .flat_map(|c| c.runs.iter().map(move |r| (c, r)))
+            .filter_map(|(c, r)| {
+                let (worst, _, _) = r.dominant_source()?;
+                Some(figures::BudgetBar {
+                    label: format!("{} / {} ({})", c.id, r.engine, worst.column),
+                    parts: worst.parts(),
+                    total: worst.total,
+                })
+            })
+            .collect();
+        if let Some(svg) = figures::render_budget(family.name(), &bars) {
+            checkpoint("figures")?;
+            data::write_atomic(
+                &figures::budget_figure_path(out, family.name()),
+                svg.as_bytes(),
+            )?;
+        }
+    }
     data::write_atomic(&summary_path(out), summary.to_json().as_bytes())?;
     let json = serde_json::to_string_pretty(&timings).expect("timings serialise") + "\n";
     data::write_atomic(&timings_path(out), json.as_bytes())?;
@@ -88,6 +116,17 @@ pub fn write(
         markdown::render(&summary, &timings).as_bytes(),
     )?;
     Ok(summary)
+}
+
+/// Write each job's discrepancy budget to `out/data/<case>/<engine>.budget.csv`.
+pub fn write_budgets(out: &Path, budgets: &[JobBudget]) -> Result<(), data::DataError> {
+    budgets
+        .par_iter()
+        .filter_map(|b| Some((b, &b.result.as_ref().ok()?.0)))
+        .try_for_each(|(b, budget)| {
+            checkpoint("csv")?;
+            data::write_history_to(&data::budget_path(out, &b.case, &b.engine), &budget.history)
+        })
 }
 
 /// Write each successful job's history to `out/data/<case>/<engine>.csv` (in parallel; each

@@ -1,6 +1,7 @@
 //! `summary.json`: every metric of a run, per case and engine, with what each run used and
 //! cost. REPORT.md is rendered from the same [`Summary`], so their numbers agree.
 
+use crate::comparison::discrepancy::{ColumnBudget, JobBudget, PARTS};
 use crate::comparison::{self, CLOSED_FORM, Comparison, ContactValidity};
 use crate::contract::History;
 use crate::report::data::{csv_path, read_history};
@@ -100,6 +101,32 @@ pub struct EngineSummary {
     pub tolerance: Option<f64>,
     /// Whether `against_baseline.worst_max` ≤ `tolerance`.
     pub meets_tolerance: Option<bool>,
+    /// The discrepancy budget's norms per contract column
+    /// ([`comparison::discrepancy`]; the histories are in `data/<case>/<engine>.budget.csv`).
+    #[serde(default)]
+    pub budget: Option<Vec<ColumnBudget>>,
+    /// Why this run has no budget, where it should have one.
+    #[serde(default)]
+    pub budget_error: Option<String>,
+}
+
+impl EngineSummary {
+    /// The budget's worst column (largest total) and its dominant part (name, norm): the source
+    /// that explains most of the discrepancy.
+    pub fn dominant_source(&self) -> Option<(&ColumnBudget, &'static str, f64)> {
+        let worst = self
+            .budget
+            .as_ref()?
+            .iter()
+            .filter(|c| c.relative)
+            .max_by(|a, b| a.total.total_cmp(&b.total))?;
+        let (k, norm) = worst
+            .parts()
+            .into_iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(&b.1))?;
+        Some((worst, PARTS[k + 1], norm))
+    }
 }
 
 impl Summary {
@@ -225,6 +252,24 @@ impl Summary {
         }
     }
 
+    /// Put each job's budget norms (or why it has none) on its run entry.
+    pub fn attach_budgets(&mut self, budgets: &[JobBudget]) {
+        for b in budgets {
+            let run = self
+                .cases
+                .iter_mut()
+                .filter(|c| c.id == b.case)
+                .flat_map(|c| c.runs.iter_mut())
+                .find(|r| r.engine == b.engine);
+            if let Some(run) = run {
+                match &b.result {
+                    Ok((basic, _)) => run.budget = Some(basic.columns.clone()),
+                    Err(e) => run.budget_error = Some(e.clone()),
+                }
+            }
+        }
+    }
+
     /// A case's cross-check of `candidate` against `reference`, if both ran.
     pub fn cross<'a>(
         case: &'a CaseSummary,
@@ -306,6 +351,8 @@ fn engine_summary(
             against_baseline: None,
             tolerance,
             meets_tolerance: tolerance.map(|_| false),
+            budget: None,
+            budget_error: None,
         },
         Ok(s) => {
             let against = (job.engine != CLOSED_FORM)
@@ -330,6 +377,8 @@ fn engine_summary(
                 against_baseline: judged,
                 tolerance,
                 meets_tolerance: meets,
+                budget: None,
+                budget_error: None,
             }
         }
     }

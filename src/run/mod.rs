@@ -18,12 +18,15 @@
 //! - [`load`]: resolve and validate the cases (with the checks that need an engine);
 //! - [`matching`]: what "matched settings" means: the settings one engine's job gets from
 //!   another engine's rules (rapier's increment is the explicit engine's);
+//! - [`refinement`]: a job's engine rerun at other increments and penalties (for the
+//!   discrepancy budget the comparison takes);
 //! - [`budget`]: each job's increments, rows and memory estimated and bounded before it runs;
 //! - this module: the jobs, run in parallel, their results in plan order.
 
 pub mod budget;
 pub mod load;
 pub mod matching;
+pub mod refinement;
 pub mod scaling;
 
 pub use load::{
@@ -173,16 +176,7 @@ pub fn execute(plan: &Plan, progress: bool) -> Outcome {
         .iter()
         .flat_map(|c| plan.engines.iter().map(move |e| (c, e.as_ref())))
         .collect();
-    let bar = if progress && std::io::stderr().is_terminal() {
-        ProgressBar::new(jobs.len() as u64)
-    } else {
-        ProgressBar::hidden()
-    };
-    bar.set_style(
-        ProgressStyle::with_template("[{elapsed_precise}] {bar:30} {pos}/{len} {msg}")
-            .expect("valid progress template")
-            .progress_chars("=> "),
-    );
+    let bar = progress_bar(jobs.len(), progress);
     let results = jobs
         .par_iter()
         .map(|&(scene, engine)| {
@@ -194,6 +188,22 @@ pub fn execute(plan: &Plan, progress: bool) -> Outcome {
         .collect();
     bar.finish_and_clear();
     Outcome { jobs: results }
+}
+
+/// A progress bar on stderr for `len` tasks, hidden unless `progress` is set and stderr is a
+/// terminal.
+pub fn progress_bar(len: usize, progress: bool) -> ProgressBar {
+    let bar = if progress && std::io::stderr().is_terminal() {
+        ProgressBar::new(len as u64)
+    } else {
+        ProgressBar::hidden()
+    };
+    bar.set_style(
+        ProgressStyle::with_template("[{elapsed_precise}] {bar:30} {pos}/{len} {msg}")
+            .expect("valid progress template")
+            .progress_chars("=> "),
+    );
+    bar
 }
 
 /// Run one job: its settings, the engine, the contract check.

@@ -49,8 +49,8 @@
 //! lumped body gains 61 J over 0.1 s): the 3D f32 runs drift from their 2D twins by up to
 //! 8e-3 of the peak for that reason.
 //!
-//! Of the run overrides ([`RunSettings`]) only `increment` applies, and only to the matched
-//! configuration: rapier has no penalty stiffness, its dashpots are implicit whatever the
+//! Of the run overrides ([`RunSettings`]) only `increment` applies: to the matched
+//! configuration, and to the default one only when forced (a study refining its 1/60 s): rapier has no penalty stiffness, its dashpots are implicit whatever the
 //! damping treatment, and its contact always starts touching.
 //!
 //! Sleeping is disabled on every body in both configurations (a body put to sleep would freeze
@@ -82,7 +82,8 @@ pub enum Configuration {
     Matched(MatchedSettings),
     /// What a typical user gets: `IntegrationParameters::default()` (4 substeps, 1 PGS sweep,
     /// contact softness 30 Hz / ζ = 10, 60 Hz against fixed bodies, contact recycling) and
-    /// dt = 1/60 s whatever the case says (an `--increment` override does not apply). The
+    /// dt = 1/60 s whatever the case says (an `--increment` override does not apply; a forced
+    /// increment, [`IncrementRule::Forced`], does: studies refine it). The
     /// output times fall between steps: positions and velocities are interpolated linearly
     /// (rotations by slerp) between the two steps around each output time. At 1/60 s the
     /// implicit springs are far past their frequencies (ω·h/4 ≈ 1.6 for the 374 rad/s rigid
@@ -202,7 +203,7 @@ impl RapierEngine {
         let plan = plan::plan(scene)?;
         let (dt, solver) = match self.configuration {
             Configuration::Matched(m) => (own_increment(scene, settings), Some(m)),
-            Configuration::Default => (DEFAULT_INCREMENT, None),
+            Configuration::Default => (default_increment(settings), None),
         };
         let run = backend::Run {
             dt,
@@ -269,7 +270,7 @@ impl Engine for RapierEngine {
     fn increments(&self, scene: &Scene, settings: &RunSettings) -> Option<f64> {
         let dt = match self.configuration {
             Configuration::Matched(_) => own_increment(scene, settings),
-            Configuration::Default => DEFAULT_INCREMENT,
+            Configuration::Default => default_increment(settings),
         };
         Some(scene.duration() / dt)
     }
@@ -305,6 +306,16 @@ pub fn own_increment(scene: &Scene, settings: &RunSettings) -> f64 {
             interval / (interval / h - 1e-9).ceil().max(1.0)
         }
         IncrementRule::Accuracy(_) | IncrementRule::Stable { .. } => interval,
+    }
+}
+
+/// The increment of a default-configuration run: 1/60 s, unless a study forces another
+/// ([`IncrementRule::Forced`], as the discrepancy budget's refinement does); a case's or a
+/// run's ordinary increment (`--increment`) does not apply to it.
+pub fn default_increment(settings: &RunSettings) -> f64 {
+    match settings.increment {
+        Some(IncrementRule::Forced(h)) => h,
+        _ => DEFAULT_INCREMENT,
     }
 }
 

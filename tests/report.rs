@@ -115,3 +115,69 @@ fn summary_and_report_agree() {
         summary.tolerance_checks().len()
     )));
 }
+
+/// REPORT.md opens with the verdict matrix: every cell equals the summary's figure for that
+/// case and engine (✓/✗ from `meets_tolerance`, the number from `against_baseline`); every
+/// link of the report resolves to a file of the run, and every figure is an SVG document.
+#[test]
+fn verdict_matrix_equals_the_summary_and_every_link_resolves() {
+    let out = tempfile::tempdir().unwrap();
+    let status = Command::new(env!("CARGO_BIN_EXE_crosscheck"))
+        .args(["run", "--quiet", "--out"])
+        .arg(out.path())
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let summary: Summary =
+        serde_json::from_str(&std::fs::read_to_string(out.path().join("summary.json")).unwrap())
+            .unwrap();
+    let report = std::fs::read_to_string(out.path().join("REPORT.md")).unwrap();
+    let matrix = report
+        .split("## Verdicts")
+        .nth(1)
+        .expect("a verdict section")
+        .split("\n## ")
+        .next()
+        .unwrap();
+    let mut lines = matrix.lines().filter(|l| l.starts_with('|'));
+    let header: Vec<String> = lines
+        .next()
+        .unwrap()
+        .split('|')
+        .map(|s| s.trim().trim_matches('`').to_string())
+        .collect();
+    let mut cells = 0;
+    for line in lines.skip(1) {
+        let row: Vec<&str> = line.split('|').map(str::trim).collect();
+        let case = summary.cases.iter().find(|c| c.id == row[1]).unwrap();
+        for (k, engine) in header.iter().enumerate().skip(2) {
+            if engine.is_empty() {
+                continue;
+            }
+            let run = case.runs.iter().find(|r| &r.engine == engine).unwrap();
+            let figure = sci(run.against_baseline.as_ref().unwrap().worst_max);
+            let expected = match run.meets_tolerance {
+                Some(true) => format!("✓ {figure}"),
+                Some(false) => format!("✗ {figure}"),
+                None => figure,
+            };
+            assert_eq!(row[k], expected, "{} / {engine}", case.id);
+            cells += 1;
+        }
+    }
+    assert_eq!(cells, 13 * 7, "every case × engine but the closed form");
+    let mut links = 0;
+    for piece in report.split("](").skip(1) {
+        let target = piece.split(')').next().unwrap();
+        assert!(out.path().join(target).is_file(), "link {target}");
+        links += 1;
+        if target.ends_with(".svg") {
+            let svg = std::fs::read_to_string(out.path().join(target)).unwrap();
+            assert!(
+                svg.contains("<svg") && svg.trim_end().ends_with("</svg>"),
+                "{target} is not an SVG document"
+            );
+        }
+    }
+    assert!(links >= 13, "one figure per case at least, found {links}");
+}

@@ -1,6 +1,7 @@
 //! `REPORT.md`, rendered from a [`Summary`]: every number in it is one of the summary's.
 
 use super::Timings;
+use super::provenance::Provenance;
 use super::summary::{CaseSummary, EngineSummary, Summary};
 use crate::comparison::discrepancy::Order;
 use std::fmt::Write;
@@ -28,10 +29,11 @@ fn total(r: &EngineSummary) -> Option<f64> {
 }
 
 /// Render the report.
-pub fn render(s: &Summary, timings: &Timings) -> String {
+pub fn render(s: &Summary, timings: &Timings, provenance: &Provenance) -> String {
     let mut o = String::new();
     let w = &mut o;
     let _ = writeln!(w, "# crosscheck report\n");
+    at_a_glance(w, s, provenance);
     let _ = writeln!(
         w,
         "crosscheck runs classic explicit-dynamics verification problems whose exact answer is known \
@@ -481,5 +483,133 @@ fn budget_table(w: &mut String, c: &CaseSummary) {
             order(b.penalty_order.as_ref()),
             dominant.replace('_', " ")
         );
+    }
+}
+
+/// One screen: what was run, the verdict matrix, the dominant source of each discrepancy.
+fn at_a_glance(w: &mut String, s: &Summary, p: &Provenance) {
+    let _ = writeln!(
+        w,
+        "**What was run.** {}; {}; {}. Machine: {}. Date (UTC): {}. Settings: {}.\n",
+        p.version, p.rustc, p.rapier, p.machine, p.date, p.settings
+    );
+    let engines: Vec<&String> = s.engines.iter().filter(|e| *e != "analytic").collect();
+    let _ = writeln!(
+        w,
+        "## Verdicts\n\nEach cell: the engine's worst error against the exact solution of its own model \
+         (largest error over the column's peak, worst column; `reference` and `explicit_small` against \
+         `analytic`, `explicit` and rapier against `reference`), marked ✓ where it meets the case's declared \
+         tolerance, ✗ where it does not, and unmarked where the case declares none.\n"
+    );
+    let _ = writeln!(
+        w,
+        "| case | {} |",
+        engines
+            .iter()
+            .map(|e| format!("`{e}`"))
+            .collect::<Vec<_>>()
+            .join(" | ")
+    );
+    let _ = writeln!(w, "|---|{}", "---:|".repeat(engines.len()));
+    for c in &s.cases {
+        let cells: Vec<String> = engines
+            .iter()
+            .map(|e| match c.runs.iter().find(|r| &&r.engine == e) {
+                None => "–".into(),
+                Some(r) => verdict_cell(r),
+            })
+            .collect();
+        let _ = writeln!(w, "| {} | {} |", c.id, cells.join(" | "));
+    }
+    let stepping: Vec<&String> = engines
+        .iter()
+        .copied()
+        .filter(|e| {
+            s.cases
+                .iter()
+                .flat_map(|c| &c.runs)
+                .any(|r| &&r.engine == e && r.budget.is_some())
+        })
+        .collect();
+    if stepping.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        w,
+        "\n## Where each discrepancy comes from\n\nEach engine's error against the closed form \
+         (`analytic`) is split into four parts that add up to it row by row (the discrepancy budget, \
+         in each case's section): *model form* (the finite-rotation model against the closed form's \
+         linearised one), *time step* (the run against the same engine at h → 0), *penalty* \
+         (penalty contact against rigid contact, k_p → ∞) and *solver* (what remains against the \
+         engine's own model). Each cell names the largest part of the engine's worst column, with its \
+         value over the column's peak, and where that is model form, the largest of the engine's own \
+         parts.\n"
+    );
+    let _ = writeln!(
+        w,
+        "| case | {} |",
+        stepping
+            .iter()
+            .map(|e| format!("`{e}`"))
+            .collect::<Vec<_>>()
+            .join(" | ")
+    );
+    let _ = writeln!(w, "|---|{}", "---|".repeat(stepping.len()));
+    for c in &s.cases {
+        let cells: Vec<String> = stepping
+            .iter()
+            .map(|e| {
+                c.runs
+                    .iter()
+                    .find(|r| &&r.engine == e)
+                    .and_then(|r| r.dominant_source())
+                    .map_or("–".into(), |(col, part, norm)| {
+                        let mut cell =
+                            format!("{} {} ({})", part.replace('_', " "), sci(norm), col.column);
+                        // Behind the model form, what the engine itself contributes.
+                        let own = [
+                            ("time step", col.time_step),
+                            ("penalty", col.penalty),
+                            ("solver", col.solver),
+                        ]
+                        .into_iter()
+                        .max_by(|a, b| a.1.total_cmp(&b.1));
+                        if let (true, Some((name, v))) = (part == "model_form", own) {
+                            let _ = write!(cell, "; own: {name} {}", sci(v));
+                        }
+                        cell
+                    })
+            })
+            .collect();
+        let _ = writeln!(w, "| {} | {} |", c.id, cells.join(" | "));
+    }
+    let mut families: Vec<&str> = s
+        .cases
+        .iter()
+        .filter(|c| c.runs.iter().any(|r| r.budget.is_some()))
+        .map(|c| c.family.as_str())
+        .collect();
+    families.dedup();
+    for f in families {
+        let _ = writeln!(
+            w,
+            "\n![discrepancy budget, {f}: each source's share](figures/budget-{f}.svg)"
+        );
+    }
+    let _ = writeln!(w);
+}
+
+/// A verdict matrix cell: ✓/✗ and the worst error against the engine's own model.
+pub fn verdict_cell(r: &EngineSummary) -> String {
+    if r.error.is_some() {
+        return "failed".into();
+    }
+    let Some(a) = &r.against_baseline else {
+        return "–".into();
+    };
+    match r.meets_tolerance {
+        Some(true) => format!("✓ {}", sci(a.worst_max)),
+        Some(false) => format!("✗ {}", sci(a.worst_max)),
+        None => sci(a.worst_max),
     }
 }

@@ -7,11 +7,13 @@
 //! - `timings.json`: wall-clock seconds per case and engine (the one thing that varies);
 //! - [`figures`]: `figures/<case>.svg`, each case's histories drawn;
 //! - [`markdown`]: `REPORT.md`, rendered from the summary and the timings;
+//! - [`provenance`]: what was run (version, commit, compiler, rapier, machine, date);
 //! - [`staging`]: how a report is assembled beside its target and swapped into place.
 
 pub mod data;
 pub mod figures;
 pub mod markdown;
+pub mod provenance;
 pub mod scaling;
 pub mod staging;
 pub mod summary;
@@ -113,7 +115,12 @@ pub fn write(
     checkpoint("report")?;
     data::write_atomic(
         &report_path(out),
-        markdown::render(&summary, &timings).as_bytes(),
+        markdown::render(
+            &summary,
+            &timings,
+            &provenance::Provenance::gather(&plan.settings),
+        )
+        .as_bytes(),
     )?;
     Ok(summary)
 }

@@ -7,8 +7,8 @@ use crosscheck::report::markdown::sci;
 use crosscheck::report::summary::Summary;
 use std::process::Command;
 
-#[test]
-fn summary_and_report_agree() {
+/// Run every case into a temporary directory: the directory, its summary and its REPORT.md.
+fn run_into_temporary_directory() -> (tempfile::TempDir, Summary, String) {
     let out = tempfile::tempdir().unwrap();
     let status = Command::new(env!("CARGO_BIN_EXE_crosscheck"))
         .args(["run", "--quiet", "--out"])
@@ -20,6 +20,12 @@ fn summary_and_report_agree() {
         serde_json::from_str(&std::fs::read_to_string(out.path().join("summary.json")).unwrap())
             .unwrap();
     let report = std::fs::read_to_string(out.path().join("REPORT.md")).unwrap();
+    (out, summary, report)
+}
+
+#[test]
+fn summary_and_report_agree() {
+    let (out, summary, report) = run_into_temporary_directory();
     assert_eq!(summary.cases.len(), 13);
 
     let mut checked = 0;
@@ -121,17 +127,7 @@ fn summary_and_report_agree() {
 /// link of the report resolves to a file of the run, and every figure is an SVG document.
 #[test]
 fn verdict_matrix_equals_the_summary_and_every_link_resolves() {
-    let out = tempfile::tempdir().unwrap();
-    let status = Command::new(env!("CARGO_BIN_EXE_crosscheck"))
-        .args(["run", "--quiet", "--out"])
-        .arg(out.path())
-        .status()
-        .unwrap();
-    assert!(status.success());
-    let summary: Summary =
-        serde_json::from_str(&std::fs::read_to_string(out.path().join("summary.json")).unwrap())
-            .unwrap();
-    let report = std::fs::read_to_string(out.path().join("REPORT.md")).unwrap();
+    let (out, summary, report) = run_into_temporary_directory();
     let matrix = report
         .split("## Verdicts")
         .nth(1)

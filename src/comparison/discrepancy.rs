@@ -24,7 +24,8 @@
 //! round-off (1e-12 of its scale) is converged in that parameter; one whose differences do not
 //! shrink with the parameter has no order, is left at its finest run and flagged.
 
-use crate::contract::{History, VALID_COLUMN};
+use super::valid_rows;
+use crate::contract::History;
 use crate::run::refinement::{Direction, Ladder, PenaltyLevel};
 use crate::scene::Scene;
 use serde::{Deserialize, Serialize};
@@ -55,16 +56,6 @@ pub enum Order {
     /// The differences do not shrink as the parameter does (or not like a power of it): no
     /// extrapolation; the finest run stands for the limit.
     NotAsymptotic,
-}
-
-impl Order {
-    /// The observed order, if there is one.
-    pub fn value(&self) -> Option<f64> {
-        match self {
-            Order::Observed(p) => Some(*p),
-            _ => None,
-        }
-    }
 }
 
 /// Extrapolate three runs `(s, values)` of one column to s → 0 (`scale`: the column's size, for
@@ -160,13 +151,6 @@ pub struct Budget {
     pub history: History,
     /// Norms per column.
     pub columns: Vec<ColumnBudget>,
-}
-
-fn valid_rows(h: &History) -> usize {
-    match h.column(VALID_COLUMN) {
-        Some(v) => v.iter().position(|x| *x == 0.0).unwrap_or(v.len()),
-        None => h.rows.len(),
-    }
 }
 
 fn column(h: &History, name: &str, n: usize) -> Result<Vec<f64>, String> {

@@ -79,6 +79,7 @@ pub struct ContactValidity {
     pub valid_until: Option<f64>,
 }
 
+/// Rows before the first one an exact solution marks invalid (all rows without a `valid` column).
 fn valid_rows(reference: &History) -> usize {
     match reference.column(VALID_COLUMN) {
         Some(v) => v.iter().position(|x| *x == 0.0).unwrap_or(v.len()),

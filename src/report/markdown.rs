@@ -501,16 +501,7 @@ fn at_a_glance(w: &mut String, s: &Summary, p: &Provenance) {
          `analytic`, `explicit` and rapier against `reference`), marked ✓ where it meets the case's declared \
          tolerance, ✗ where it does not, and unmarked where the case declares none.\n"
     );
-    let _ = writeln!(
-        w,
-        "| case | {} |",
-        engines
-            .iter()
-            .map(|e| format!("`{e}`"))
-            .collect::<Vec<_>>()
-            .join(" | ")
-    );
-    let _ = writeln!(w, "|---|{}", "---:|".repeat(engines.len()));
+    engine_table_header(w, &engines, "---:|");
     for c in &s.cases {
         let cells: Vec<String> = engines
             .iter()
@@ -545,16 +536,7 @@ fn at_a_glance(w: &mut String, s: &Summary, p: &Provenance) {
          value over the column's peak, and where that is model form, the largest of the engine's own \
          parts.\n"
     );
-    let _ = writeln!(
-        w,
-        "| case | {} |",
-        stepping
-            .iter()
-            .map(|e| format!("`{e}`"))
-            .collect::<Vec<_>>()
-            .join(" | ")
-    );
-    let _ = writeln!(w, "|---|{}", "---|".repeat(stepping.len()));
+    engine_table_header(w, &stepping, "---|");
     for c in &s.cases {
         let cells: Vec<String> = stepping
             .iter()
@@ -612,4 +594,11 @@ pub fn verdict_cell(r: &EngineSummary) -> String {
         Some(false) => format!("✗ {}", sci(a.worst_max)),
         None => sci(a.worst_max),
     }
+}
+
+/// The header of a cases × engines table: `case`, then each engine, cells aligned by `align`.
+fn engine_table_header(w: &mut String, engines: &[&String], align: &str) {
+    let names: Vec<String> = engines.iter().map(|e| format!("`{e}`")).collect();
+    let _ = writeln!(w, "| case | {} |", names.join(" | "));
+    let _ = writeln!(w, "|---|{}", align.repeat(engines.len()));
 }

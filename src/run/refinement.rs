@@ -69,28 +69,8 @@ pub struct PenaltyLevel {
 pub struct Ladder {
     /// How the time levels go.
     pub direction: Direction,
-    /// How many levels it has.
-    pub depth: Depth,
     /// Penalty levels k₀, 4k₀, 16k₀ (64k₀), or the one level of an engine without penalty.
     pub levels: Vec<PenaltyLevel>,
-}
-
-impl Ladder {
-    /// Runs the ladder took beyond the job itself.
-    pub fn reruns(&self) -> usize {
-        self.levels.iter().map(|l| l.rungs.len()).sum::<usize>() - 1
-    }
-}
-
-/// The factor a ladder multiplies the job's increments by, at most (for bounding runs): the
-/// time levels of every penalty level, each base up to 2× finer per level (a penalty 4× stiffer
-/// halves the stable increment).
-pub fn cost_factor(depth: Depth) -> f64 {
-    let (time, penalty) = match depth {
-        Depth::Basic => (1.0 + 2.0 + 4.0, 3),
-        Depth::Extra => (1.0 + 2.0 + 4.0 + 8.0, 4),
-    };
-    (0..penalty).map(|j| time * 2f64.powi(j)).sum()
 }
 
 /// Build the ladder of a successful job of `engine` on `scene` (run with the plan's
@@ -175,9 +155,5 @@ pub fn ladder(
         }
         levels.push(PenaltyLevel { stiffness, rungs });
     }
-    Ok(Some(Ladder {
-        direction,
-        depth,
-        levels,
-    }))
+    Ok(Some(Ladder { direction, levels }))
 }

@@ -102,6 +102,12 @@ fn explicit_budgets_are_converged_one_level_further() {
         let (basic, extra) = ok(b);
         for (c, x) in basic.columns.iter().zip(&extra.columns) {
             let what = format!("{} / {} / {}", b.case, b.engine, c.column);
+            println!(
+                "{what}: change time step {:.3}, penalty {:.3}; solver {:.2e}",
+                change(c.time_step, x.time_step),
+                change(c.penalty, x.penalty),
+                c.solver
+            );
             if let Order::Observed(p) = c.time_order {
                 assert!((p - 2.0).abs() < 0.25, "{what}: order in h {p}");
             }
@@ -125,12 +131,12 @@ fn explicit_budgets_are_converged_one_level_further() {
     }
 }
 
-/// rapier_f64 (matched): first order in h on the kinematic columns (0.9–1.1 where it shows an
-/// order; its contact force is not a power series in h: 0.44 on the pinned surface-mass case,
-/// where the first rows carry the first step's impulse), and its time-step
-/// part moves by less than 25 % one level further wherever it is at least 1 % of its error
-/// against its own model (measured up to 23 %: the coarsened ladder 4h, 2h, h is not quite in
-/// rapier's asymptotic range on the rigid cases, and this is measured, not assumed).
+/// rapier_f64 (matched): first order in h on every column (measured 0.95–1.08; the contact force
+/// is compared from the first increment on, its t = 0 value being the first increment's impulse,
+/// which is not a power series in h), and its time-step part moves by less than 25 % one level
+/// further wherever it is at least 1 % of its error against its own model (measured up to
+/// 23 %, on the sliding cases: the coarsened ladder 4h, 2h, h is not quite in rapier's asymptotic
+/// range there, and this is measured, not assumed; 0.4–6 % on the pinned ones).
 #[test]
 fn rapier_time_step_part_is_first_order_and_stable_one_level_further() {
     let (_, _, budgets) = budgets();
@@ -138,13 +144,16 @@ fn rapier_time_step_part_is_first_order_and_stable_one_level_further() {
         let (basic, extra) = ok(b);
         for (c, x) in basic.columns.iter().zip(&extra.columns) {
             let what = format!("{} / {}", b.case, c.column);
+            println!(
+                "{what}: change time step {:.3} (order {:?})",
+                change(c.time_step, x.time_step),
+                c.time_order
+            );
             let own = c.time_step.max(c.penalty).max(c.solver);
             if c.time_step < 0.01 * own || !c.relative {
                 continue;
             }
-            if let Order::Observed(p) = c.time_order
-                && c.column != "contact_force"
-            {
+            if let Order::Observed(p) = c.time_order {
                 assert!((p - 1.0).abs() < 0.1, "{what}: order in h {p}");
             }
             assert!(

@@ -13,9 +13,10 @@ use crosscheck::engines::rapier::record::Recorder;
 use crosscheck::engines::rapier::{
     Configuration, MatchedSettings, Precision, RapierEngine, engines,
 };
+use crosscheck::engines::reference::ReferenceEngine;
 use crosscheck::engines::{Engine, EngineError, History, RunSettings};
 use crosscheck::run::matching::matched_increment;
-use crosscheck::scene::{Dof, Scene};
+use crosscheck::scene::{Dof, IncrementRule, Scene};
 use std::collections::HashMap;
 use std::sync::{Mutex, OnceLock};
 
@@ -184,25 +185,24 @@ fn three_d_equals_two_d() {
 ///
 /// | case | vs analytic | vs explicit | what dominates |
 /// |---|---|---|---|
-/// | rigid{2,3}d_pin_lumped | 6.72e-2 | 7.23e-2 | finite vs small rotation (analytic); rapier's first-step contact force (explicit) |
-/// | rigid{2,3}d_pin_surface | 6.71e-2 | 9.75e-2 | same |
+/// | rigid{2,3}d_pin_lumped | 6.72e-2 | 1.19e-2 | finite vs small rotation (analytic); soft contact and first-order joint motors in rotation (explicit) |
+/// | rigid{2,3}d_pin_surface | 6.71e-2 | 1.19e-2 | same |
 /// | rigid{2,3}d_slide_lumped | 3.66e-1 | 4.63e-3 | model form (analytic); first-order spring (explicit) |
 /// | rigid{2,3}d_slide_surface | 4.87e-1 | 9.04e-3 | same |
 /// | springs_grounded_{a,b,c} | 1.27e-3 | 1.27e-3 | first-order amplitude loss of the implicit springs |
 /// | springs_n2n_{b,c} | 1.70e-3 | 1.70e-3 | same |
 ///
-/// rapier's contact starts touching: in its first step the velocity-level contact carries no
-/// curvature (centripetal) term, so the first step's force is ~20 % low (3.4e3 against the
-/// explicit engine's 4.26e3 at t = 0 in the pinned surface case); it is on from the second step.
+/// The contact force is compared from the first increment on (its t = 0 value apart: see
+/// `the_t0_contact_force_is_the_first_increments_and_builds_up`).
 #[test]
 fn regression_bounds_of_rapier_f64() {
     let frozen: [(&str, f64, f64); 13] = [
-        ("rigid2d_pin_lumped", 6.72e-2, 7.23e-2),
-        ("rigid2d_pin_surface", 6.71e-2, 9.75e-2),
+        ("rigid2d_pin_lumped", 6.72e-2, 1.19e-2),
+        ("rigid2d_pin_surface", 6.71e-2, 1.19e-2),
         ("rigid2d_slide_lumped", 3.66e-1, 4.63e-3),
         ("rigid2d_slide_surface", 4.87e-1, 9.04e-3),
-        ("rigid3d_pin_lumped", 6.72e-2, 7.23e-2),
-        ("rigid3d_pin_surface", 6.71e-2, 9.75e-2),
+        ("rigid3d_pin_lumped", 6.72e-2, 1.19e-2),
+        ("rigid3d_pin_surface", 6.71e-2, 1.19e-2),
         ("rigid3d_slide_lumped", 3.66e-1, 4.63e-3),
         ("rigid3d_slide_surface", 4.87e-1, 9.04e-3),
         ("springs_grounded_a", 1.27e-3, 1.27e-3),
@@ -235,6 +235,67 @@ fn regression_bounds_of_rapier_f64() {
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// rapier resolves contact by impulses, so the contact force it reports at t = 0 is its first
+/// increment's normal impulse over the increment. On the pinned case that is low, and lower at a
+/// smaller increment (measured 83 %, 77 % and 56 % of the reference's initial force at 1e-5,
+/// 2.5e-6 and 1e-6 s): a soft contact building up over a time of its own, not a discretisation
+/// error that refining removes. From the first output row (t = 2e-4 s) on, the force is within
+/// 2e-4 of the peak at every one of those increments. The comparison therefore measures the t = 0
+/// value apart (`initial_errors`) and the rest from the first increment on; this test holds both
+/// readings to what was measured (fractions ±5 points, later rows to 2e-3 of the peak: rapier's
+/// first-order error at 1e-5 s is 7.7e-3 over the whole run, far less this early).
+#[test]
+fn the_t0_contact_force_is_the_first_increments_and_builds_up() {
+    let id = "rigid2d_pin_lumped";
+    let s = scene(id);
+    let reference = cached(id, &ReferenceEngine);
+    let exact = col(&reference, "contact_force");
+    let peak = peak(&exact);
+    let e = RapierEngine::matched(Precision::F64);
+    let mut fractions = Vec::new();
+    for (h, expected) in [(1e-5, 0.83), (2.5e-6, 0.77), (1e-6, 0.56)] {
+        let run = run(
+            &e,
+            &s,
+            RunSettings {
+                increment: Some(IncrementRule::Given(h)),
+                ..RunSettings::default()
+            },
+        );
+        let force = col(&run, "contact_force");
+        let fraction = force[0] / exact[0];
+        let next = (force[1] - exact[1]).abs() / peak;
+        println!(
+            "h = {h:e}: t = 0 force {:.4e} = {fraction:.3} of {:.4e}; row 1 error {next:.2e}",
+            force[0], exact[0]
+        );
+        assert!(
+            (fraction - expected).abs() <= 0.05,
+            "h = {h:e}: first-increment force {fraction:.3} of the exact, measured {expected}"
+        );
+        assert!(next <= 2e-3, "h = {h:e}: row 1 off by {next:e} of the peak");
+        fractions.push(fraction);
+    }
+    assert!(
+        fractions.windows(2).all(|w| w[1] < w[0]),
+        "the first-increment force should fall as the increment shrinks: {fractions:?}"
+    );
+    // The comparison leaves t = 0 out of the contact force's errors and keeps it apart.
+    let c = compare(&s, &reference, &cached(id, &e));
+    let initial = c.initial_errors["contact_force"];
+    assert!((initial - (0.83 - 1.0) * exact[0] / peak).abs() <= 0.05 * exact[0] / peak);
+    let force = c
+        .columns
+        .iter()
+        .find(|c| c.column == "contact_force")
+        .unwrap();
+    assert!(
+        force.max < 1e-2,
+        "from the first increment on: {:e}",
+        force.max
+    );
 }
 
 /// (4) rapier_f64 (matched) and the explicit engine agree on the spring cases to rapier's order.

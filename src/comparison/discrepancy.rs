@@ -24,7 +24,7 @@
 //! round-off (1e-12 of its scale) is converged in that parameter; one whose differences do not
 //! shrink with the parameter has no order, is left at its finest run and flagged.
 
-use super::valid_rows;
+use super::{first_compared_row, valid_rows};
 use crate::contract::History;
 use crate::run::refinement::{Direction, Ladder, PenaltyLevel};
 use crate::scene::Scene;
@@ -59,14 +59,17 @@ pub enum Order {
 }
 
 /// Extrapolate three runs `(s, values)` of one column to s → 0 (`scale`: the column's size, for
-/// the round-off test).
-pub fn extrapolate(runs: [(f64, &[f64]); 3], scale: f64) -> Extrapolation {
+/// the round-off test). The order is observed on the rows from `first` on (the rows the
+/// comparison measures) and applied to every row.
+pub fn extrapolate(runs: [(f64, &[f64]); 3], scale: f64, first: usize) -> Extrapolation {
     let mut runs = runs;
     runs.sort_by(|a, b| a.0.total_cmp(&b.0));
     let [(sf, yf), (sm, ym), (sc, yc)] = runs;
     let diff = |a: &[f64], b: &[f64]| {
-        a.iter()
-            .zip(b)
+        let from = first.min(a.len());
+        a[from..]
+            .iter()
+            .zip(&b[from..])
             .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
     };
     let (d_fm, d_mc) = (diff(yf, ym), diff(ym, yc));
@@ -218,12 +221,15 @@ pub fn budget(
         let relative = peak > 0.0 && peak >= 1e-6 * max_abs(&y);
         let scale = if relative { peak } else { 1.0 };
         let round_off = peak.max(max_abs(&y));
+        // Norms and observed orders over the rows the comparison measures (a contact force
+        // from the first increment on); the histories keep every row.
+        let first = first_compared_row(scene, name).min(n);
         // h → 0 at each penalty level.
         let mut limits = Vec::new();
         let mut time_order = Order::Converged;
         for (j, p) in ladder.levels.iter().enumerate() {
             let [f, m, c] = time_runs(p, ladder.direction, level, name, n)?;
-            let e = extrapolate([(f.0, &f.1), (m.0, &m.1), (c.0, &c.1)], round_off);
+            let e = extrapolate([(f.0, &f.1), (m.0, &m.1), (c.0, &c.1)], round_off, first);
             if j == 0 {
                 time_order = e.order;
             }
@@ -238,7 +244,7 @@ pub fn budget(
                     .iter()
                     .map(|(k, v)| (1.0 / k.unwrap_or(f64::INFINITY), v.as_slice()))
                     .collect();
-                let e = extrapolate([three[0], three[1], three[2]], round_off);
+                let e = extrapolate([three[0], three[1], three[2]], round_off, first);
                 (e.values, Some(e.order))
             }
             _ => return Err("a penalty ladder needs three stiffnesses".into()),
@@ -254,7 +260,7 @@ pub fn budget(
         let residual = (0..n)
             .map(|i| (parts[0][i] - (parts[1][i] + parts[2][i] + parts[3][i] + parts[4][i])).abs())
             .fold(0.0f64, f64::max);
-        let norm = |v: &[f64]| max_abs(v) / scale;
+        let norm = |v: &[f64]| max_abs(&v[first..]) / scale;
         norms.push(ColumnBudget {
             column: name.to_string(),
             peak,

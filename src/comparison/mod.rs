@@ -8,15 +8,22 @@
 //! - `end`: the error at the last valid row divided by the same peak.
 //!
 //! A column whose reference peak is zero, or below 1e-6 of the candidate's (a held DOF that a
-//! soft joint lets drift), is compared in absolute terms. The energy
+//! soft joint lets drift), is compared in absolute terms.
+//!
+//! A contact force is compared from the first increment on ([`first_compared_row`]): an engine
+//! that resolves contact by impulses (rapier) can only report at t = 0 the mean force of its
+//! first increment, not the instantaneous force of the initial state, so the t = 0 value is
+//! measured separately (`initial_errors`) and reported beside the others, not mixed into them. The energy
 //! balance error of an engine that writes `e_balance` is its largest magnitude divided by the
 //! largest kinetic + elastic energy of the run.
 
 pub mod discrepancy;
+pub mod equivalence;
 
 use crate::contract::{self, History, VALID_COLUMN};
-use crate::scene::Scene;
+use crate::scene::{Probe, Scene};
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 
 /// The closed form (the benchmark's small-rotation model): every engine's total error is
 /// measured against it, and it is the baseline of the small-rotation engines.
@@ -66,6 +73,10 @@ pub struct Comparison {
     pub rows: usize,
     /// Energy balance error, for engines that keep energies.
     pub energy_balance: Option<f64>,
+    /// Per column compared from the first increment on ([`first_compared_row`]): the signed
+    /// error at t = 0 over the peak (candidate − reference), measured separately.
+    #[serde(default)]
+    pub initial_errors: BTreeMap<String, f64>,
 }
 
 /// What the closed form says about its own validity (rigid-contact cases).
@@ -77,6 +88,16 @@ pub struct ContactValidity {
     pub margin: f64,
     /// Time the contact force first turns tensile (the end of validity), if it does.
     pub valid_until: Option<f64>,
+}
+
+/// The first row at which `column` is compared: 1 for a contact force (its t = 0 value is
+/// measured separately, see the module doc), 0 for everything else.
+pub fn first_compared_row(scene: &Scene, column: &str) -> usize {
+    let contact = scene
+        .columns
+        .iter()
+        .any(|c| c.name == column && matches!(c.probe, Probe::ContactForce { .. }));
+    usize::from(contact)
 }
 
 /// Rows before the first one an exact solution marks invalid (all rows without a `valid` column).
@@ -91,6 +112,7 @@ fn valid_rows(reference: &History) -> usize {
 /// scene's contract columns.
 pub fn compare(scene: &Scene, reference: &History, candidate: &History) -> Comparison {
     let n = valid_rows(reference).min(candidate.rows.len());
+    let mut initial_errors = BTreeMap::new();
     let columns: Vec<ColumnError> = contract::columns(scene.family)
         .iter()
         .filter_map(|name| {
@@ -103,9 +125,18 @@ pub fn compare(scene: &Scene, reference: &History, candidate: &History) -> Compa
             // drift by 1e-9, has no meaningful peak: compare in absolute terms.
             let relative = peak > 0.0 && peak >= 1e-6 * candidate_peak;
             let scale = if relative { peak } else { 1.0 };
-            let errors: Vec<f64> = a.iter().zip(b).map(|(x, y)| (y - x).abs()).collect();
+            let first = first_compared_row(scene, name).min(n);
+            if first > 0 {
+                initial_errors.insert(name.to_string(), (b[0] - a[0]) / scale);
+            }
+            let errors: Vec<f64> = a[first..]
+                .iter()
+                .zip(&b[first..])
+                .map(|(x, y)| (y - x).abs())
+                .collect();
             let max = errors.iter().fold(0.0f64, |m, e| m.max(*e));
-            let rms = (errors.iter().map(|e| e * e).sum::<f64>() / n.max(1) as f64).sqrt();
+            let rms =
+                (errors.iter().map(|e| e * e).sum::<f64>() / errors.len().max(1) as f64).sqrt();
             Some(ColumnError {
                 column: name.to_string(),
                 peak,
@@ -121,6 +152,7 @@ pub fn compare(scene: &Scene, reference: &History, candidate: &History) -> Compa
         worst_max,
         rows: n,
         energy_balance: energy_balance(candidate),
+        initial_errors,
         columns,
     }
 }

@@ -347,6 +347,7 @@ fn case_section(w: &mut String, c: &CaseSummary) {
             sci(m.margin)
         );
     }
+    initial_contact_force(w, c);
     for r in &c.runs {
         let Some((col, max, _, _)) = worst(r) else {
             continue;
@@ -437,6 +438,37 @@ fn case_section(w: &mut String, c: &CaseSummary) {
     }
 }
 
+/// The contact force at t = 0, measured apart from the errors (which start at the first
+/// increment): each engine's signed error there against its own model, and what rapier's is.
+fn initial_contact_force(w: &mut String, c: &CaseSummary) {
+    let cells: Vec<String> = c
+        .runs
+        .iter()
+        .filter(|r| r.increment.is_some_and(|h| h > 0.0)) // the stepping engines
+        .filter_map(|r| {
+            let a = r.against_baseline.as_ref()?;
+            let e = a
+                .initial_errors
+                .values()
+                .max_by(|x, y| x.abs().total_cmp(&y.abs()))?;
+            Some(format!("`{}` {e:+.2e}", r.engine))
+        })
+        .collect();
+    if cells.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        w,
+        "Contact force at t = 0 (engine − its own model, over the peak; measured apart, the errors below \
+         start at the first increment): {}. rapier resolves contact by impulses, so what it reports at \
+         t = 0 is its first increment's normal impulse divided by the increment: the force while its soft \
+         contact is still building up (at a smaller increment it is lower still, not nearer), not the \
+         force of the initial state. From the first output row on it follows the model (see the errors \
+         below).\n",
+        cells.join(", ")
+    );
+}
+
 fn order(o: Option<&Order>) -> String {
     match o {
         None => "–".into(),
@@ -512,6 +544,7 @@ fn at_a_glance(w: &mut String, s: &Summary, p: &Provenance) {
             .collect();
         let _ = writeln!(w, "| {} | {} |", c.id, cells.join(" | "));
     }
+    equivalence_table(w, s, &engines);
     let stepping: Vec<&String> = engines
         .iter()
         .copied()
@@ -579,6 +612,47 @@ fn at_a_glance(w: &mut String, s: &Summary, p: &Provenance) {
         );
     }
     let _ = writeln!(w);
+}
+
+/// The equivalence checks: each case against the equivalent case it was found to match, with
+/// every engine's measured difference.
+fn equivalence_table(w: &mut String, s: &Summary, engines: &[&String]) {
+    if s.equivalences.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        w,
+        "\n## Equivalence checks\n\nCases that build one problem in different ways (element kinds, a held \
+         node, 2D or 3D, lumped or surface masses) must give one answer. Pairs are found, not declared: two \
+         cases are equivalent on a column when their closed forms agree there to {} of its peak. Each cell: \
+         the largest difference between the two cases' histories over those columns, over the column's \
+         peak (a contact force from the first increment on).\n",
+        sci(crate::comparison::equivalence::AGREEMENT)
+    );
+    let closed = crate::comparison::CLOSED_FORM.to_string();
+    let mut all: Vec<&String> = vec![&closed];
+    all.extend(engines.iter().copied());
+    let names: Vec<String> = all.iter().map(|e| format!("`{e}`")).collect();
+    let _ = writeln!(
+        w,
+        "| case = equivalent case | columns | {} |",
+        names.join(" | ")
+    );
+    let _ = writeln!(w, "|---|---|{}", "---:|".repeat(all.len()));
+    for e in &s.equivalences {
+        let cells: Vec<String> = all
+            .iter()
+            .map(|engine| e.differences.get(*engine).map_or("–".into(), |d| sci(*d)))
+            .collect();
+        let _ = writeln!(
+            w,
+            "| {} = {} | {} | {} |",
+            e.case,
+            e.same_as,
+            e.columns.join(", "),
+            cells.join(" | ")
+        );
+    }
 }
 
 /// A verdict matrix cell: ✓/✗ and the worst error against the engine's own model.

@@ -2,6 +2,7 @@
 //! cost. REPORT.md is rendered from the same [`Summary`], so their numbers agree.
 
 use crate::comparison::discrepancy::{ColumnBudget, JobBudget, PARTS};
+use crate::comparison::equivalence::{self, Equivalence};
 use crate::comparison::{self, CLOSED_FORM, Comparison, ContactValidity};
 use crate::contract::History;
 use crate::report::data::{csv_path, read_history};
@@ -20,6 +21,10 @@ pub struct Summary {
     pub engines: Vec<String>,
     /// Per case, in report order.
     pub cases: Vec<CaseSummary>,
+    /// Cases that are the same problem built another way, each measured against its
+    /// equivalent in every engine ([`crate::comparison::equivalence`]).
+    #[serde(default)]
+    pub equivalences: Vec<Equivalence>,
 }
 
 /// Pairs of engines compared with each other, (candidate, reference):
@@ -198,9 +203,11 @@ impl Summary {
                 }
             })
             .collect();
+        let engines: Vec<String> = plan.engines.iter().map(|e| e.name().to_string()).collect();
         Summary {
             generator: format!("crosscheck {}", env!("CARGO_PKG_VERSION")),
-            engines: plan.engines.iter().map(|e| e.name().to_string()).collect(),
+            equivalences: equivalence::measure(&plan.cases, &engines, history),
+            engines,
             cases,
         }
     }
@@ -229,6 +236,15 @@ impl Summary {
                 }
             }
         }
+        for old in previous.equivalences {
+            if !self
+                .equivalences
+                .iter()
+                .any(|e| e.case == old.case && e.same_as == old.same_as)
+            {
+                self.equivalences.push(old);
+            }
+        }
         for e in previous.engines {
             if !self.engines.contains(&e) {
                 self.engines.push(e);
@@ -247,6 +263,8 @@ impl Summary {
         };
         self.engines.sort_by_key(|e| order(e));
         self.cases.sort_by(|a, b| a.id.cmp(&b.id));
+        self.equivalences
+            .sort_by(|a, b| (&a.same_as, &a.case).cmp(&(&b.same_as, &b.case)));
         for c in &mut self.cases {
             c.runs.sort_by_key(|r| order(&r.engine));
         }

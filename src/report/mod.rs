@@ -15,6 +15,7 @@ pub mod figures;
 pub mod markdown;
 pub mod provenance;
 pub mod scaling;
+pub mod sketch;
 pub mod staging;
 pub mod summary;
 

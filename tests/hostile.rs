@@ -51,8 +51,9 @@ fn previous_report() -> (tempfile::TempDir, PathBuf, BTreeMap<String, Vec<u8>>) 
     let stepping = crosscheck::engines::all().len() - 2;
     assert_eq!(
         before.len(),
-        2 * (crosscheck::engines::all().len() + stepping) + 2 + 2 + 3,
-        "CSVs, budget CSVs, case figures, budget figures per family, summary, timings, REPORT.md"
+        2 * (crosscheck::engines::all().len() + stepping) + 2 * 3 + 2 + 3,
+        "CSVs, budget CSVs, case figures (histories, errors, sketch), budget figures per family, \
+         summary, timings, REPORT.md"
     );
     (root, out, before)
 }
@@ -182,7 +183,7 @@ fn one_writer_per_output() {
     let after = snapshot(&out);
     assert_eq!(
         after.len(),
-        before.len() + 2 * crosscheck::engines::all().len() - 2 + 1, // CSVs, budget CSVs, figure
+        before.len() + 2 * crosscheck::engines::all().len() - 2 + 3, // CSVs, budget CSVs, 3 figures
         "the new case's CSVs and figure"
     );
     for (name, bytes) in &before {
@@ -301,7 +302,7 @@ fn closed_or_full_stdout_is_an_error_not_a_panic() {
         let after = snapshot(&out);
         assert_eq!(
             after.len(),
-            before.len() + 2 * crosscheck::engines::all().len() - 2 + 1, // CSVs, budget CSVs, figure
+            before.len() + 2 * crosscheck::engines::all().len() - 2 + 3, // CSVs, budget CSVs, 3 figures
             "the report is in place"
         );
     }

@@ -101,7 +101,7 @@ pub fn first_compared_row(scene: &Scene, column: &str) -> usize {
 }
 
 /// Rows before the first one an exact solution marks invalid (all rows without a `valid` column).
-fn valid_rows(reference: &History) -> usize {
+pub fn valid_rows(reference: &History) -> usize {
     match reference.column(VALID_COLUMN) {
         Some(v) => v.iter().position(|x| *x == 0.0).unwrap_or(v.len()),
         None => reference.rows.len(),

@@ -1,7 +1,9 @@
 //! SVG figures (plotters): per case, each live contract column over time for the closed form
 //! and the engines, so a reader sees what the error tables measure.
 
-use crate::contract::History;
+use crate::comparison;
+use crate::contract::{self, History};
+use crate::scene::Scene;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::path::{Path, PathBuf};
@@ -17,7 +19,7 @@ const DRAWN: [(&str, RGBColor); 6] = [
 ];
 
 /// Width of the legend column on the right of every panel (outside the data).
-const LEGEND_WIDTH: u32 = 170;
+const LEGEND_WIDTH: u32 = 240;
 
 /// The unit of a contract column, in the cases' consistent units (N, m, kg, s, rad).
 pub fn unit(column: &str) -> &'static str {
@@ -153,23 +155,193 @@ pub fn render(case: &str, columns: &[&str], histories: &[(&str, History)]) -> Op
                 // The legend, in its own column right of the data. A run that leaves the
                 // closed form's range is clipped at the panel edge, and says so.
                 let outside = points.iter().any(|(_, y)| *y < lo || *y > hi);
-                let y = 20 + 18 * row as i32;
-                legend
-                    .draw(&PathElement::new([(4, y), (24, y)], colour.stroke_width(2)))
-                    .ok()?;
-                let label = if outside {
-                    format!("{engine} (clipped)")
-                } else {
-                    engine.to_string()
-                };
-                legend
-                    .draw(&Text::new(
-                        label,
-                        (30, y - 6),
-                        ("sans-serif", 12).into_font(),
-                    ))
-                    .ok()?;
+                legend_entry(&legend, row, *colour, engine, outside)?;
             }
+        }
+        root.present().ok()?;
+    }
+    Some(svg)
+}
+
+/// One line of a panel's legend (in its own column right of the data): a run that leaves the
+/// panel's range is clipped at its edge, and says so.
+fn legend_entry<DB: DrawingBackend>(
+    legend: &DrawingArea<DB, plotters::coord::Shift>,
+    row: usize,
+    colour: RGBColor,
+    label: &str,
+    clipped: bool,
+) -> Option<()> {
+    let y = 20 + 18 * row as i32;
+    legend
+        .draw(&PathElement::new([(4, y), (24, y)], colour.stroke_width(2)))
+        .ok()?;
+    let label = if clipped {
+        format!("{label} (clipped)")
+    } else {
+        label.to_string()
+    };
+    legend
+        .draw(&Text::new(
+            label,
+            (30, y - 6),
+            ("sans-serif", 12).into_font(),
+        ))
+        .ok()?;
+    Some(())
+}
+
+/// Errors below this are drawn at it on the log-scale panels (round-off: nothing smaller is
+/// meaningful relative to a peak).
+pub const LOG_FLOOR: f64 = 1e-16;
+
+/// Errors above this are clipped on the log-scale panels (a run off by ten times the peak has
+/// no accuracy left to show).
+const LOG_CEILING: f64 = 10.0;
+
+/// A labelled line of a log-scale panel: label, colour, (t, value) points.
+type LabelledSeries = (String, RGBColor, Vec<(f64, f64)>);
+
+/// One log-scale panel: named series of (t, value ≥ 0), drawn between [`LOG_FLOOR`] and
+/// [`LOG_CEILING`], the legend in its own column.
+fn log_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    y_desc: &str,
+    series: &[LabelledSeries],
+) -> Option<()> {
+    let (panel, legend) = area.split_horizontally(900);
+    let (t0, t1) = series
+        .iter()
+        .flat_map(|s| s.2.iter().map(|p| p.0))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
+            (a.min(t), b.max(t))
+        });
+    if !(t0.is_finite() && t1.is_finite() && t1 > t0) {
+        return None;
+    }
+    // The lower end from the values above the floor (an exact start, error 0, would otherwise
+    // stretch the axis down to round-off); anything below it is drawn at it.
+    let values = series.iter().flat_map(|s| s.2.iter().map(|p| p.1));
+    let (lo, hi) = values
+        .filter(|v| v.is_finite() && *v > LOG_FLOOR)
+        .fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(v), b.max(v)));
+    let lo = (lo / 2.0).clamp(LOG_FLOOR, LOG_CEILING / 10.0);
+    let hi = (hi * 2.0).clamp(lo * 10.0, LOG_CEILING);
+    let mut chart = ChartBuilder::on(&panel)
+        .margin(8)
+        .x_label_area_size(36)
+        .y_label_area_size(80)
+        .build_cartesian_2d(t0..t1, (lo..hi).log_scale())
+        .ok()?;
+    let x_span = t1 - t0;
+    chart
+        .configure_mesh()
+        .x_desc("t [s]")
+        .y_desc(y_desc)
+        .x_label_formatter(&|x| tick(*x, x_span))
+        .y_label_formatter(&|y| tick(*y, 0.0))
+        .light_line_style(WHITE)
+        .draw()
+        .ok()?;
+    for (row, (label, colour, points)) in series.iter().enumerate() {
+        let clipped = points.iter().any(|(_, y)| *y > hi);
+        let drawn = points.iter().map(|(t, y)| (*t, y.clamp(lo, hi)));
+        chart
+            .draw_series(LineSeries::new(drawn, colour.stroke_width(1)))
+            .ok()?;
+        legend_entry(&legend, row, *colour, label, clipped)?;
+    }
+    Some(())
+}
+
+/// `out/figures/<case>.sketch.svg` (drawn by [`crate::report::sketch`]).
+pub fn sketch_path(out: &Path, case: &str) -> PathBuf {
+    out.join("figures").join(format!("{case}.sketch.svg"))
+}
+
+/// `out/figures/<case>.errors.svg`.
+pub fn errors_figure_path(out: &Path, case: &str) -> PathBuf {
+    out.join("figures").join(format!("{case}.errors.svg"))
+}
+
+/// Render a case's error figure: per live contract column, each engine's error against the
+/// exact solution of its own model ([`comparison::baseline`]) over time, over the column's
+/// peak, on a log scale (the rows the comparison measures: valid rows, a contact force from the
+/// first increment on); a last panel the energy balance error of each engine that keeps one,
+/// over its largest kinetic + elastic energy.
+pub fn render_errors(scene: &Scene, histories: &[(&str, History)]) -> Option<String> {
+    let find = |name: &str| histories.iter().find(|(e, _)| *e == name).map(|(_, h)| h);
+    let mut panels: Vec<(String, Vec<LabelledSeries>)> = Vec::new();
+    for column in contract::columns(scene.family) {
+        let series: Vec<_> = DRAWN
+            .iter()
+            .filter_map(|(engine, colour)| {
+                let against = comparison::baseline(engine)?;
+                let (run, exact) = (find(engine)?, find(against)?);
+                let (t, y, x) = (run.column("t")?, run.column(column)?, exact.column(column)?);
+                let n = comparison::valid_rows(exact).min(y.len()).min(x.len());
+                let peak = x[..n].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                if peak == 0.0 {
+                    return None;
+                }
+                let first = comparison::first_compared_row(scene, column).min(n);
+                let points = (first..n)
+                    .map(|i| (t[i], ((y[i] - x[i]).abs() / peak).max(LOG_FLOOR)))
+                    .filter(|p| p.1.is_finite())
+                    .collect();
+                Some((format!("{engine} vs {against}"), *colour, points))
+            })
+            .collect();
+        if !series.is_empty() {
+            panels.push((format!("|error| / peak of {column}"), series));
+        }
+    }
+    let balance: Vec<_> = DRAWN
+        .iter()
+        .filter_map(|(engine, colour)| {
+            let h = find(engine)?;
+            let (t, b) = (h.column("t")?, h.column(contract::E_BALANCE)?);
+            let (k, e) = (
+                h.column(contract::E_KINETIC)?,
+                h.column(contract::E_ELASTIC)?,
+            );
+            let scale = k.iter().zip(&e).fold(0.0f64, |m, (k, e)| m.max(k + e));
+            (scale > 0.0).then(|| {
+                let points = t
+                    .into_iter()
+                    .zip(b)
+                    .map(|(t, b)| (t, (b.abs() / scale).max(LOG_FLOOR)))
+                    .filter(|p| p.1.is_finite())
+                    .collect();
+                (engine.to_string(), *colour, points)
+            })
+        })
+        .collect();
+    if !balance.is_empty() {
+        panels.push(("|energy balance| / peak energy".into(), balance));
+    }
+    if panels.is_empty() {
+        return None;
+    }
+    let mut svg = String::new();
+    {
+        let height = 220 * panels.len() as u32 + 60;
+        let root =
+            SVGBackend::with_string(&mut svg, (900 + LEGEND_WIDTH, height)).into_drawing_area();
+        root.fill(&WHITE).ok()?;
+        let (title, body) = root.split_vertically(60);
+        title
+            .titled(
+                &format!(
+                    "{}: error against the exact solution of each engine's own model \
+                     (log scale; smaller values drawn at the lower edge)",
+                    scene.id
+                ),
+                ("sans-serif", 16),
+            )
+            .ok()?;
+        for (area, (desc, series)) in body.split_evenly((panels.len(), 1)).iter().zip(&panels) {
+            log_panel(area, desc, series)?;
         }
         root.present().ok()?;
     }

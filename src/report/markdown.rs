@@ -324,7 +324,10 @@ fn case_section(w: &mut String, c: &CaseSummary) {
     );
     let _ = writeln!(
         w,
-        "![{0}: every engine's histories](figures/{0}.svg)\n",
+        "![{0}: the scene, drawn from the case file](figures/{0}.sketch.svg)\n\n\
+         ![{0}: every engine's histories](figures/{0}.svg)\n\n\
+         ![{0}: each engine's error against its own model, and its energy balance, over time \
+         (log scale)](figures/{0}.errors.svg)\n",
         c.id
     );
     if let Some(m) = &c.contact {

@@ -5,7 +5,8 @@
 //! - [`summary`]: `summary.json`, every metric per case and engine (deterministic: the same
 //!   inputs give the same bytes);
 //! - `timings.json`: wall-clock seconds per case and engine (the one thing that varies);
-//! - [`figures`]: `figures/<case>.svg`, each case's histories drawn;
+//! - [`figures`]: `figures/<case>.svg`, each case's histories drawn, and its errors over time;
+//! - [`sketch`]: `figures/<case>.sketch.svg`, each scene drawn from the `Scene` itself;
 //! - [`markdown`]: `REPORT.md`, rendered from the summary and the timings;
 //! - [`provenance`]: what was run (version, commit, compiler, rapier, machine, date);
 //! - [`staging`]: how a report is assembled beside its target and swapped into place.
@@ -85,6 +86,14 @@ pub fn write(
         if let Some(svg) = figures::render(&case.id, contract::columns(scene.family), &histories) {
             checkpoint("figures")?;
             data::write_atomic(&figures::figure_path(out, &case.id), svg.as_bytes())?;
+        }
+        if let Some(svg) = sketch::render(scene) {
+            checkpoint("figures")?;
+            data::write_atomic(&figures::sketch_path(out, &case.id), svg.as_bytes())?;
+        }
+        if let Some(svg) = figures::render_errors(scene, &histories) {
+            checkpoint("figures")?;
+            data::write_atomic(&figures::errors_figure_path(out, &case.id), svg.as_bytes())?;
         }
     }
     for family in [Family::RigidBody, Family::Springs] {

@@ -24,7 +24,7 @@
 //! round-off (1e-12 of its scale) is converged in that parameter; one whose differences do not
 //! shrink with the parameter has no order, is left at its finest run and flagged.
 
-use super::{first_compared_row, valid_rows};
+use super::{first_compared_row, peak as max_abs, valid_rows};
 use crate::contract::History;
 use crate::run::refinement::{Direction, Ladder, PenaltyLevel};
 use crate::scene::Scene;
@@ -189,10 +189,6 @@ fn time_runs(
         Ok((r.increment, column(&r.history, name, n)?))
     };
     Ok([get(pick[0])?, get(pick[1])?, get(pick[2])?])
-}
-
-fn max_abs(v: &[f64]) -> f64 {
-    v.iter().fold(0.0f64, |m, x| m.max(x.abs()))
 }
 
 /// The budget of `engine_history` (the job's run, rung 0 of `ladder`) against the closed form

@@ -4,11 +4,11 @@
 //!
 //! Which cases are equivalent is not declared: it is found from the closed form. Two cases of
 //! one family, duration and sampling are equivalent on a contract column when their closed-form
-//! histories of it are non-zero and agree to [`AGREEMENT`] of its peak. Cases so linked form a
-//! group; each member is measured against the first of its group (by id) that it is directly
-//! linked to, and every engine's difference between the two runs is reported.
+//! histories of it are non-zero and agree to [`AGREEMENT`] of its peak. Each case is measured
+//! against the earliest case (by id) it so agrees with, and every engine's difference between
+//! the two runs is reported.
 
-use super::{CLOSED_FORM, first_compared_row, valid_rows};
+use super::{CLOSED_FORM, first_compared_row, peak, valid_rows};
 use crate::contract::{self, History};
 use crate::scene::Scene;
 use serde::{Deserialize, Serialize};
@@ -24,7 +24,7 @@ pub const AGREEMENT: f64 = 1e-9;
 pub struct Equivalence {
     /// The case measured.
     pub case: String,
-    /// The equivalent case it is measured against (the first of its group it is linked to).
+    /// The equivalent case it is measured against (the earliest by id that it agrees with).
     pub same_as: String,
     /// The contract columns on which the two closed forms agree (the ones compared).
     pub columns: Vec<String>,
@@ -51,7 +51,7 @@ fn agreeing_columns(a: (&Scene, &History), b: (&Scene, &History)) -> Vec<String>
             let (Some(x), Some(y)) = (ha.column(name), hb.column(name)) else {
                 return false;
             };
-            let peak = x[..n].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let peak = peak(&x[..n]);
             peak > 0.0 && max_difference(&x[..n], &y[..n]) <= AGREEMENT * peak
         })
         .map(|name| name.to_string())
@@ -74,31 +74,16 @@ pub fn measure(
     let mut order: Vec<&Scene> = scenes.iter().collect();
     order.sort_by(|a, b| a.id.cmp(&b.id));
     let closed: Vec<Option<History>> = order.iter().map(|s| history(&s.id, CLOSED_FORM)).collect();
-    // Group of each case: the index of the first case it is (transitively) linked to.
-    let mut group: Vec<usize> = (0..order.len()).collect();
-    let mut found = Vec::new();
-    for j in 0..order.len() {
-        let Some(hj) = &closed[j] else { continue };
-        // Link to the earliest directly agreeing case; that case's group becomes j's.
-        for i in 0..j {
-            let Some(hi) = &closed[i] else { continue };
-            let columns = agreeing_columns((order[i], hi), (order[j], hj));
-            if columns.is_empty() {
-                continue;
-            }
-            if group[j] == j {
-                group[j] = group[i];
-                found.push((i, j, columns));
-            } else if group[i] != group[j] {
-                // j links two groups: merge the later one into the earlier.
-                let (keep, drop) = (group[i].min(group[j]), group[i].max(group[j]));
-                group
-                    .iter_mut()
-                    .filter(|g| **g == drop)
-                    .for_each(|g| *g = keep);
-            }
-        }
-    }
+    // Each case against the earliest (by id) case it directly agrees with, if any.
+    let found: Vec<(usize, usize, Vec<String>)> = (0..order.len())
+        .filter_map(|j| {
+            let hj = closed[j].as_ref()?;
+            (0..j).find_map(|i| {
+                let columns = agreeing_columns((order[i], closed[i].as_ref()?), (order[j], hj));
+                (!columns.is_empty()).then_some((i, j, columns))
+            })
+        })
+        .collect();
     found
         .into_iter()
         .map(|(i, j, columns)| {
@@ -109,7 +94,7 @@ pub fn measure(
                     closed[i]
                         .as_ref()
                         .and_then(|h| h.column(c))
-                        .map_or(0.0, |v| v.iter().fold(0.0f64, |m, x| m.max(x.abs())))
+                        .map_or(0.0, |v| peak(&v))
                 })
                 .collect();
             let differences = std::iter::once(CLOSED_FORM.to_string())

@@ -8,14 +8,14 @@
 //! - `end`: the error at the last valid row divided by the same peak.
 //!
 //! A column whose reference peak is zero, or below 1e-6 of the candidate's (a held DOF that a
-//! soft joint lets drift), is compared in absolute terms.
+//! soft joint lets drift), is compared in absolute terms. The energy balance error of an engine
+//! that writes `e_balance` is its largest magnitude divided by the largest kinetic + elastic
+//! energy of the run.
 //!
 //! A contact force is compared from the first increment on ([`first_compared_row`]): an engine
 //! that resolves contact by impulses (rapier) can only report at t = 0 the mean force of its
 //! first increment, not the instantaneous force of the initial state, so the t = 0 value is
-//! measured separately (`initial_errors`) and reported beside the others, not mixed into them. The energy
-//! balance error of an engine that writes `e_balance` is its largest magnitude divided by the
-//! largest kinetic + elastic energy of the run.
+//! measured separately (`initial_errors`) and reported beside the others, not mixed into them.
 
 pub mod discrepancy;
 pub mod equivalence;
@@ -90,6 +90,11 @@ pub struct ContactValidity {
     pub valid_until: Option<f64>,
 }
 
+/// The largest magnitude of a column (its peak; 0 for an empty one).
+pub fn peak(values: &[f64]) -> f64 {
+    values.iter().fold(0.0f64, |m, x| m.max(x.abs()))
+}
+
 /// The first row at which `column` is compared: 1 for a contact force (its t = 0 value is
 /// measured separately, see the module doc), 0 for everything else.
 pub fn first_compared_row(scene: &Scene, column: &str) -> usize {
@@ -119,8 +124,7 @@ pub fn compare(scene: &Scene, reference: &History, candidate: &History) -> Compa
             let a = reference.column(name)?;
             let b = candidate.column(name)?;
             let (a, b) = (&a[..n], &b[..n]);
-            let peak = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-            let candidate_peak = b.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            let (peak, candidate_peak) = (peak(a), peak(b));
             // A reference that is (numerically) zero, such as a held DOF that a soft joint lets
             // drift by 1e-9, has no meaningful peak: compare in absolute terms.
             let relative = peak > 0.0 && peak >= 1e-6 * candidate_peak;

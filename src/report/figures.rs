@@ -280,7 +280,7 @@ pub fn render_errors(scene: &Scene, histories: &[(&str, History)]) -> Option<Str
                 let (run, exact) = (find(engine)?, find(against)?);
                 let (t, y, x) = (run.column("t")?, run.column(column)?, exact.column(column)?);
                 let n = comparison::valid_rows(exact).min(y.len()).min(x.len());
-                let peak = x[..n].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                let peak = comparison::peak(&x[..n]);
                 if peak == 0.0 {
                     return None;
                 }

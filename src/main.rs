@@ -8,12 +8,12 @@
 
 use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand, ValueEnum};
 use crosscheck::case;
-use crosscheck::comparison::discrepancy;
+use crosscheck::comparison::{discrepancy, work_precision};
 use crosscheck::engines::RunSettings;
 use crosscheck::interrupt;
 use crosscheck::report::{self, staging};
 use crosscheck::run::refinement::Depth;
-use crosscheck::run::{self, LoadError, Plan, budget};
+use crosscheck::run::{self, LoadError, Plan, budget, sweep};
 use crosscheck::scene::{ContactStart, DampingTreatment, Dimension, IncrementRule, PenaltyRule};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -59,6 +59,37 @@ enum Command {
         #[arg(value_name = "FILE")]
         files: Vec<PathBuf>,
     },
+    /// Sweep each engine's settings (time increment, penalty stiffness, rapier substeps; f32
+    /// and f64) and write what each accuracy costs: `OUT/sweep/<case>.csv` and
+    /// `OUT/figures/<case>.work-precision.svg`; orders, floors and time to accuracy on
+    /// standard output.
+    Sweep(SweepArgs),
+}
+
+/// Options of `crosscheck sweep`.
+#[derive(Debug, Args)]
+struct SweepArgs {
+    /// Case ids from cases/ or paths to .toml case files (default: every case in cases/).
+    #[arg(value_name = "CASE")]
+    cases: Vec<String>,
+    /// Comma-separated engines to sweep (default: every engine that steps in time).
+    #[arg(long, value_delimiter = ',', value_name = "NAMES")]
+    engines: Vec<String>,
+    /// Output directory.
+    #[arg(long, value_name = "DIR", default_value = "report")]
+    out: PathBuf,
+    /// Runs per point (CPU time reported as min, median and max over them).
+    #[arg(long, value_name = "N", default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..=100))]
+    repeat: u64,
+    /// Most increments one run of a point may take (rapier: a tenth of it, substeps counted).
+    #[arg(long, value_name = "N", default_value_t = sweep::Grid::default().max_increments, value_parser = positive)]
+    max_increments: f64,
+    /// Do not show the progress bar.
+    #[arg(long, short)]
+    quiet: bool,
+    /// Refuse (exit 2) when another run is writing the same output, instead of waiting.
+    #[arg(long)]
+    no_wait: bool,
 }
 
 #[derive(Debug, Args)]
@@ -99,6 +130,13 @@ struct RunArgs {
     /// Most bytes of output histories the run may hold.
     #[arg(long, value_name = "BYTES", default_value_t = budget::Limits::default().max_memory_bytes, value_parser = positive)]
     max_memory: f64,
+    /// Also sweep each engine's settings and report what accuracy costs (the compact grid of
+    /// `crosscheck sweep`; `crosscheck` with no arguments does).
+    #[arg(long)]
+    sweep: bool,
+    /// Runs per sweep point (with --sweep).
+    #[arg(long, value_name = "N", default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..=100))]
+    repeat: u64,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -141,6 +179,8 @@ impl RunArgs {
             max_increments: budget::Limits::default().max_increments,
             max_rows: budget::Limits::default().max_rows,
             max_memory: budget::Limits::default().max_memory_bytes,
+            sweep: true,
+            repeat: 3,
         }
     }
 
@@ -186,6 +226,7 @@ fn main() -> ExitCode {
         Some(Command::Run(args)) => run_command(args, &dir),
         Some(Command::Check { files }) => check(files, &dir),
         Some(Command::Scaling { max_n, out, quiet }) => scaling(max_n as usize, &out, quiet),
+        Some(Command::Sweep(args)) => sweep_command(args, &dir),
     }
 }
 
@@ -426,6 +467,62 @@ fn interrupted() -> ExitCode {
     ExitCode::from(interrupt::EXIT_CODE)
 }
 
+/// Resolve `--out` and load the cases named (every case with none): exit 2 with the messages
+/// when either is invalid.
+fn target_and_cases(
+    out: &Path,
+    names: &[String],
+    dir: &Path,
+) -> Result<(PathBuf, Vec<crosscheck::scene::Scene>), ExitCode> {
+    let target = staging::resolve_output(out).map_err(|e| {
+        eprintln!("error: {e}; nothing was run");
+        ExitCode::from(2)
+    })?;
+    if names.is_empty()
+        && let Err(e) = case_files(dir)
+    {
+        eprintln!("error: {e}; nothing was run");
+        return Err(ExitCode::from(2));
+    }
+    let cases = run::load_cases(names, dir).map_err(|errors| {
+        report_load_errors(&errors);
+        eprintln!("nothing was run");
+        ExitCode::from(2)
+    })?;
+    Ok((target, cases))
+}
+
+/// Take the output's lock (waiting unless `wait` is false: then a busy output is exit 2) and
+/// start a staging directory for `entries`.
+fn lock_and_stage(
+    target: &Path,
+    wait: bool,
+    entries: &[&str],
+) -> Result<(staging::OutputLock, staging::Staging), ExitCode> {
+    let lock = match staging::OutputLock::acquire(target, wait) {
+        Ok(l) => l,
+        Err(staging::OutputError::Interrupted) => return Err(interrupted()),
+        Err(e @ staging::OutputError::Busy { .. }) => {
+            eprintln!("error: {e}");
+            return Err(ExitCode::from(2));
+        }
+        Err(e) => {
+            eprintln!("error: cannot lock the report: {e}");
+            return Err(ExitCode::FAILURE);
+        }
+    };
+    match staging::Staging::begin(target, entries) {
+        Ok(s) => Ok((lock, s)),
+        Err(e) => {
+            eprintln!(
+                "error: cannot prepare the report in {}: {e}",
+                target.display()
+            );
+            Err(ExitCode::FAILURE)
+        }
+    }
+}
+
 fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
     let started = std::time::Instant::now();
     let engines = match run::select_engines(&args.engines) {
@@ -435,26 +532,9 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let target = match staging::resolve_output(&args.out) {
-        Ok(t) => t,
-        Err(e) => {
-            eprintln!("error: {e}; nothing was run");
-            return ExitCode::from(2);
-        }
-    };
-    if args.cases.is_empty()
-        && let Err(e) = case_files(dir)
-    {
-        eprintln!("error: {e}; nothing was run");
-        return ExitCode::from(2);
-    }
-    let cases = match run::load_cases(&args.cases, dir) {
-        Ok(c) => c,
-        Err(errors) => {
-            report_load_errors(&errors);
-            eprintln!("nothing was run");
-            return ExitCode::from(2);
-        }
+    let (target, cases) = match target_and_cases(&args.out, &args.cases, dir) {
+        Ok(x) => x,
+        Err(code) => return code,
     };
     let settings = args.settings();
     let refused = run::check_overrides(&cases, &settings);
@@ -478,27 +558,9 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
     if interrupt::checkpoint("load").is_err() {
         return interrupted();
     }
-    let _lock = match staging::OutputLock::acquire(&target, !args.no_wait) {
-        Ok(l) => l,
-        Err(staging::OutputError::Interrupted) => return interrupted(),
-        Err(e @ staging::OutputError::Busy { .. }) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(2);
-        }
-        Err(e) => {
-            eprintln!("error: cannot lock the report: {e}");
-            return ExitCode::FAILURE;
-        }
-    };
-    let staging = match staging::Staging::begin(&target, &report::ENTRIES) {
-        Ok(s) => s,
-        Err(e) => {
-            eprintln!(
-                "error: cannot prepare the report in {}: {e}",
-                target.display()
-            );
-            return ExitCode::FAILURE;
-        }
+    let (_lock, staging) = match lock_and_stage(&target, !args.no_wait, &report::ENTRIES) {
+        Ok(x) => x,
+        Err(code) => return code,
     };
     let loaded = started.elapsed().as_secs_f64();
     let outcome = run::execute(&plan, !args.quiet);
@@ -511,7 +573,34 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
     if interrupt::requested() {
         return interrupted();
     }
-    let summary = match report::write(staging.path(), &plan, &outcome, &budgets, staging.target()) {
+    let sweeps = if args.sweep {
+        let names: Vec<&str> = plan.engines.iter().map(|e| e.name()).collect();
+        let grid = sweep::Grid {
+            repeat: args.repeat as usize,
+            ..sweep::Grid::default()
+        };
+        work_precision::measure(&plan, &outcome, &names, &grid, !args.quiet)
+    } else {
+        Vec::new()
+    };
+    let swept = started.elapsed().as_secs_f64();
+    if interrupt::requested() {
+        return interrupted();
+    }
+    let mut parts = vec![
+        ("load and check", loaded),
+        ("jobs", ran - loaded),
+        ("discrepancy budget", budgeted - ran),
+    ];
+    if args.sweep {
+        parts.push(("sweep", swept - budgeted));
+    }
+    let study = report::Study {
+        budgets: &budgets,
+        sweeps: &sweeps,
+        parts,
+    };
+    let summary = match report::write(staging.path(), &plan, &outcome, &study, staging.target()) {
         Ok(s) => s,
         Err(report::data::DataError::Interrupted) => return interrupted(),
         Err(e) => {
@@ -540,11 +629,12 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
         checks.len()
     ));
     out.print(&format!(
-        "time: load and check {:.2} s, jobs {:.2} s, budget {:.2} s, report {:.2} s, swap {:.2} s; total {:.2} s\n",
+        "time: load and check {:.2} s, jobs {:.2} s, budget {:.2} s, sweep {:.2} s, report {:.2} s, swap {:.2} s; total {:.2} s\n",
         loaded,
         ran - loaded,
         budgeted - ran,
-        written - budgeted,
+        swept - budgeted,
+        written - swept,
         swapped - written,
         swapped
     ));
@@ -557,4 +647,80 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
     } else {
         ExitCode::FAILURE
     })
+}
+
+fn sweep_command(args: SweepArgs, dir: &Path) -> ExitCode {
+    use crosscheck::report::work_precision as written;
+    let engines: Vec<&str> = if args.engines.is_empty() {
+        sweep::ENGINES.to_vec()
+    } else {
+        let mut chosen = Vec::new();
+        for name in &args.engines {
+            match sweep::ENGINES.iter().find(|e| **e == name.trim()) {
+                Some(e) => chosen.push(*e),
+                None => {
+                    eprintln!(
+                        "error: `{}` cannot be swept; engines that step in time: {}",
+                        name.trim(),
+                        sweep::ENGINES.join(", ")
+                    );
+                    return ExitCode::from(2);
+                }
+            }
+        }
+        chosen
+    };
+    let (target, cases) = match target_and_cases(&args.out, &args.cases, dir) {
+        Ok(x) => x,
+        Err(code) => return code,
+    };
+    let (_lock, staging) = match lock_and_stage(&target, !args.no_wait, &["sweep", "figures"]) {
+        Ok(x) => x,
+        Err(code) => return code,
+    };
+    // The exact solutions every point is measured against.
+    let plan = Plan {
+        cases,
+        engines: ["analytic", "reference"]
+            .iter()
+            .filter_map(|n| crosscheck::engines::named(n))
+            .collect(),
+        settings: RunSettings::default(),
+    };
+    let outcome = run::execute(&plan, false);
+    if interrupt::requested() {
+        return interrupted();
+    }
+    let grid = sweep::Grid {
+        repeat: args.repeat as usize,
+        max_increments: args.max_increments,
+        ..sweep::Grid::default()
+    };
+    let sweeps = work_precision::measure(&plan, &outcome, &engines, &grid, !args.quiet);
+    if interrupt::requested() {
+        return interrupted();
+    }
+    match written::write(staging.path(), &sweeps, &plan.cases) {
+        Ok(()) => {}
+        Err(report::data::DataError::Interrupted) => return interrupted(),
+        Err(e) => {
+            eprintln!("error: cannot write the sweep (the previous one is unchanged): {e}");
+            return ExitCode::FAILURE;
+        }
+    }
+    if interrupt::checkpoint("swap").is_err() {
+        return interrupted();
+    }
+    if let Err(e) = staging.commit() {
+        eprintln!("error: cannot put the sweep in place (the previous one is unchanged): {e}");
+        return ExitCode::FAILURE;
+    }
+    let mut out = Stdout::default();
+    out.print(&written::text(&sweeps));
+    out.print(&format!(
+        "written: {} and {}\n",
+        args.out.join("sweep").display(),
+        args.out.join("figures").display()
+    ));
+    out.finish(ExitCode::SUCCESS)
 }

@@ -45,7 +45,17 @@ fn the_budget_adds_up_to_the_total_read_from_the_csvs() {
     );
     let out = tempfile::tempdir().unwrap();
     let none = out.path().join("none");
-    crosscheck::report::write(out.path(), plan, outcome, budgets, &none).unwrap();
+    crosscheck::report::write(
+        out.path(),
+        plan,
+        outcome,
+        &crosscheck::report::Study {
+            budgets,
+            ..Default::default()
+        },
+        &none,
+    )
+    .unwrap();
     for b in budgets {
         let scene = plan.cases.iter().find(|s| s.id == b.case).unwrap();
         let budget = read_history(&budget_path(out.path(), &b.case, &b.engine)).unwrap();

@@ -7,20 +7,81 @@ use crosscheck::report::markdown::sci;
 use crosscheck::report::summary::Summary;
 use std::process::Command;
 
-/// Run every case into a temporary directory: the directory, its summary and its REPORT.md.
-fn run_into_temporary_directory() -> (tempfile::TempDir, Summary, String) {
-    let out = tempfile::tempdir().unwrap();
-    let status = Command::new(env!("CARGO_BIN_EXE_crosscheck"))
-        .args(["run", "--quiet", "--out"])
-        .arg(out.path())
-        .status()
-        .unwrap();
-    assert!(status.success());
-    let summary: Summary =
-        serde_json::from_str(&std::fs::read_to_string(out.path().join("summary.json")).unwrap())
+/// Run every case, with the sweep, into a temporary directory (once per test binary): the
+/// directory, its summary and its REPORT.md.
+fn run_into_temporary_directory() -> &'static (tempfile::TempDir, Summary, String) {
+    static RUN: std::sync::OnceLock<(tempfile::TempDir, Summary, String)> =
+        std::sync::OnceLock::new();
+    RUN.get_or_init(|| {
+        let out = tempfile::tempdir().unwrap();
+        let status = Command::new(env!("CARGO_BIN_EXE_crosscheck"))
+            .args(["run", "--quiet", "--sweep", "--repeat", "1", "--out"])
+            .arg(out.path())
+            .stdout(std::process::Stdio::null())
+            .status()
             .unwrap();
-    let report = std::fs::read_to_string(out.path().join("REPORT.md")).unwrap();
-    (out, summary, report)
+        assert!(status.success());
+        let summary: Summary = serde_json::from_str(
+            &std::fs::read_to_string(out.path().join("summary.json")).unwrap(),
+        )
+        .unwrap();
+        let report = std::fs::read_to_string(out.path().join("REPORT.md")).unwrap();
+        (out, summary, report)
+    })
+}
+
+/// The sweep's orders and floors are on each run entry of summary.json and in REPORT.md's
+/// overview, the same numbers; each swept case has its CSV and its work–precision figure.
+#[test]
+fn sweep_orders_and_floors_are_in_the_summary_and_the_report() {
+    let (out, summary, report) = run_into_temporary_directory();
+    let mut checked = 0;
+    for c in &summary.cases {
+        assert!(
+            out.path()
+                .join("sweep")
+                .join(format!("{}.csv", c.id))
+                .is_file()
+        );
+        assert!(
+            out.path()
+                .join("figures")
+                .join(format!("{}.work-precision.svg", c.id))
+                .is_file()
+        );
+        let start = report.find("## What accuracy costs").expect("the section");
+        let end = start + report[start..].find("**CPU seconds per simulated").unwrap();
+        let row = report[start..end]
+            .lines()
+            .find(|l| l.starts_with(&format!("| {} | ", c.id)))
+            .unwrap_or_else(|| panic!("{}: no order row in REPORT.md", c.id));
+        for engine in crosscheck::run::sweep::ENGINES {
+            let r = c.runs.iter().find(|r| r.engine == engine).unwrap();
+            if let Some(p) = r.observed_order {
+                let fit = r.order_fit.as_ref().unwrap();
+                assert_eq!(fit.value, p);
+                assert!(fit.points >= 2 && fit.finest < fit.coarsest, "{fit:?}");
+                assert!(
+                    row.contains(&format!("{p:.2}")),
+                    "{}: {engine} {p:.2} in {row}",
+                    c.id
+                );
+                checked += 1;
+            }
+            if let Some(f) = &r.floor {
+                assert!(f.value > 0.0 && !f.cause.is_empty());
+                assert!(
+                    row.contains(&sci(f.value)),
+                    "{}: {engine} floor in {row}",
+                    c.id
+                );
+            }
+        }
+    }
+    // Every engine has an order but, on the four pinned cases, rapier's defaults (their errors
+    // never leave the pre-asymptotic range within the budget) and rapier_f32 (f32 round-off
+    // stalls it after two points): 13 × 6 − 12.
+    assert!(checked >= 13 * 6 - 12, "{checked} orders");
 }
 
 #[test]

@@ -59,9 +59,14 @@ fn a_failed_case_does_not_stop_the_others() {
             .filter(|j| j.case == "springs_n2n_b")
             .all(|j| j.is_ok())
     );
-    let summary =
-        crosscheck::report::write(out.path(), &plan, &outcome, &[], &out.path().join("none"))
-            .unwrap();
+    let summary = crosscheck::report::write(
+        out.path(),
+        &plan,
+        &outcome,
+        &Default::default(),
+        &out.path().join("none"),
+    )
+    .unwrap();
     let bad_runs = &summary
         .cases
         .iter()

@@ -3,6 +3,7 @@
 use super::Timings;
 use super::provenance::Provenance;
 use super::summary::{CaseSummary, EngineSummary, Summary};
+use super::work_precision::{self, SweepRows};
 use crate::comparison::discrepancy::Order;
 use std::fmt::Write;
 
@@ -29,11 +30,21 @@ fn total(r: &EngineSummary) -> Option<f64> {
 }
 
 /// Render the report.
-pub fn render(s: &Summary, timings: &Timings, provenance: &Provenance) -> String {
+///
+/// `sweeps`: each case's sweep rows (the cost of accuracy); `parts`: how long each part of the
+/// run took, seconds, in order (empty: not said).
+pub fn render(
+    s: &Summary,
+    timings: &Timings,
+    provenance: &Provenance,
+    sweeps: &SweepRows,
+    parts: &[(&str, f64)],
+) -> String {
     let mut o = String::new();
     let w = &mut o;
     let _ = writeln!(w, "# crosscheck report\n");
-    at_a_glance(w, s, provenance);
+    at_a_glance(w, s, provenance, parts);
+    work_precision::overview(w, s, sweeps);
     let _ = writeln!(
         w,
         "crosscheck runs classic explicit-dynamics verification problems whose exact answer is known \
@@ -153,6 +164,9 @@ pub fn render(s: &Summary, timings: &Timings, provenance: &Provenance) -> String
     let _ = writeln!(w, "\n## Cases");
     for c in &s.cases {
         case_section(w, c);
+        if let Some(rows) = sweeps.get(&c.id) {
+            work_precision::case_part(w, c, rows);
+        }
     }
     o
 }
@@ -522,12 +536,24 @@ fn budget_table(w: &mut String, c: &CaseSummary) {
 }
 
 /// One screen: what was run, the verdict matrix, the dominant source of each discrepancy.
-fn at_a_glance(w: &mut String, s: &Summary, p: &Provenance) {
+fn at_a_glance(w: &mut String, s: &Summary, p: &Provenance, parts: &[(&str, f64)]) {
     let _ = writeln!(
         w,
         "**What was run.** {}; {}; {}. Machine: {}. Date (UTC): {}. Settings: {}.\n",
         p.version, p.rustc, p.rapier, p.machine, p.date, p.settings
     );
+    if !parts.is_empty() {
+        let list: Vec<String> = parts
+            .iter()
+            .map(|(name, t)| format!("{name} {t:.1} s"))
+            .collect();
+        let _ = writeln!(
+            w,
+            "**How long each part took** (wall clock, {} threads): {}; then writing this report.\n",
+            rayon::current_num_threads(),
+            list.join(", ")
+        );
+    }
     let engines: Vec<&String> = s.engines.iter().filter(|e| *e != "analytic").collect();
     let _ = writeln!(
         w,

@@ -7,6 +7,8 @@
 //! - `timings.json`: wall-clock seconds per case and engine (the one thing that varies);
 //! - [`figures`]: `figures/<case>.svg`, each case's histories drawn, and its errors over time;
 //! - [`sketch`]: `figures/<case>.sketch.svg`, each scene drawn from the `Scene` itself;
+//! - [`work_precision`]: `sweep/<case>.csv` and `figures/<case>.work-precision.svg`, what
+//!   each accuracy costs;
 //! - [`markdown`]: `REPORT.md`, rendered from the summary and the timings;
 //! - [`provenance`]: what was run (version, commit, compiler, rapier, machine, date);
 //! - [`staging`]: how a report is assembled beside its target and swapped into place.
@@ -19,8 +21,10 @@ pub mod scaling;
 pub mod sketch;
 pub mod staging;
 pub mod summary;
+pub mod work_precision;
 
 use crate::comparison::discrepancy::JobBudget;
+use crate::comparison::work_precision::CaseSweep;
 use crate::contract::{self, History};
 use crate::run::{Outcome, Plan};
 use crate::scene::Family;
@@ -30,13 +34,25 @@ use std::path::{Path, PathBuf};
 use summary::Summary;
 
 /// The report's own entries in its directory; nothing else there is the report's.
-pub const ENTRIES: [&str; 5] = [
+pub const ENTRIES: [&str; 6] = [
     "data",
     "figures",
+    "sweep",
     "summary.json",
     "timings.json",
     "REPORT.md",
 ];
+
+/// What a run measured beyond its jobs, for the report.
+#[derive(Debug, Default)]
+pub struct Study<'a> {
+    /// Each job's discrepancy budget.
+    pub budgets: &'a [JobBudget],
+    /// Each case's sweep (what accuracy costs).
+    pub sweeps: &'a [CaseSweep],
+    /// How long each part of the run took (name, wall seconds), in order.
+    pub parts: Vec<(&'static str, f64)>,
+}
 
 /// Wall-clock seconds per case and engine.
 pub type Timings = BTreeMap<String, BTreeMap<String, f64>>;
@@ -51,14 +67,16 @@ pub fn write(
     out: &Path,
     plan: &Plan,
     outcome: &Outcome,
-    budgets: &[JobBudget],
+    study: &Study,
     previous: &Path,
 ) -> Result<Summary, data::DataError> {
     write_histories(out, outcome)?;
-    write_budgets(out, budgets)?;
+    write_budgets(out, study.budgets)?;
+    work_precision::write(out, study.sweeps, &plan.cases)?;
     checkpoint("summary")?;
     let mut summary = Summary::build(plan, outcome, out);
-    summary.attach_budgets(budgets);
+    summary.attach_budgets(study.budgets);
+    summary.attach_sweeps(study.sweeps);
     let mut timings: Timings = read_json(&timings_path(previous)).unwrap_or_default();
     if let Some(old) = read_json::<Summary>(&summary_path(previous)) {
         summary.merge_previous(old);
@@ -129,6 +147,8 @@ pub fn write(
             &summary,
             &timings,
             &provenance::Provenance::gather(&plan.settings),
+            &work_precision::read_all(out, summary.cases.iter().map(|c| c.id.as_str())),
+            &study.parts,
         )
         .as_bytes(),
     )?;

@@ -3,6 +3,7 @@
 
 use crate::comparison::discrepancy::{ColumnBudget, JobBudget, PARTS};
 use crate::comparison::equivalence::{self, Equivalence};
+use crate::comparison::work_precision::{CaseSweep, Floor, ObservedOrder};
 use crate::comparison::{self, CLOSED_FORM, Comparison, ContactValidity};
 use crate::contract::History;
 use crate::report::data::{csv_path, read_history};
@@ -113,6 +114,17 @@ pub struct EngineSummary {
     /// Why this run has no budget, where it should have one.
     #[serde(default)]
     pub budget_error: Option<String>,
+    /// The observed order of convergence in the time increment, from the sweep
+    /// ([`crate::comparison::work_precision`]; None where the run had no sweep or the sweep no
+    /// asymptotic range).
+    #[serde(default)]
+    pub observed_order: Option<f64>,
+    /// How the order was fitted: the path, its range of increments and its points.
+    #[serde(default)]
+    pub order_fit: Option<ObservedOrder>,
+    /// Where the sweep stopped improving (value and named cause), where it did.
+    #[serde(default)]
+    pub floor: Option<Floor>,
 }
 
 impl EngineSummary {
@@ -288,6 +300,25 @@ impl Summary {
         }
     }
 
+    /// Put each engine's observed order and floor from the sweeps on its run entry.
+    pub fn attach_sweeps(&mut self, sweeps: &[CaseSweep]) {
+        for sweep in sweeps {
+            for fit in &sweep.fits {
+                let run = self
+                    .cases
+                    .iter_mut()
+                    .filter(|c| c.id == sweep.case)
+                    .flat_map(|c| c.runs.iter_mut())
+                    .find(|r| r.engine == fit.engine);
+                if let Some(run) = run {
+                    run.observed_order = fit.observed_order.as_ref().map(|o| o.value);
+                    run.order_fit = fit.observed_order.clone();
+                    run.floor = fit.floor.clone();
+                }
+            }
+        }
+    }
+
     /// A case's cross-check of `candidate` against `reference`, if both ran.
     pub fn cross<'a>(
         case: &'a CaseSummary,
@@ -371,6 +402,9 @@ fn engine_summary(
             meets_tolerance: tolerance.map(|_| false),
             budget: None,
             budget_error: None,
+            observed_order: None,
+            order_fit: None,
+            floor: None,
         },
         Ok(s) => {
             let against = (job.engine != CLOSED_FORM)
@@ -397,6 +431,9 @@ fn engine_summary(
                 meets_tolerance: meets,
                 budget: None,
                 budget_error: None,
+                observed_order: None,
+                order_fit: None,
+                floor: None,
             }
         }
     }

@@ -28,6 +28,7 @@ pub mod load;
 pub mod matching;
 pub mod refinement;
 pub mod scaling;
+pub mod sweep;
 
 pub use load::{
     LoadError, UnknownEngine, check_increment, check_overrides, check_scene, engine_names,

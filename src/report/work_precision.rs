@@ -1,0 +1,547 @@
+//! The sweep's files: `sweep/<case>.csv` (one row per point: [`COLUMNS`]) and
+//! `figures/<case>.work-precision.svg` (error against CPU time, log–log, one path per engine
+//! and setting family, the Pareto front, unstable points at the edge, timing whiskers, the
+//! case's tolerances).
+
+use crate::comparison::work_precision::{self, COLUMNS, CaseSweep, Row};
+use crate::report::figures::tick;
+use crate::run::sweep::{PathKind, Status};
+use plotters::prelude::*;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// `out/sweep/<case>.csv`.
+pub fn csv_path(out: &Path, case: &str) -> PathBuf {
+    out.join("sweep").join(format!("{case}.csv"))
+}
+
+/// `out/figures/<case>.work-precision.svg`.
+pub fn figure_path(out: &Path, case: &str) -> PathBuf {
+    out.join("figures")
+        .join(format!("{case}.work-precision.svg"))
+}
+
+fn number(x: f64) -> String {
+    if x.is_finite() {
+        format!("{x:e}")
+    } else {
+        String::new()
+    }
+}
+
+fn optional(x: Option<f64>) -> String {
+    x.map_or_else(String::new, number)
+}
+
+/// A case's sweep as CSV text (numbers in Rust's shortest round-trip form; an absent or
+/// non-finite value is an empty field).
+pub fn csv(rows: &[Row]) -> String {
+    let mut s = COLUMNS.join(",") + "\n";
+    for r in rows {
+        let fields = [
+            r.engine.clone(),
+            r.precision.clone(),
+            number(r.increment),
+            optional(r.penalty_stiffness),
+            r.iterations.map_or_else(String::new, |i| i.to_string()),
+            r.steps.to_string(),
+            optional(r.error_max),
+            optional(r.error_rms),
+            number(r.cpu_s_min),
+            number(r.cpu_s_median),
+            number(r.cpu_s_max),
+            r.status.clone(),
+        ];
+        s += &(fields.join(",") + "\n");
+    }
+    s
+}
+
+/// Read a sweep CSV back (None if it is missing or not one).
+pub fn read(path: &Path) -> Option<Vec<Row>> {
+    let text = std::fs::read_to_string(path).ok()?;
+    let mut lines = text.lines();
+    if lines.next()? != COLUMNS.join(",") {
+        return None;
+    }
+    let num = |s: &str| -> Option<Option<f64>> {
+        if s.is_empty() {
+            Some(None)
+        } else {
+            s.parse::<f64>().ok().map(Some)
+        }
+    };
+    lines
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            if f.len() != COLUMNS.len() {
+                return None;
+            }
+            Some(Row {
+                engine: f[0].to_string(),
+                precision: f[1].to_string(),
+                increment: num(f[2])??,
+                penalty_stiffness: num(f[3])?,
+                iterations: if f[4].is_empty() {
+                    None
+                } else {
+                    Some(f[4].parse().ok()?)
+                },
+                steps: f[5].parse().ok()?,
+                error_max: num(f[6])?,
+                error_rms: num(f[7])?,
+                cpu_s_min: num(f[8])??,
+                cpu_s_median: num(f[9])??,
+                cpu_s_max: num(f[10])??,
+                status: f[11].to_string(),
+            })
+        })
+        .collect()
+}
+
+/// Engine colours of the work–precision diagram.
+const COLOURS: [(&str, RGBColor); 6] = [
+    ("explicit", RGBColor(31, 119, 180)),
+    ("explicit_small", RGBColor(44, 160, 44)),
+    ("rapier_f64", RGBColor(214, 39, 40)),
+    ("rapier_f32", RGBColor(255, 127, 14)),
+    ("rapier_f64_default", RGBColor(148, 103, 189)),
+    ("rapier_f32_default", RGBColor(140, 86, 75)),
+];
+
+fn colour(engine: &str) -> RGBColor {
+    COLOURS
+        .iter()
+        .find(|(e, _)| *e == engine)
+        .map_or(RGBColor(0, 0, 0), |c| c.1)
+}
+
+/// `c` mixed with white by `t` ∈ [0, 1).
+fn lighter(c: RGBColor, t: f64) -> RGBColor {
+    let mix = |x: u8| (x as f64 + (255.0 - x as f64) * t).round() as u8;
+    RGBColor(mix(c.0), mix(c.1), mix(c.2))
+}
+
+/// Errors below this are drawn at it (round-off).
+const ERROR_FLOOR: f64 = 1e-16;
+
+/// The work–precision diagram of one case's sweep; `tolerances` are the case's declared ones
+/// (engine → max error over peak). None when no point has both an error and a time.
+pub fn render(sweep: &CaseSweep, tolerances: &BTreeMap<String, f64>) -> Option<String> {
+    let rows = sweep.rows();
+    let ok: Vec<&Row> = rows
+        .iter()
+        .filter(|r| r.status == "ok" && r.error_max.is_some_and(f64::is_finite))
+        .collect();
+    if ok.is_empty() {
+        return None;
+    }
+    let errors = ok
+        .iter()
+        .map(|r| r.error_max.unwrap_or(1.0).max(ERROR_FLOOR));
+    let (elo, ehi) = errors.fold((f64::INFINITY, 0.0f64), |(a, b), e| (a.min(e), b.max(e)));
+    let tol_hi = tolerances.values().fold(0.0f64, |m, t| m.max(*t));
+    let (x0, x1) = (elo / 3.0, (ehi.max(tol_hi) * 3.0).min(1e3));
+    let times = rows
+        .iter()
+        .flat_map(|r| [r.cpu_s_min, r.cpu_s_max])
+        .filter(|t| *t > 0.0 && t.is_finite());
+    let (tlo, thi) = times.fold((f64::INFINITY, 0.0f64), |(a, b), t| (a.min(t), b.max(t)));
+    if !(tlo.is_finite() && thi > 0.0 && x1 > x0) {
+        return None;
+    }
+    let (y0, y1) = (tlo / 2.0, thi * 2.0);
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (1180, 700)).into_drawing_area();
+        root.fill(&WHITE).ok()?;
+        let (title, body) = root.split_vertically(50);
+        title
+            .titled(
+                &format!(
+                    "{}: what accuracy costs (each point one setting; whiskers: min–max CPU \
+                     time of the repeats)",
+                    sweep.case
+                ),
+                ("sans-serif", 16),
+            )
+            .ok()?;
+        let (panel, legend) = body.split_horizontally(880);
+        let mut chart = ChartBuilder::on(&panel)
+            .margin(10)
+            .x_label_area_size(44)
+            .y_label_area_size(80)
+            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
+            .ok()?;
+        chart
+            .configure_mesh()
+            .x_desc("error against the exact solution of the engine's own model (max over peak)")
+            .y_desc("CPU seconds per simulated second")
+            .x_label_formatter(&|x| tick(*x, 0.0))
+            .y_label_formatter(&|y| tick(*y, 0.0))
+            .light_line_style(WHITE)
+            .draw()
+            .ok()?;
+        // The Pareto front, under the data.
+        let front: Vec<(f64, f64)> = work_precision::pareto(&rows)
+            .into_iter()
+            .map(|i| {
+                (
+                    rows[i].error_max.unwrap_or(1.0).max(ERROR_FLOOR),
+                    rows[i].cpu_s_min,
+                )
+            })
+            .collect();
+        let mut steps = Vec::new();
+        for (k, p) in front.iter().enumerate() {
+            if k > 0 {
+                steps.push((front[k - 1].0, p.1));
+            }
+            steps.push(*p);
+        }
+        let grey = RGBColor(190, 190, 190);
+        chart
+            .draw_series(LineSeries::new(steps, grey.stroke_width(6)))
+            .ok()?;
+        // Tolerances.
+        let mut by_value: BTreeMap<String, Vec<&str>> = BTreeMap::new();
+        for (engine, t) in tolerances {
+            if colour(engine) != RGBColor(0, 0, 0) {
+                by_value.entry(number(*t)).or_default().push(engine);
+            }
+        }
+        for (k, (value, engines)) in by_value.iter().enumerate() {
+            let t: f64 = value.parse().unwrap_or(0.0);
+            if !(x0..x1).contains(&t) {
+                continue;
+            }
+            let c = colour(engines[0]);
+            chart
+                .draw_series(LineSeries::new([(t, y0), (t, y1)], c.stroke_width(1)))
+                .ok()?;
+            chart
+                .draw_series([Text::new(
+                    format!("tolerance {}", engines.join(", ")),
+                    (t * 1.1, y1 / 1.3 / 1.8f64.powi(k as i32)),
+                    ("sans-serif", 11).into_font().color(&c),
+                )])
+                .ok()?;
+        }
+        // Paths.
+        let mut entries: Vec<(String, RGBColor)> = Vec::new();
+        let mut shade: BTreeMap<&str, usize> = BTreeMap::new();
+        for path in &sweep.paths {
+            let k = shade.entry(path.engine.as_str()).or_default();
+            let c = lighter(colour(&path.engine), 0.13 * *k as f64);
+            *k += 1;
+            let duration = sweep.duration;
+            let pts: Vec<(f64, f64, f64, f64)> = path
+                .points
+                .iter()
+                .filter(|p| p.status == Status::Ok)
+                .filter_map(|p| {
+                    let e = p.error?.0.max(ERROR_FLOOR);
+                    let mut cpu: Vec<f64> = p.cpu_seconds.iter().map(|c| c / duration).collect();
+                    cpu.sort_by(f64::total_cmp);
+                    Some((e, cpu[0], cpu[cpu.len() - 1], cpu[cpu.len() / 2]))
+                })
+                .collect();
+            let width = if matches!(path.kind, PathKind::Substeps { .. }) {
+                1
+            } else {
+                2
+            };
+            chart
+                .draw_series(LineSeries::new(
+                    pts.iter().map(|p| (p.0, p.1)),
+                    c.stroke_width(width),
+                ))
+                .ok()?;
+            chart
+                .draw_series(pts.iter().map(|p| Circle::new((p.0, p.1), 3, c.filled())))
+                .ok()?;
+            for p in &pts {
+                if p.2 > p.1 * 1.001 {
+                    chart
+                        .draw_series(LineSeries::new([(p.0, p.1), (p.0, p.2)], c.stroke_width(1)))
+                        .ok()?;
+                }
+            }
+            for p in path.points.iter().filter(|p| p.status != Status::Ok) {
+                let cpu = p.cpu_seconds.first().copied().unwrap_or(0.0) / duration;
+                let y = cpu.clamp(y0, y1);
+                chart
+                    .draw_series([Cross::new((x1 / 1.25, y), 5, c.stroke_width(2))])
+                    .ok()?;
+            }
+            entries.push((path.label(), c));
+        }
+        // Legend, in its own column.
+        let font = ("sans-serif", 12).into_font();
+        let mut row = 0;
+        let mut line = |text: String, c: RGBColor, mark: u8| -> Option<()> {
+            let y = 20 + 18 * row;
+            row += 1;
+            match mark {
+                0 => legend
+                    .draw(&PathElement::new([(4, y), (24, y)], c.stroke_width(2)))
+                    .ok()?,
+                1 => legend
+                    .draw(&PathElement::new([(4, y), (24, y)], c.stroke_width(6)))
+                    .ok()?,
+                _ => legend
+                    .draw(&Cross::new((14, y), 5, c.stroke_width(2)))
+                    .ok()?,
+            }
+            legend
+                .draw(&Text::new(text, (30, y - 6), font.clone()))
+                .ok()?;
+            Some(())
+        };
+        for (label, c) in entries {
+            line(label, c, 0)?;
+        }
+        line("Pareto front (all engines)".into(), grey, 1)?;
+        line(
+            "unstable or failed (right edge)".into(),
+            RGBColor(0, 0, 0),
+            2,
+        )?;
+        root.present().ok()?;
+    }
+    Some(svg)
+}
+
+/// Write each case's sweep CSV and work–precision figure into `out` (each file atomically;
+/// an interruption checkpoint before each).
+pub fn write(
+    out: &Path,
+    sweeps: &[CaseSweep],
+    scenes: &[crate::scene::Scene],
+) -> Result<(), crate::report::data::DataError> {
+    use crate::report::data::{DataError, write_atomic};
+    for s in sweeps {
+        crate::interrupt::checkpoint("sweep").map_err(|_| DataError::Interrupted)?;
+        write_atomic(&csv_path(out, &s.case), csv(&s.rows()).as_bytes())?;
+        let tolerances = scenes
+            .iter()
+            .find(|c| c.id == s.case)
+            .map(|c| c.tolerances.clone().into_iter().collect())
+            .unwrap_or_default();
+        if let Some(svg) = render(s, &tolerances) {
+            write_atomic(&figure_path(out, &s.case), svg.as_bytes())?;
+        }
+    }
+    Ok(())
+}
+
+/// Plain text for standard output: per case and engine, the observed order, the floor, and
+/// the CPU time to reach each of [`work_precision::TARGETS`].
+pub fn text(sweeps: &[CaseSweep]) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    for c in sweeps {
+        let rows = c.rows();
+        let _ = writeln!(s, "{} ({} points)", c.case, rows.len());
+        for f in &c.fits {
+            let order = f.observed_order.as_ref().map_or("-".into(), |o| {
+                format!(
+                    "{:.2} over h {:.2e}..{:.2e} ({} points)",
+                    o.value, o.finest, o.coarsest, o.points
+                )
+            });
+            let floor = f.floor.as_ref().map_or("none reached".into(), |f| {
+                format!("{:.2e}: {}", f.value, f.cause)
+            });
+            let reach: Vec<String> = work_precision::TARGETS
+                .iter()
+                .map(|t| match work_precision::cheapest(&rows, &f.engine, *t) {
+                    work_precision::Reach::Reached(r) => {
+                        format!("{t:.0e}: {:.2e} s/s", r.cpu_s_min)
+                    }
+                    work_precision::Reach::NotReached(best) => format!(
+                        "{t:.0e}: not reached{}",
+                        best.map_or(String::new(), |b| format!(" (best {b:.2e})"))
+                    ),
+                })
+                .collect();
+            let _ = writeln!(
+                s,
+                "  {:<18} order {order}; floor {floor}; {}",
+                f.engine,
+                reach.join(", ")
+            );
+        }
+    }
+    s
+}
+
+/// Each case's sweep rows, by case id.
+pub type SweepRows = BTreeMap<String, Vec<Row>>;
+
+/// The sweep rows written in `out` for each of `cases` (cases without a sweep are left out).
+pub fn read_all<'a>(out: &Path, cases: impl Iterator<Item = &'a str>) -> SweepRows {
+    cases
+        .filter_map(|c| Some((c.to_string(), read(&csv_path(out, c))?)))
+        .collect()
+}
+
+/// The short name of a floor's cause (before any detail in parentheses or after a colon).
+pub fn short_cause(cause: &str) -> &str {
+    cause.split([':', '(']).next().unwrap_or(cause).trim()
+}
+
+fn sci(x: f64) -> String {
+    crate::report::markdown::sci(x)
+}
+
+/// A time-to-accuracy cell: CPU seconds per simulated second and the setting, or "not
+/// reached" with the smallest error attained.
+pub fn reach_cell(rows: &[Row], engine: &str, target: f64, setting: bool) -> String {
+    match work_precision::cheapest(rows, engine, target) {
+        work_precision::Reach::Reached(r) if setting => {
+            let mut s = format!("{} (h {}", sci(r.cpu_s_min), sci(r.increment));
+            if let Some(k) = r.penalty_stiffness {
+                s += &format!(", k_p {}", sci(k));
+            }
+            if let Some(n) = r.iterations {
+                s += &format!(", {n} substeps");
+            }
+            s + ")"
+        }
+        work_precision::Reach::Reached(r) => sci(r.cpu_s_min),
+        work_precision::Reach::NotReached(Some(best)) => format!("not reached ({})", sci(best)),
+        work_precision::Reach::NotReached(None) => "–".into(),
+    }
+}
+
+/// The report's section on what accuracy costs: how the sweep works, then per case and engine
+/// the observed order and floor, and the CPU time to 1e-4 of the peak.
+pub fn overview(w: &mut String, s: &crate::report::summary::Summary, sweeps: &SweepRows) {
+    use std::fmt::Write;
+    let engines: Vec<&str> = crate::run::sweep::ENGINES
+        .into_iter()
+        .filter(|e| sweeps.values().flatten().any(|r| r.engine == *e))
+        .collect();
+    if engines.is_empty() {
+        return;
+    }
+    let grid = crate::run::sweep::Grid::default();
+    let _ = writeln!(
+        w,
+        "\n## What accuracy costs\n\nEach engine was rerun over a grid of settings (the sweep: \
+         `sweep/<case>.csv`, one work–precision diagram per case in its section). The time \
+         increment goes from 0.9 of the stable one (or the output interval; rapier's default \
+         configuration from its 1/60 s) down by √10 per point; the explicit engines do so at each \
+         penalty stiffness of 1e2 … 1e6 × the largest spring stiffness, rapier's matched \
+         configuration also over 1 … 64 substeps, f32 and f64. A path stops where its error stalls \
+         (a point more than {} of the previous one) or where the next point would take more than \
+         {:.0e} increments (rapier: {:.0e} substeps). Errors are against the exact solution of \
+         the engine's own model, as in the verdicts; CPU time is the running thread's, setup \
+         included, per simulated second, the minimum of {} runs (one for points over a tenth of \
+         the budget).\n",
+        grid.stall,
+        grid.max_increments,
+        grid.max_increments * crate::run::sweep::RAPIER_SHARE,
+        grid.repeat
+    );
+    let _ = writeln!(
+        w,
+        "**Observed order and floor.** The order is the least-squares slope of log error against \
+         log increment over the points above {}× the path's floor (for the explicit engines on \
+         contact cases, along the penalty stiffnesses each at 0.9 of its own stable increment, \
+         since at one stiffness the compliance floor comes at the first refinement); the floor is \
+         where refinement stopped paying, named by what limits it.\n",
+        work_precision::FLOOR_MARGIN
+    );
+    let header: Vec<String> = engines.iter().map(|e| format!("`{e}`")).collect();
+    let _ = writeln!(w, "| case | {} |", header.join(" | "));
+    let _ = writeln!(w, "|---|{}", "---|".repeat(engines.len()));
+    for c in &s.cases {
+        if !sweeps.contains_key(&c.id) {
+            continue;
+        }
+        let cells: Vec<String> = engines
+            .iter()
+            .map(|e| {
+                let Some(r) = c.runs.iter().find(|r| r.engine == *e) else {
+                    return "–".into();
+                };
+                let order = r.observed_order.map_or("–".into(), |p| format!("{p:.2}"));
+                match &r.floor {
+                    Some(f) => format!("{order}; floor {} {}", sci(f.value), short_cause(&f.cause)),
+                    None => order,
+                }
+            })
+            .collect();
+        let _ = writeln!(w, "| {} | {} |", c.id, cells.join(" | "));
+    }
+    let _ = writeln!(
+        w,
+        "\n**CPU seconds per simulated second to reach 1e-4 of the peak** (the cheapest point of \
+         the sweep within it; \"not reached\" gives the smallest error attained):\n"
+    );
+    let _ = writeln!(w, "| case | {} |", header.join(" | "));
+    let _ = writeln!(w, "|---|{}", "---:|".repeat(engines.len()));
+    for (case, rows) in sweeps {
+        let cells: Vec<String> = engines
+            .iter()
+            .map(|e| reach_cell(rows, e, 1e-4, false))
+            .collect();
+        let _ = writeln!(w, "| {case} | {} |", cells.join(" | "));
+    }
+    let _ = writeln!(w);
+}
+
+/// A case section's part on what accuracy costs: the diagram, then per engine the order, the
+/// floor, the CPU time to each target and the cheapest setting within the case's tolerance.
+pub fn case_part(w: &mut String, c: &crate::report::summary::CaseSummary, rows: &[Row]) {
+    use std::fmt::Write;
+    let _ = writeln!(
+        w,
+        "\n**What accuracy costs.** Data: `sweep/{0}.csv`.\n\n\
+         ![{0}: work–precision diagram (error against CPU time per simulated second, log–log)]\
+         (figures/{0}.work-precision.svg)\n",
+        c.id
+    );
+    let _ = writeln!(
+        w,
+        "| engine | observed order (increments) | floor | to 1e-2 | to 1e-4 | to 1e-6 | cheapest within the tolerance |"
+    );
+    let _ = writeln!(w, "|---|---|---|---:|---:|---:|---|");
+    for e in crate::run::sweep::ENGINES {
+        if !rows.iter().any(|r| r.engine == e) {
+            continue;
+        }
+        let run = c.runs.iter().find(|r| r.engine == e);
+        let order = run
+            .and_then(|r| r.order_fit.as_ref())
+            .map_or("–".into(), |o| {
+                format!(
+                    "{:.2} ({} … {}, {} points)",
+                    o.value,
+                    sci(o.coarsest),
+                    sci(o.finest),
+                    o.points
+                )
+            });
+        let floor = run
+            .and_then(|r| r.floor.as_ref())
+            .map_or("none within the budget".into(), |f| {
+                format!("{}: {}", sci(f.value), f.cause)
+            });
+        let within = match run.and_then(|r| r.tolerance) {
+            Some(t) => format!("{}: {}", sci(t), reach_cell(rows, e, t, true)),
+            None => "no tolerance declared".into(),
+        };
+        let reach: Vec<String> = work_precision::TARGETS
+            .iter()
+            .map(|t| reach_cell(rows, e, *t, false))
+            .collect();
+        let _ = writeln!(
+            w,
+            "| {e} | {order} | {floor} | {} | {within} |",
+            reach.join(" | ")
+        );
+    }
+}

@@ -1,0 +1,569 @@
+//! Sweeps: each engine rerun on a case over a grid of settings, every point timed, so that the
+//! comparison can say what accuracy costs (work–precision, `comparison::work_precision`).
+//!
+//! A sweep is a set of *paths*, each a sequence of settings that refine one thing:
+//!
+//! - `explicit`, `explicit_small`: the time increment, from 0.9 of the stable one (or the
+//!   output interval, whichever is shorter) down by [`Grid::refinement`] per point; on a scene
+//!   with penalty contact one such path per penalty stiffness of [`Grid::penalty_ratios`] (× the
+//!   largest spring stiffness). Each path also runs once just above its stable increment (the
+//!   shortest increment above it that divides the output interval, where there is one): that
+//!   point must come back unstable.
+//! - `rapier_f64`, `rapier_f32` (matched configuration): the increment from the output interval
+//!   down, and the substeps (`solver_iterations`: 1, 2, 4, …) at the output interval;
+//! - `rapier_f64_default`, `rapier_f32_default`: the increment from rapier's 1/60 s down.
+//!
+//! A path stops when its error stalls (a point's error is more than [`Grid::stall`] of the
+//! previous one: the refinement no longer pays) or when the next point would take more than
+//! the grid's budget of increments ([`Grid::max_increments`], substeps counted for rapier).
+//! Both rules depend only on the errors and the settings, never on timings, so the same inputs
+//! run the same points. Each point runs [`Grid::repeat`] times; the CPU seconds of each run are
+//! the running thread's own (`CLOCK_THREAD_CPUTIME_ID`), setup included.
+//!
+//! This layer measures nothing against a reference: the caller hands in how a history's error
+//! is measured ([`ErrorOf`]), which the stall rule needs.
+
+use crate::contract::{self, History};
+use crate::engines::rapier::{self, Configuration, MatchedSettings, Precision, RapierEngine};
+use crate::engines::{Engine, RunSettings, explicit};
+use crate::scene::{IncrementRule, PenaltyRule, Scene};
+use rayon::prelude::*;
+
+/// The grid and its limits.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Grid {
+    /// Runs per point (the CPU time is reported as min, median, max over them).
+    pub repeat: usize,
+    /// Increment ratio between successive points of a path (√10: two points per decade).
+    pub refinement: f64,
+    /// Penalty stiffnesses, as multiples of the scene's largest spring stiffness, one
+    /// increment path each (scenes with penalty contact).
+    pub penalty_ratios: Vec<f64>,
+    /// Rapier substep counts of the substeps path.
+    pub substeps: Vec<usize>,
+    /// A path stops after a point whose error exceeds this fraction of the previous point's.
+    pub stall: f64,
+    /// Most increments one run of a point may take (explicit engines: increments; rapier:
+    /// increments × substeps, [`RAPIER_SHARE`] of it). About 0.1–0.3 s of CPU for the explicit
+    /// engines and 0.3–1 s for rapier at the shipped speeds. Points above a tenth of it run
+    /// once whatever [`Grid::repeat`] says (a long run's time varies little).
+    pub max_increments: f64,
+    /// Most points a path has (a bound whatever the errors do).
+    pub max_points: usize,
+}
+
+impl Default for Grid {
+    /// The compact grid the main command runs.
+    fn default() -> Self {
+        Grid {
+            repeat: 3,
+            refinement: 10f64.sqrt(),
+            penalty_ratios: vec![1e2, 1e3, 1e4, 1e5, 1e6],
+            substeps: vec![1, 2, 4, 8, 16, 32, 64],
+            stall: 0.7,
+            max_increments: 1.0e6,
+            max_points: 12,
+        }
+    }
+}
+
+/// Rapier's increments are budgeted at this fraction of [`Grid::max_increments`] (one rapier
+/// substep costs ~1–3 µs against ~0.1–0.3 µs for an explicit increment).
+pub const RAPIER_SHARE: f64 = 0.2;
+
+/// Errors (max over peak) at or above this are pre-asymptotic: a path does not stall there.
+pub const PRE_ASYMPTOTIC: f64 = 0.5;
+
+/// What happened at a point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Status {
+    /// The run finished and its history meets the output contract.
+    Ok,
+    /// The run stopped on its instability guard, or its state turned non-finite.
+    Unstable,
+    /// Any other failure.
+    Failed,
+}
+
+impl Status {
+    /// `ok`, `unstable`, `failed`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Status::Ok => "ok",
+            Status::Unstable => "unstable",
+            Status::Failed => "failed",
+        }
+    }
+}
+
+/// One run setting and what it gave.
+#[derive(Debug, Clone)]
+pub struct Point {
+    /// The increment taken (requested, where the run failed before choosing one).
+    pub increment: f64,
+    /// Penalty stiffness (engines with penalty contact on a scene with contact).
+    pub penalty_stiffness: Option<f64>,
+    /// Rapier substeps per increment.
+    pub iterations: Option<usize>,
+    /// Increments taken (0 for a failed run).
+    pub steps: u64,
+    /// The stable increment the engine computed (explicit engines, ok runs).
+    pub stable_increment: Option<f64>,
+    /// Error as the caller measures it: (max over peak, RMS over peak), for an ok run.
+    pub error: Option<(f64, f64)>,
+    /// CPU seconds of each repeat (one for a failed run).
+    pub cpu_seconds: Vec<f64>,
+    /// Outcome.
+    pub status: Status,
+    /// Why the run failed, if it did.
+    pub message: Option<String>,
+}
+
+/// What a path refines.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PathKind {
+    /// The time increment, at a fixed penalty stiffness (where the engine has one).
+    Increment {
+        /// Penalty stiffness ratio to the largest spring stiffness (penalty engines with
+        /// contact).
+        penalty_ratio: Option<f64>,
+    },
+    /// Rapier's substeps, at a fixed increment.
+    Substeps {
+        /// The increment.
+        increment: f64,
+    },
+}
+
+/// One path of one engine.
+#[derive(Debug, Clone)]
+pub struct SweepPath {
+    /// Engine name.
+    pub engine: String,
+    /// `f64` or `f32`.
+    pub precision: &'static str,
+    /// What it refines.
+    pub kind: PathKind,
+    /// Points, coarse to fine; an unstable probe, where there is one, first.
+    pub points: Vec<Point>,
+    /// Why the path ended: `stalled`, `budget`, `failed` or `points`.
+    pub ended: &'static str,
+}
+
+impl SweepPath {
+    /// A short label: the engine and what the path holds fixed.
+    pub fn label(&self) -> String {
+        match self.kind {
+            PathKind::Increment {
+                penalty_ratio: Some(r),
+            } => format!("{}, k_p = {r:.0e} k", self.engine),
+            PathKind::Increment {
+                penalty_ratio: None,
+            } => format!("{}, h", self.engine),
+            PathKind::Substeps { .. } => format!("{}, substeps", self.engine),
+        }
+    }
+}
+
+/// How the caller measures a history's error: engine name and history to (max, RMS), or
+/// `None` where it cannot (no baseline).
+pub type ErrorOf<'a> = dyn Fn(&str, &History) -> Option<(f64, f64)> + Sync + 'a;
+
+/// How the caller measures a history's error on a scene (see [`ErrorOf`]).
+pub type SceneErrorOf<'a> = dyn Fn(&Scene, &str, &History) -> Option<(f64, f64)> + Sync + 'a;
+
+/// The engines a sweep can run (those that step in time), in report order.
+pub const ENGINES: [&str; 6] = [
+    "explicit",
+    "explicit_small",
+    "rapier_f64",
+    "rapier_f32",
+    "rapier_f64_default",
+    "rapier_f32_default",
+];
+
+/// The paths of `engines` (names from [`ENGINES`]) on `scene`, before they run.
+fn plan(scene: &Scene, engines: &[&str], grid: &Grid) -> Vec<(String, PathKind)> {
+    let interval = scene.duration() / (scene.output_rows - 1) as f64;
+    let mut paths = Vec::new();
+    for &e in engines {
+        match e {
+            "explicit" | "explicit_small" if !scene.contacts.is_empty() => {
+                for r in &grid.penalty_ratios {
+                    paths.push((
+                        e.to_string(),
+                        PathKind::Increment {
+                            penalty_ratio: Some(*r),
+                        },
+                    ));
+                }
+            }
+            "explicit" | "explicit_small" | "rapier_f64_default" | "rapier_f32_default" => paths
+                .push((
+                    e.to_string(),
+                    PathKind::Increment {
+                        penalty_ratio: None,
+                    },
+                )),
+            "rapier_f64" | "rapier_f32" => {
+                paths.push((
+                    e.to_string(),
+                    PathKind::Increment {
+                        penalty_ratio: None,
+                    },
+                ));
+                paths.push((
+                    e.to_string(),
+                    PathKind::Substeps {
+                        increment: interval,
+                    },
+                ));
+            }
+            _ => {}
+        }
+    }
+    paths
+}
+
+/// How many paths [`run`] runs on `scene` (for a progress bar).
+pub fn plan_len(scene: &Scene, engines: &[&str], grid: &Grid) -> usize {
+    plan(scene, engines, grid).len()
+}
+
+/// Run every path of every case in `scenes`, each with the engines named beside it (those of
+/// [`ENGINES`]; others are skipped), in parallel; `tick` is called once per finished path. Paths come back
+/// per case in the order of `scenes`, each case's in engine order.
+pub fn run(
+    scenes: &[(&Scene, Vec<&str>)],
+    grid: &Grid,
+    error_of: &SceneErrorOf,
+    tick: &(dyn Fn(&str) + Sync),
+) -> Vec<Vec<SweepPath>> {
+    let jobs: Vec<(usize, &Scene, String, PathKind)> = scenes
+        .iter()
+        .enumerate()
+        .flat_map(|(i, (s, engines))| {
+            plan(s, engines, grid)
+                .into_iter()
+                .map(move |(e, k)| (i, *s, e, k))
+        })
+        .collect();
+    let done: Vec<(usize, SweepPath)> = jobs
+        .par_iter()
+        .map(|(i, scene, engine, kind)| {
+            let error = |e: &str, h: &History| error_of(scene, e, h);
+            let path = run_path(scene, engine, *kind, grid, &error);
+            tick(&format!("{}/{}", scene.id, path.label()));
+            (*i, path)
+        })
+        .collect();
+    let mut out = vec![Vec::new(); scenes.len()];
+    for (i, p) in done {
+        out[i].push(p);
+    }
+    out
+}
+
+/// The settings of one point of a path: the engine (rapier's substeps are its configuration)
+/// and the run overrides.
+fn point_engine(name: &str, kind: PathKind, substeps: Option<usize>) -> Box<dyn Engine> {
+    let precision = if name.contains("f32") {
+        Precision::F32
+    } else {
+        Precision::F64
+    };
+    match name {
+        "explicit" => Box::new(explicit::ExplicitEngine::finite()),
+        "explicit_small" => Box::new(explicit::ExplicitEngine::small()),
+        "rapier_f64_default" | "rapier_f32_default" => {
+            Box::new(RapierEngine::default_configuration(precision))
+        }
+        _ => {
+            let solver_iterations = match kind {
+                PathKind::Substeps { .. } => substeps.unwrap_or(1),
+                PathKind::Increment { .. } => MatchedSettings::CHOSEN.solver_iterations,
+            };
+            Box::new(RapierEngine::with(
+                precision,
+                Configuration::Matched(MatchedSettings {
+                    solver_iterations,
+                    ..MatchedSettings::CHOSEN
+                }),
+            ))
+        }
+    }
+}
+
+/// Substeps per increment of a rapier engine (None for others).
+fn substeps_of(engine: &str, kind: PathKind, substeps: Option<usize>) -> Option<usize> {
+    match (engine, kind) {
+        (e, _) if !e.starts_with("rapier") => None,
+        (_, PathKind::Substeps { .. }) => substeps,
+        ("rapier_f64_default" | "rapier_f32_default", _) => {
+            Some(rapier::backend::DEFAULT_SOLVER_ITERATIONS)
+        }
+        _ => Some(MatchedSettings::CHOSEN.solver_iterations),
+    }
+}
+
+/// CPU seconds this thread has used.
+pub fn thread_cpu_seconds() -> f64 {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: clock_gettime writes one timespec through a valid pointer; it has no other
+    // preconditions.
+    let r = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+    if r != 0 {
+        return 0.0;
+    }
+    ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
+}
+
+/// One setting run `repeat` times.
+fn run_point(
+    scene: &Scene,
+    engine: &dyn Engine,
+    settings: &RunSettings,
+    iterations: Option<usize>,
+    repeat: usize,
+    error: &ErrorOf,
+) -> Point {
+    let requested = match settings.increment {
+        Some(IncrementRule::Forced(h) | IncrementRule::Given(h)) => h,
+        _ => 0.0,
+    };
+    let mut cpu = Vec::new();
+    type Measured = (f64, u64, Option<f64>, Option<f64>, Option<(f64, f64)>);
+    let mut first: Option<Result<Measured, String>> = None;
+    for _ in 0..repeat.max(1) {
+        if crate::interrupt::checkpoint("sweep").is_err() {
+            first.get_or_insert(Err("interrupted".into()));
+            break;
+        }
+        let start = thread_cpu_seconds();
+        let out = engine.run(scene, settings).map_err(|e| e.to_string());
+        let checked = out.and_then(|o| {
+            contract::check(scene, &o.history)?;
+            contract::check_finite(&o.history)?;
+            Ok(o)
+        });
+        cpu.push(thread_cpu_seconds() - start);
+        let failed = checked.is_err();
+        if first.is_none() {
+            first = Some(checked.map(|o| {
+                (
+                    o.info.increment,
+                    o.info.steps,
+                    o.info.stable_increment,
+                    o.info.penalty_stiffness,
+                    error(engine.name(), &o.history),
+                )
+            }));
+        }
+        if failed {
+            break;
+        }
+    }
+    match first.expect("at least one run") {
+        Ok((increment, steps, stable_increment, penalty_stiffness, error)) => {
+            // Above its stable increment a penalty contact can chatter without its energy
+            // growing past the engine's guard (the contact opens, so the unstable mode stays
+            // bounded): such a run finishes but holds nothing of the answer.
+            let above = stable_increment.is_some_and(|s| increment > s * (1.0 + 1e-9));
+            let lost = error.is_some_and(|e| e.0 > 1.0);
+            let (status, message) = if above && lost {
+                (
+                    Status::Unstable,
+                    Some(format!(
+                        "finished above the stable increment {:e} with an error of {:.2e} of the peak",
+                        stable_increment.unwrap_or(0.0),
+                        error.map_or(0.0, |e| e.0)
+                    )),
+                )
+            } else {
+                (Status::Ok, None)
+            };
+            Point {
+                increment,
+                penalty_stiffness,
+                iterations,
+                steps,
+                stable_increment,
+                error,
+                cpu_seconds: cpu,
+                status,
+                message,
+            }
+        }
+        Err(message) => {
+            let unstable = message.contains("unstable") || message.contains("non-finite");
+            Point {
+                increment: requested,
+                penalty_stiffness: None,
+                iterations,
+                steps: 0,
+                stable_increment: None,
+                error: None,
+                cpu_seconds: cpu,
+                status: if unstable {
+                    Status::Unstable
+                } else {
+                    Status::Failed
+                },
+                message: Some(message),
+            }
+        }
+    }
+}
+
+/// Run one path until it stalls, fails, or the next point exceeds the budget.
+fn run_path(
+    scene: &Scene,
+    engine_name: &str,
+    kind: PathKind,
+    grid: &Grid,
+    error: &ErrorOf,
+) -> SweepPath {
+    let interval = scene.duration() / (scene.output_rows - 1) as f64;
+    let precision = if engine_name.contains("f32") {
+        "f32"
+    } else {
+        "f64"
+    };
+    let penalty = match kind {
+        PathKind::Increment {
+            penalty_ratio: Some(r),
+        } => Some(PenaltyRule::Ratio(r)),
+        _ => None,
+    };
+    let rapier = engine_name.starts_with("rapier");
+    let budget = if rapier {
+        grid.max_increments * RAPIER_SHARE
+    } else {
+        grid.max_increments
+    };
+    let mut points: Vec<Point> = Vec::new();
+    let mut ended = "points";
+    // The settings of the k-th point of the path.
+    let setting = |k: usize, first: Option<&Point>| -> (RunSettings, Option<usize>) {
+        let base = RunSettings {
+            penalty,
+            ..RunSettings::default()
+        };
+        match kind {
+            PathKind::Substeps { increment } => (
+                RunSettings {
+                    increment: Some(IncrementRule::Forced(increment)),
+                    ..base
+                },
+                grid.substeps.get(k).copied(),
+            ),
+            PathKind::Increment { .. } => {
+                let start = if rapier {
+                    if engine_name.ends_with("default") {
+                        rapier::DEFAULT_INCREMENT
+                    } else {
+                        interval
+                    }
+                } else {
+                    first.map_or(0.0, |p| p.increment)
+                };
+                let rule = if k == 0 && !rapier {
+                    IncrementRule::Stable { safety: 0.9 }
+                } else {
+                    IncrementRule::Forced(start / grid.refinement.powi(k as i32))
+                };
+                (
+                    RunSettings {
+                        increment: Some(rule),
+                        ..base
+                    },
+                    None,
+                )
+            }
+        }
+    };
+    let count = match kind {
+        PathKind::Substeps { .. } => grid.substeps.len().min(grid.max_points),
+        PathKind::Increment { .. } => grid.max_points,
+    };
+    let mut probe: Option<Point> = None;
+    for k in 0..count {
+        let (settings, substeps) = setting(k, points.first());
+        let iterations = substeps_of(engine_name, kind, substeps);
+        let engine = point_engine(engine_name, kind, substeps);
+        let increments =
+            engine.increments(scene, &settings).unwrap_or(0.0) * iterations.unwrap_or(1) as f64;
+        if increments > budget * (1.0 + 1e-9) {
+            ended = "budget";
+            break;
+        }
+        let repeat = if increments > budget / 10.0 {
+            1
+        } else {
+            grid.repeat
+        };
+        let point = run_point(scene, engine.as_ref(), &settings, iterations, repeat, error);
+        let status = point.status;
+        let this = point.error.map(|e| e.0);
+        let previous = points.last().and_then(|p| p.error.map(|e| e.0));
+        if k == 0 && !rapier && status == Status::Ok {
+            probe = unstable_probe(scene, engine.as_ref(), &settings, &point, interval, error);
+        }
+        points.push(point);
+        if status != Status::Ok {
+            ended = "failed";
+            break;
+        }
+        // An error of the order of the answer itself is pre-asymptotic (it saturates, it
+        // does not stall): only smaller errors can stall.
+        if let (Some(e), Some(p)) = (this, previous)
+            && e > grid.stall * p
+            && p < PRE_ASYMPTOTIC
+        {
+            ended = "stalled";
+            break;
+        }
+    }
+    if let Some(p) = probe {
+        points.insert(0, p);
+    }
+    SweepPath {
+        engine: engine_name.to_string(),
+        precision,
+        kind,
+        points,
+        ended,
+    }
+}
+
+/// The run just above the stable increment of a path's first point: the shortest increment
+/// above it that divides the output interval (so that the engine takes it as it is), when that
+/// is less than twice the stable one.
+fn unstable_probe(
+    scene: &Scene,
+    engine: &dyn Engine,
+    settings: &RunSettings,
+    first: &Point,
+    interval: f64,
+    error: &ErrorOf,
+) -> Option<Point> {
+    let stable = first.stable_increment?;
+    let n = (interval / stable).floor();
+    if n < 1.0 {
+        return None;
+    }
+    let h = interval / n;
+    if !(h > 1.001 * stable && h < 2.0 * stable) {
+        return None;
+    }
+    let forced = RunSettings {
+        increment: Some(IncrementRule::Forced(h)),
+        ..*settings
+    };
+    let mut point = run_point(scene, engine, &forced, None, 1, error);
+    point.penalty_stiffness = point.penalty_stiffness.or(first.penalty_stiffness);
+    Some(point)
+}

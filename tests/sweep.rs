@@ -1,0 +1,205 @@
+//! What accuracy costs: the sweep's orders of convergence and floors on every seed case, and
+//! the files `crosscheck sweep` writes.
+
+mod common;
+
+use crosscheck::comparison::work_precision::{self, CaseSweep};
+use crosscheck::engines;
+use crosscheck::run::{self, Plan, sweep};
+use std::process::Command;
+use std::sync::OnceLock;
+
+/// The compact sweep of every seed case, once per test binary (one run per point: the orders
+/// and floors depend on errors only).
+fn sweeps() -> &'static [CaseSweep] {
+    static SWEEPS: OnceLock<Vec<CaseSweep>> = OnceLock::new();
+    SWEEPS.get_or_init(|| {
+        let plan = Plan {
+            cases: common::all_scenes(),
+            engines: ["analytic", "reference"]
+                .iter()
+                .filter_map(|n| engines::named(n))
+                .collect(),
+            settings: Default::default(),
+        };
+        let outcome = run::execute(&plan, false);
+        assert!(outcome.all_ok());
+        let grid = sweep::Grid {
+            repeat: 1,
+            ..sweep::Grid::default()
+        };
+        work_precision::measure(&plan, &outcome, &sweep::ENGINES, &grid, false)
+    })
+}
+
+fn order(case: &str, engine: &str) -> f64 {
+    let s = sweeps().iter().find(|s| s.case == case).unwrap();
+    let f = s.fits.iter().find(|f| f.engine == engine).unwrap();
+    let o = f
+        .observed_order
+        .as_ref()
+        .unwrap_or_else(|| panic!("{case} / {engine}: no observed order"));
+    println!(
+        "{case:24} {engine:16} order {:.3} over {:.2e}..{:.2e} ({} points, {})",
+        o.value, o.finest, o.coarsest, o.points, o.path
+    );
+    assert!(o.points >= 3, "{case} / {engine}: {} points", o.points);
+    o.value
+}
+
+/// The central-difference scheme is second order; so is penalty compliance along the
+/// diagonal (k_p ∝ 1/h² at a fixed fraction of the stable increment). Known shortfall: the
+/// finite-rotation engine on the pinned and sliding-surface cases, measured and frozen here
+/// (±0.15): its error at the stable increment falls more slowly than h² as k_p rises.
+#[test]
+fn the_explicit_engines_converge_at_second_order_on_every_seed_case() {
+    let shortfall = [
+        ("rigid2d_pin_lumped", 1.04),
+        ("rigid2d_pin_surface", 1.04),
+        ("rigid3d_pin_lumped", 1.04),
+        ("rigid3d_pin_surface", 1.04),
+        ("rigid2d_slide_surface", 1.63),
+        ("rigid3d_slide_surface", 1.63),
+    ];
+    for s in sweeps() {
+        let p = order(&s.case, "explicit_small");
+        assert!((1.8..=2.2).contains(&p), "{} explicit_small: {p}", s.case);
+        let p = order(&s.case, "explicit");
+        match shortfall.iter().find(|(c, _)| *c == s.case) {
+            Some((_, frozen)) => assert!(
+                (p - frozen).abs() <= 0.15,
+                "{} explicit: {p} against the frozen {frozen}",
+                s.case
+            ),
+            None => assert!((1.8..=2.2).contains(&p), "{} explicit: {p}", s.case),
+        }
+    }
+}
+
+/// Rapier's joint motors are backward Euler (first order) and its contact is solved once per
+/// substep: first order in the increment. Measured and frozen per family (±0.1).
+#[test]
+fn rapier_converges_at_first_order() {
+    for s in sweeps() {
+        let frozen = if s.case.starts_with("springs") {
+            0.98
+        } else if s.case.contains("slide") {
+            0.83
+        } else {
+            0.95
+        };
+        let p = order(&s.case, "rapier_f64");
+        assert!((p - frozen).abs() <= 0.1, "{} rapier_f64: {p}", s.case);
+    }
+}
+
+/// Where refinement stops paying, and why: the explicit engines on contact stall at the
+/// penalty compliance of the stiffest penalty (k/k_p = 1e-6, times the 1–3 geometry factor the
+/// case files state); rapier in f32 on the pinned cases at f32 round-off (its f64 twin goes
+/// lower at the same setting); on the spring cases nothing stalls within the budget.
+#[test]
+fn floors_are_where_the_budget_says() {
+    for s in sweeps() {
+        let floor = |engine: &str| {
+            s.fits
+                .iter()
+                .find(|f| f.engine == engine)
+                .and_then(|f| f.floor.clone())
+        };
+        for engine in ["explicit", "explicit_small"] {
+            let f = floor(engine);
+            if s.case.starts_with("springs") {
+                assert!(f.is_none(), "{} {engine}: {f:?}", s.case);
+                continue;
+            }
+            let f = f.unwrap_or_else(|| panic!("{} {engine}: no floor", s.case));
+            println!("{} {engine}: {:.3e} {}", s.case, f.value, f.cause);
+            assert!(f.cause.starts_with("penalty compliance"), "{f:?}");
+            assert!(
+                (3e-7..=1e-5).contains(&f.value),
+                "{} {engine}: {f:?}",
+                s.case
+            );
+        }
+        if s.case.contains("pin") {
+            let f = floor("rapier_f32").unwrap();
+            assert_eq!(f.cause, "f32 round-off", "{}", s.case);
+        }
+    }
+}
+
+/// `crosscheck sweep` into a temporary directory: one CSV per case with the documented header,
+/// every row complete, an unstable probe where the explicit engine has a stable increment below
+/// the output interval, every figure a well-formed SVG document; and a second sweep gives the
+/// same rows but for the CPU times.
+#[test]
+fn a_sweep_writes_its_csvs_and_figures() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = ["springs_grounded_a", "rigid2d_pin_lumped"];
+    let sweep_into = |out: &std::path::Path| {
+        let status = Command::new(env!("CARGO_BIN_EXE_crosscheck"))
+            .args(["sweep", "-q", "--repeat", "2", "--max-increments", "1e5"])
+            .args(cases)
+            .arg("--out")
+            .arg(out)
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .stdout(std::process::Stdio::null())
+            .status()
+            .unwrap();
+        assert!(status.success());
+    };
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    sweep_into(&a);
+    sweep_into(&b);
+    for case in cases {
+        let text = std::fs::read_to_string(a.join("sweep").join(format!("{case}.csv"))).unwrap();
+        let mut lines = text.lines();
+        assert_eq!(
+            lines.next().unwrap(),
+            "engine,precision,increment,penalty_stiffness,iterations,steps,error_max,error_rms,\
+             cpu_s_min,cpu_s_median,cpu_s_max,status"
+        );
+        let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+        assert!(rows.len() > 20, "{case}: {} rows", rows.len());
+        for r in &rows {
+            assert_eq!(r.len(), 12, "{r:?}");
+            assert!(["ok", "unstable", "failed"].contains(&r[11]), "{r:?}");
+            let cpu: Vec<f64> = r[8..11].iter().map(|x| x.parse().unwrap()).collect();
+            assert!(
+                cpu[0] > 0.0 && cpu[0] <= cpu[1] && cpu[1] <= cpu[2],
+                "{r:?}"
+            );
+            if r[11] == "ok" {
+                let e: f64 = r[6].parse().unwrap();
+                assert!(e.is_finite() && e >= 0.0, "{r:?}");
+            }
+        }
+        // Above its stable increment the explicit engine must not come back ok.
+        if case.starts_with("rigid") {
+            assert!(
+                rows.iter()
+                    .any(|r| r[0] == "explicit" && r[11] == "unstable"),
+                "{case}: no unstable probe"
+            );
+        }
+        for engine in sweep::ENGINES {
+            assert!(rows.iter().any(|r| r[0] == engine), "{case}: no {engine}");
+        }
+        let svg =
+            std::fs::read_to_string(a.join("figures").join(format!("{case}.work-precision.svg")))
+                .unwrap();
+        let doc = roxmltree::Document::parse(&svg).unwrap_or_else(|e| panic!("{case}: {e}"));
+        assert_eq!(doc.root_element().tag_name().name(), "svg");
+        // Same settings, same errors: everything but the CPU times is reproduced.
+        let other = std::fs::read_to_string(b.join("sweep").join(format!("{case}.csv"))).unwrap();
+        let strip = |t: &str| -> Vec<String> {
+            t.lines()
+                .map(|l| {
+                    let f: Vec<&str> = l.split(',').collect();
+                    [&f[..8], &f[11..]].concat().join(",")
+                })
+                .collect()
+        };
+        assert_eq!(strip(&text), strip(&other), "{case}");
+    }
+}

@@ -57,6 +57,37 @@ impl History {
     }
 }
 
+/// How far two runs of one engine on one scene are apart: over the family's contract columns,
+/// the largest |a − b| divided by the peak |b| of the column (a contact force from its second
+/// row: an impulse-based engine's first row is a mean over its first increment). What an engine
+/// uses to estimate its own error from runs at two settings (accuracy on request); not a
+/// measure against an exact solution.
+///
+/// A column whose peak is below 1e-6 of the largest column peak (a held DOF that a soft joint
+/// lets drift by 1e-9) is left out: its relative change is noise.
+pub fn relative_change(family: Family, a: &History, b: &History) -> f64 {
+    let measured: Vec<(f64, f64)> = columns(family)
+        .iter()
+        .filter_map(|name| {
+            let (x, y) = (a.column(name)?, b.column(name)?);
+            let first = usize::from(*name == "contact_force");
+            let n = x.len().min(y.len());
+            let peak = y[..n].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let worst = x[first.min(n)..n]
+                .iter()
+                .zip(&y[first.min(n)..n])
+                .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+            Some((peak, worst))
+        })
+        .collect();
+    let largest = measured.iter().fold(0.0f64, |m, c| m.max(c.0));
+    measured
+        .iter()
+        .filter(|(peak, _)| *peak > 1e-6 * largest)
+        .map(|(peak, worst)| worst / peak)
+        .fold(0.0, f64::max)
+}
+
 /// Every value of a history must be finite: the first non-finite one fails it, naming the
 /// column and the time.
 pub fn check_finite(history: &History) -> Result<(), String> {

@@ -109,6 +109,10 @@ struct RunArgs {
     /// Use this penalty stiffness instead of the case's rule.
     #[arg(long, value_name = "K", value_parser = positive)]
     penalty: Option<f64>,
+    /// Accuracy on request: each engine chooses its increment (and penalty stiffness) so that
+    /// its error against its own model's exact solution is at most EPS of each column's peak.
+    #[arg(long, value_name = "EPS", value_parser = positive, conflicts_with_all = ["increment", "penalty"])]
+    tolerance: Option<f64>,
     /// How dashpots see the velocity.
     #[arg(long, value_enum)]
     damping: Option<DampingArg>,
@@ -172,6 +176,7 @@ impl RunArgs {
             out: PathBuf::from("report"),
             increment: None,
             penalty: None,
+            tolerance: None,
             damping: None,
             contact_start: None,
             quiet: false,
@@ -194,7 +199,10 @@ impl RunArgs {
 
     fn settings(&self) -> RunSettings {
         RunSettings {
-            increment: self.increment.map(IncrementRule::Given),
+            increment: self
+                .increment
+                .map(IncrementRule::Given)
+                .or(self.tolerance.map(IncrementRule::Tolerance)),
             penalty: self.penalty.map(PenaltyRule::Stiffness),
             damping: self.damping.map(|d| match d {
                 DampingArg::Centred => DampingTreatment::Centred,

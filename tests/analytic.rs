@@ -223,17 +223,6 @@ fn contact_margins_are_reported() {
     }
 }
 
-/// A shipped case with some of its text replaced (each pattern must occur).
-fn variant(id: &str, edits: &[(&str, &str)]) -> crosscheck::scene::Scene {
-    let path = crosscheck::case::cases_dir().join(format!("{id}.toml"));
-    let mut text = std::fs::read_to_string(&path).unwrap();
-    for (from, to) in edits {
-        assert!(text.contains(from), "{id}: no `{from}`");
-        text = text.replace(from, to);
-    }
-    crosscheck::case::parse(&text, &path).unwrap_or_else(|e| panic!("{e}"))
-}
-
 /// The grounded oscillator at ζ = 0.5, 1 and 3 (and a hair either side of critical, where the
 /// under- and over-damped forms divide by ωd → 0 and r₁ − r₂ → 0): the hand-derived forms
 /// against the reference, an ODE solution (Dop853 at rtol 1e-12) that shares no formula with
@@ -248,7 +237,7 @@ fn every_damping_ratio_matches_an_independent_ode_solution() {
     let (m, k): (f64, f64) = (0.02588, 30.0);
     for zeta in [0.5, 1.0 - 1e-9, 1.0, 1.0 + 1e-9, 3.0] {
         let c = 2.0 * zeta * (k * m).sqrt();
-        let scene = variant(
+        let scene = common::variant(
             "springs_grounded_a",
             &[("damping = 0.12", &format!("damping = {c:e}"))],
         );
@@ -273,7 +262,7 @@ fn every_damping_ratio_matches_an_independent_ode_solution() {
     // Critical damping by hand at t = 0.1 s: u = e^(−ωn t)(1 + ωn t), u̇ = −ωn² t e^(−ωn t).
     let wn = (k / m).sqrt();
     let c = 2.0 * (k * m).sqrt();
-    let scene = variant(
+    let scene = common::variant(
         "springs_grounded_a",
         &[("damping = 0.12", &format!("damping = {c:e}"))],
     );
@@ -296,7 +285,7 @@ fn a_line_given_to_four_digits_passes_check_and_is_solved() {
     use crosscheck::engines::Engine;
     use crosscheck::engines::analytic::springs;
     use crosscheck::engines::reference::ReferenceEngine;
-    let scene = variant(
+    let scene = common::variant(
         "springs_grounded_c",
         &[
             ("direction = [1.0, 1.0]", "direction = [0.866, 0.5]"),

@@ -392,6 +392,18 @@ const CORPUS: &[(&str, usize, &str, &str)] = &[
     ),
     ("safety_zero", 14, "time.safety", "must be in (0, 1], got 0"),
     (
+        "tolerance_with_increment",
+        15,
+        "time.tolerance",
+        "chooses the increment itself: give no `increment`, `accuracy` or `safety` with it",
+    ),
+    (
+        "time_tolerance_negative",
+        14,
+        "time.tolerance",
+        "a tolerance must be a finite number > 0, got -0.0001",
+    ),
+    (
         "damping_treatment_unknown",
         15,
         "time.damping",

@@ -963,6 +963,14 @@ pub fn scene(case: &CaseFile, stem: Option<&str>) -> Result<Scene, SceneError> {
 
     // Settings.
     let t = &case.time;
+    if t.tolerance.is_some()
+        && (t.increment.is_some() || t.accuracy.is_some() || t.safety.is_some())
+    {
+        return err(
+            "time.tolerance",
+            "chooses the increment itself: give no `increment`, `accuracy` or `safety` with it",
+        );
+    }
     if t.safety.is_some() && (t.increment.is_some() || t.accuracy.is_some()) {
         return err(
             "time.safety",
@@ -977,6 +985,11 @@ pub fn scene(case: &CaseFile, stem: Option<&str>) -> Result<Scene, SceneError> {
         (None, Some(a)) => {
             IncrementRule::Accuracy(b.positive("time.accuracy", a, "an accuracy")?)
         }
+        (None, None) if t.tolerance.is_some() => IncrementRule::Tolerance(b.positive(
+            "time.tolerance",
+            t.tolerance.unwrap_or(0.0),
+            "a tolerance",
+        )?),
         (None, None) => {
             let safety = t.safety.unwrap_or(DEFAULT_SAFETY);
             if !(safety > 0.0 && safety <= 1.0) {

@@ -68,6 +68,10 @@ pub struct TimeTable {
     pub accuracy: Option<f64>,
     /// Fraction of the stable increment used when neither is given (default 0.9).
     pub safety: Option<f64>,
+    /// Or: accuracy on request: the largest error (over each column's peak) the engines may make
+    /// against their own model's exact solution; they choose the increment (and the penalty
+    /// stiffness) themselves.
+    pub tolerance: Option<f64>,
     /// `centred` (second order, default) or `lagged` (dashpots see the previous half-step velocity).
     pub damping: Option<String>,
 }

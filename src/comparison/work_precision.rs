@@ -69,7 +69,8 @@ pub struct EngineFit {
     pub engine: String,
     /// The observed order, where the sweep had an asymptotic range of at least two points.
     pub observed_order: Option<ObservedOrder>,
-    /// The lowest floor of the engine's paths, where any stalled.
+    /// The lowest floor of the engine's paths, where any stalled and no other path of the
+    /// engine went below it.
     pub floor: Option<Floor>,
 }
 
@@ -401,7 +402,13 @@ fn fit(engine: &str, paths: &[SweepPath], contact: bool) -> EngineFit {
                 path: p.label(),
             })
         })
-        .min_by(|a, b| a.value.total_cmp(&b.value));
+        .min_by(|a, b| a.value.total_cmp(&b.value))
+        // A floor is the engine's only if none of its other paths went below it.
+        .filter(|f| {
+            own.iter()
+                .flat_map(|p| ok_points(p))
+                .all(|(_, e)| e >= f.value * (1.0 - 1e-12))
+        });
     EngineFit {
         engine: engine.to_string(),
         observed_order,

@@ -365,6 +365,7 @@ fn case_section(w: &mut String, c: &CaseSummary) {
         );
     }
     initial_contact_force(w, c);
+    on_request(w, c);
     for r in &c.runs {
         let Some((col, max, _, _)) = worst(r) else {
             continue;
@@ -452,6 +453,68 @@ fn case_section(w: &mut String, c: &CaseSummary) {
                 );
             }
         }
+    }
+}
+
+/// Accuracy on request (`--tolerance`, `[time] tolerance`): per engine that ran on request,
+/// the tolerance asked for, the error achieved against its own model, the error it predicted,
+/// the increment and penalty stiffness it chose, and what that cost (its increments and its
+/// pilots'); a refusal says why.
+fn on_request(w: &mut String, c: &CaseSummary) {
+    let rows: Vec<String> = c
+        .runs
+        .iter()
+        .filter_map(|r| {
+            let eps = *r.measures.get("requested_tolerance")?;
+            let achieved = r.against_baseline.as_ref()?.worst_max;
+            let verdict = if achieved <= eps && achieved >= eps / 10.0 {
+                "within [ε/10, ε]"
+            } else if achieved > eps {
+                "**above ε**"
+            } else {
+                "below ε/10"
+            };
+            Some(format!(
+                "| {} | {} | {} | {} | {verdict} | {} | {} | {} + {} |",
+                r.engine,
+                sci(eps),
+                sci(achieved),
+                opt(r.measures.get("predicted_error").copied()),
+                opt(r.increment),
+                opt(r.penalty_stiffness),
+                r.steps.unwrap_or(0),
+                r.counters.get("pilot_increments").copied().unwrap_or(0)
+            ))
+        })
+        .collect();
+    let refused: Vec<String> = c
+        .runs
+        .iter()
+        .filter_map(|r| {
+            let e = r.error.as_ref()?;
+            e.contains("out of reach")
+                .then(|| format!("- `{}`: {e}", r.engine))
+        })
+        .collect();
+    if rows.is_empty() && refused.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        w,
+        "\n**Accuracy on request.** Each engine chose its own increment (and penalty stiffness) \
+         for the tolerance ε; achieved is its error against its own model's exact solution, \
+         predicted what its error model said; the cost is its increments plus those of its \
+         pilot runs.\n"
+    );
+    if !rows.is_empty() {
+        let _ = writeln!(
+            w,
+            "| engine | ε | achieved | predicted | | h | k_p | increments + pilots |\n|---|---:|---:|---:|---|---:|---:|---:|\n{}",
+            rows.join("\n")
+        );
+    }
+    if !refused.is_empty() {
+        let _ = writeln!(w, "\n{}", refused.join("\n"));
     }
 }
 

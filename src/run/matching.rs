@@ -12,7 +12,13 @@ use crate::scene::{IncrementRule, Scene};
 
 /// The settings one job runs with: the run's overrides, completed with what `engine` needs.
 pub fn job_settings(engine: &dyn Engine, scene: &Scene, settings: &RunSettings) -> RunSettings {
+    let on_request = matches!(
+        settings.increment.unwrap_or(scene.settings.increment),
+        IncrementRule::Tolerance(_)
+    );
     match engine.needs() {
+        // Accuracy on request: every engine chooses its own increment for the tolerance.
+        _ if on_request => *settings,
         Needs::Nothing => *settings,
         Needs::MatchedIncrement => RunSettings {
             increment: Some(IncrementRule::Forced(matched_increment(scene, settings))),

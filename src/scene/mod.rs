@@ -333,6 +333,10 @@ pub enum IncrementRule {
     Accuracy(f64),
     /// Used as given even above the stable increment: for stability studies only.
     Forced(f64),
+    /// Accuracy on request: the engine chooses its increment (and, with penalty contact, its
+    /// penalty stiffness) so that its error against its own model's exact solution is at most
+    /// this fraction of each column's peak, from its own error model and pilot runs.
+    Tolerance(f64),
     /// A fraction of the stable increment.
     Stable {
         /// The fraction (0, 1].

@@ -87,3 +87,14 @@ pub fn snapshot(dir: &Path) -> BTreeMap<String, Vec<u8>> {
     walk(dir, dir, &mut out);
     out
 }
+
+/// A shipped case with some of its text replaced (each pattern must occur).
+pub fn variant(id: &str, edits: &[(&str, &str)]) -> Scene {
+    let path = case::cases_dir().join(format!("{id}.toml"));
+    let mut text = std::fs::read_to_string(&path).unwrap();
+    for (from, to) in edits {
+        assert!(text.contains(from), "{id}: no `{from}`");
+        text = text.replace(from, to);
+    }
+    case::parse(&text, &path).unwrap_or_else(|e| panic!("{e}"))
+}

@@ -118,6 +118,9 @@ pub(crate) fn choose_increment(
             }
         }
         IncrementRule::Stable { safety } => (safety * limit).min(interval),
+        // Resolved by the engine's pilot runs (`on_request`) before it integrates; as an
+        // estimate without them, the default fraction of the stable increment.
+        IncrementRule::Tolerance(_) => (crate::scene::DEFAULT_SAFETY * limit).min(interval),
     };
     let per_interval = (interval / h - 1e-9).ceil().max(1.0);
     Ok(interval / per_interval)

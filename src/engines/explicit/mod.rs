@@ -3,10 +3,11 @@
 pub mod integrate;
 pub mod linear;
 pub mod model;
+pub mod on_request;
 pub mod space;
 
 use super::{Engine, EngineError, RunInfo, RunOutput, RunSettings};
-use crate::scene::{Dimension, Scene, SceneSettings};
+use crate::scene::{Dimension, IncrementRule, Scene, SceneSettings};
 use integrate::{Integration, integrate};
 use space::{Planar, Spatial};
 use std::collections::BTreeMap;
@@ -55,16 +56,34 @@ impl Engine for ExplicitEngine {
     }
     fn run(&self, scene: &Scene, settings: &RunSettings) -> Result<RunOutput, EngineError> {
         let start = Instant::now();
-        let run = self.integrate(scene, settings)?;
+        // Accuracy on request: pilot runs choose the increment and the penalty stiffness.
+        let mut measures = BTreeMap::new();
+        let mut pilot_increments = None;
+        let mut penalty = (!scene.contacts.is_empty())
+            .then(|| scene.penalty_stiffness(merged(scene, settings).penalty));
+        let run = match merged(scene, settings).increment {
+            IncrementRule::Tolerance(eps) => {
+                let (run, choice) = on_request::run(self, scene, settings, eps)?;
+                measures.insert("requested_tolerance".to_string(), eps);
+                measures.insert("predicted_error".to_string(), choice.predicted);
+                pilot_increments = Some(choice.pilot_increments);
+                penalty = choice.penalty.or(penalty);
+                run
+            }
+            _ => self.integrate(scene, settings)?,
+        };
         let wall_seconds = start.elapsed().as_secs_f64();
         let c = run.counters;
-        let counters = BTreeMap::from([
+        let mut counters = BTreeMap::from([
             ("force_evaluations".to_string(), c.force_evaluations),
             ("contact_evaluations".to_string(), c.contact_evaluations),
             ("damping_evaluations".to_string(), c.damping_evaluations),
             ("rotation_updates".to_string(), c.rotation_updates),
             ("body_solves".to_string(), c.body_solves),
         ]);
+        if let Some(n) = pilot_increments {
+            counters.insert("pilot_increments".to_string(), n);
+        }
         Ok(RunOutput {
             engine: self.name().to_string(),
             history: run.history,
@@ -72,11 +91,10 @@ impl Engine for ExplicitEngine {
                 increment: run.increment,
                 steps: run.steps,
                 stable_increment: run.stable.map(|s| s.increment),
-                penalty_stiffness: (!scene.contacts.is_empty())
-                    .then(|| scene.penalty_stiffness(merged(scene, settings).penalty)),
+                penalty_stiffness: penalty,
                 wall_seconds,
                 counters,
-                measures: BTreeMap::new(),
+                measures,
             },
         })
     }

@@ -275,7 +275,32 @@ impl Engine for RapierEngine {
         Some(scene.duration() / dt)
     }
     fn run(&self, scene: &Scene, settings: &RunSettings) -> Result<RunOutput, EngineError> {
+        let start = Instant::now();
+        let mut request = None;
+        let chosen;
+        let settings = match settings.increment.unwrap_or(scene.settings.increment) {
+            IncrementRule::Tolerance(eps) => {
+                let (h, predicted, pilots) = self.on_request(scene, settings, eps)?;
+                request = Some((eps, predicted, pilots));
+                chosen = RunSettings {
+                    increment: Some(IncrementRule::Forced(h)),
+                    ..*settings
+                };
+                &chosen
+            }
+            _ => settings,
+        };
         let (mut output, diagnostics) = self.run_with_diagnostics(scene, settings)?;
+        if let Some((eps, predicted, pilots)) = request {
+            let m = &mut output.info.measures;
+            m.insert("requested_tolerance".to_string(), eps);
+            m.insert("predicted_error".to_string(), predicted);
+            output
+                .info
+                .counters
+                .insert("pilot_increments".to_string(), pilots);
+            output.info.wall_seconds = start.elapsed().as_secs_f64();
+        }
         for (k, contact) in scene.contacts.iter().enumerate() {
             for (name, values) in [
                 ("mean_penetration", &diagnostics.mean_penetration),
@@ -294,6 +319,71 @@ impl Engine for RapierEngine {
     }
 }
 
+/// Most increments a rapier run on request may take (about 1–3 s of CPU at 4 substeps).
+pub const MAX_INCREMENTS_ON_REQUEST: f64 = 2e5;
+
+impl RapierEngine {
+    /// Accuracy on request: rapier is first order in its increment, so two pilot runs at h₁ (the
+    /// output interval, or 1/60 s for the default configuration) and h₁/2 measure its error
+    /// e(h₁) ≈ 2 ‖x(h₁) − x(h₁/2)‖, and h = h₁ · 0.316 ε / e(h₁) aims at the middle of
+    /// [ε/10, ε]. Refused, saying why, when that takes more than
+    /// [`MAX_INCREMENTS_ON_REQUEST`] increments, or when a check at the chosen increment (the
+    /// run against itself at h/2) still estimates more than ε/2. Returns the increment, the
+    /// estimated error and the pilots' increments.
+    fn on_request(
+        &self,
+        scene: &Scene,
+        settings: &RunSettings,
+        eps: f64,
+    ) -> Result<(f64, f64, u64), EngineError> {
+        let h1 = match self.configuration {
+            Configuration::Matched(_) => scene.duration() / (scene.output_rows - 1) as f64,
+            Configuration::Default => DEFAULT_INCREMENT,
+        };
+        let at = |h: f64| RunSettings {
+            increment: Some(IncrementRule::Forced(h)),
+            ..*settings
+        };
+        let (coarse, _) = self.run_with_diagnostics(scene, &at(h1))?;
+        let (fine, _) = self.run_with_diagnostics(scene, &at(h1 / 2.0))?;
+        let pilots = coarse.info.steps + fine.info.steps;
+        let e1 =
+            2.0 * crate::contract::relative_change(scene.family, &coarse.history, &fine.history);
+        let aim = 0.316 * eps;
+        let h = if e1 > 0.0 {
+            (h1 * aim / e1).min(h1)
+        } else {
+            h1
+        };
+        let increments = scene.duration() / h;
+        if increments > MAX_INCREMENTS_ON_REQUEST {
+            return Err(EngineError::Unsupported(format!(
+                "tolerance {eps:e} is out of reach for {}: its first-order error, {e1:.2e} at                  h = {h1:.2e} s, asks for h = {h:.2e} s, {increments:.1e} increments (at most                  {MAX_INCREMENTS_ON_REQUEST:e}); below its floor (contact softness, f32                  round-off) no increment reaches it",
+                self.name
+            )));
+        }
+        // Check at the chosen increment: its own error estimate there, against itself at h/2.
+        // Where rapier's error has stopped falling (contact softness, f32 round-off) the first-
+        // order model promised too much, and the tolerance is out of reach.
+        let (run, _) = self.run_with_diagnostics(scene, &at(h))?;
+        let (half, _) = self.run_with_diagnostics(scene, &at(h / 2.0))?;
+        let estimate =
+            2.0 * crate::contract::relative_change(scene.family, &run.history, &half.history);
+        // Accepted at half the tolerance: the first-order estimate runs low where rapier's
+        // order has dropped below one (0.8 on the sliding cases).
+        if estimate > 0.5 * eps {
+            return Err(EngineError::Unsupported(format!(
+                "tolerance {eps:e} is out of reach for {}: at h = {h:.2e} s, chosen from its \
+                 first-order error ({e1:.2e} at h = {h1:.2e} s), its error estimate is still \
+                 {estimate:.2e}: it has stopped falling at first order (contact softness, PGS \
+                 sweeps, f32 round-off)",
+                self.name
+            )));
+        }
+        Ok((h, estimate, pilots + run.info.steps + half.info.steps))
+    }
+}
+
 /// The increment of a matched run: the run's increment override, else the case's given one,
 /// shortened to divide the output interval so that rows fall on steps; for a case whose rule
 /// needs a stable increment (rapier has none), the output interval. The job planner hands the
@@ -305,7 +395,9 @@ pub fn own_increment(scene: &Scene, settings: &RunSettings) -> f64 {
         IncrementRule::Given(h) | IncrementRule::Forced(h) => {
             interval / (interval / h - 1e-9).ceil().max(1.0)
         }
-        IncrementRule::Accuracy(_) | IncrementRule::Stable { .. } => interval,
+        IncrementRule::Accuracy(_) | IncrementRule::Stable { .. } | IncrementRule::Tolerance(_) => {
+            interval
+        }
     }
 }
 

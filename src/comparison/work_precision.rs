@@ -135,9 +135,14 @@ pub const COLUMNS: [&str; 12] = [
 impl CaseSweep {
     /// Every point as a CSV row, path by path.
     pub fn rows(&self) -> Vec<Row> {
-        self.paths
+        self.paths.iter().flat_map(|p| self.path_rows(p)).collect()
+    }
+
+    /// One path's points as CSV rows.
+    pub fn path_rows(&self, path: &SweepPath) -> Vec<Row> {
+        path.points
             .iter()
-            .flat_map(|p| p.points.iter().map(move |pt| row(p, pt, self.duration)))
+            .map(|pt| row(path, pt, self.duration))
             .collect()
     }
 }

@@ -12,6 +12,10 @@ pub use crate::contract::History;
 use crate::scene::{ContactStart, DampingTreatment, IncrementRule, PenaltyRule, Scene};
 use std::collections::BTreeMap;
 
+/// Accuracy on request ([`IncrementRule::Tolerance`]): the fraction of the tolerance ε an
+/// engine's choice aims at, 1/√10, the middle of [ε/10, ε] on a log scale.
+pub const ON_REQUEST_AIM: f64 = 0.316;
+
 /// Per-run overrides of the settings a case declares (`None`: keep the case's).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct RunSettings {

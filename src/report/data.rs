@@ -91,6 +91,16 @@ pub fn format_value(x: f64) -> String {
     format!("{x:e}")
 }
 
+/// [`format_value`] for a finite number, an empty field otherwise (tables where a value may be
+/// missing: the scaling study, the sweep).
+pub fn format_finite(x: f64) -> String {
+    if x.is_finite() {
+        format_value(x)
+    } else {
+        String::new()
+    }
+}
+
 /// Write `history` as CSV to `path`, atomically: the data go to a temporary file in the same
 /// directory, which is flushed, synced and renamed over `path`. On error the temporary file is
 /// removed and any previous `path` is left untouched.

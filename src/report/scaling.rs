@@ -2,6 +2,7 @@
 //! `DIR/figures/scaling.svg` (ns per increment against N, log–log, with each engine's fitted
 //! exponent and the memory-bandwidth limit).
 
+use crate::report::data::format_finite as number;
 use crate::run::scaling::{Study, fitted_exponent};
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -51,14 +52,6 @@ pub fn csv(study: &Study) -> String {
         s += &(fields.join(",") + "\n");
     }
     s
-}
-
-fn number(x: f64) -> String {
-    if x.is_finite() {
-        format!("{x:e}")
-    } else {
-        String::new()
-    }
 }
 
 /// Each engine's fitted exponent of ns per increment against N over N ≥ [`FIT_FROM_N`].

@@ -4,8 +4,10 @@
 //! case's tolerances).
 
 use crate::comparison::work_precision::{self, COLUMNS, CaseSweep, Row};
+use crate::report::data::format_finite as number;
 use crate::report::figures::tick;
-use crate::run::sweep::{PathKind, Status};
+use crate::report::markdown::sci;
+use crate::run::sweep::PathKind;
 use plotters::prelude::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -19,14 +21,6 @@ pub fn csv_path(out: &Path, case: &str) -> PathBuf {
 pub fn figure_path(out: &Path, case: &str) -> PathBuf {
     out.join("figures")
         .join(format!("{case}.work-precision.svg"))
-}
-
-fn number(x: f64) -> String {
-    if x.is_finite() {
-        format!("{x:e}")
-    } else {
-        String::new()
-    }
 }
 
 fn optional(x: Option<f64>) -> String {
@@ -234,17 +228,12 @@ pub fn render(sweep: &CaseSweep, tolerances: &BTreeMap<String, f64>) -> Option<S
             let k = shade.entry(path.engine.as_str()).or_default();
             let c = lighter(colour(&path.engine), 0.13 * *k as f64);
             *k += 1;
-            let duration = sweep.duration;
-            let pts: Vec<(f64, f64, f64, f64)> = path
-                .points
+            let path_rows = sweep.path_rows(path);
+            // (error, fastest, slowest) of each ok point.
+            let pts: Vec<(f64, f64, f64)> = path_rows
                 .iter()
-                .filter(|p| p.status == Status::Ok)
-                .filter_map(|p| {
-                    let e = p.error?.0.max(ERROR_FLOOR);
-                    let mut cpu: Vec<f64> = p.cpu_seconds.iter().map(|c| c / duration).collect();
-                    cpu.sort_by(f64::total_cmp);
-                    Some((e, cpu[0], cpu[cpu.len() - 1], cpu[cpu.len() / 2]))
-                })
+                .filter(|r| r.status == "ok")
+                .filter_map(|r| Some((r.error_max?.max(ERROR_FLOOR), r.cpu_s_min, r.cpu_s_max)))
                 .collect();
             let width = if matches!(path.kind, PathKind::Substeps { .. }) {
                 1
@@ -267,9 +256,8 @@ pub fn render(sweep: &CaseSweep, tolerances: &BTreeMap<String, f64>) -> Option<S
                         .ok()?;
                 }
             }
-            for p in path.points.iter().filter(|p| p.status != Status::Ok) {
-                let cpu = p.cpu_seconds.first().copied().unwrap_or(0.0) / duration;
-                let y = cpu.clamp(y0, y1);
+            for r in path_rows.iter().filter(|r| r.status != "ok") {
+                let y = r.cpu_s_min.clamp(y0, y1);
                 chart
                     .draw_series([Cross::new((x1 / 1.25, y), 5, c.stroke_width(2))])
                     .ok()?;
@@ -389,10 +377,6 @@ pub fn read_all<'a>(out: &Path, cases: impl Iterator<Item = &'a str>) -> SweepRo
 /// The short name of a floor's cause (before any detail in parentheses or after a colon).
 pub fn short_cause(cause: &str) -> &str {
     cause.split([':', '(']).next().unwrap_or(cause).trim()
-}
-
-fn sci(x: f64) -> String {
-    crate::report::markdown::sci(x)
 }
 
 /// A time-to-accuracy cell: CPU seconds per simulated second and the setting, or "not

@@ -28,8 +28,8 @@ use crate::contract;
 use crate::engines::{EngineError, RunSettings};
 use crate::scene::{DEFAULT_SAFETY, IncrementRule, PenaltyRule, Scene};
 
-/// The fraction of ε the choice aims at (1/√10: the middle of [ε/10, ε] on a log scale).
-pub const AIM: f64 = 0.316;
+/// The fraction of ε the choice aims at.
+pub const AIM: f64 = crate::engines::ON_REQUEST_AIM;
 
 /// Most increments a run on request may take: a tolerance that needs more is refused.
 pub const MAX_INCREMENTS: f64 = 1e8;

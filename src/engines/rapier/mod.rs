@@ -325,7 +325,7 @@ pub const MAX_INCREMENTS_ON_REQUEST: f64 = 2e5;
 impl RapierEngine {
     /// Accuracy on request: rapier is first order in its increment, so two pilot runs at h₁ (the
     /// output interval, or 1/60 s for the default configuration) and h₁/2 measure its error
-    /// e(h₁) ≈ 2 ‖x(h₁) − x(h₁/2)‖, and h = h₁ · 0.316 ε / e(h₁) aims at the middle of
+    /// e(h₁) ≈ 2 ‖x(h₁) − x(h₁/2)‖, and h = h₁ · [`super::ON_REQUEST_AIM`] ε / e(h₁) aims at the middle of
     /// [ε/10, ε]. Refused, saying why, when that takes more than
     /// [`MAX_INCREMENTS_ON_REQUEST`] increments, or when a check at the chosen increment (the
     /// run against itself at h/2) still estimates more than ε/2. Returns the increment, the
@@ -349,7 +349,7 @@ impl RapierEngine {
         let pilots = coarse.info.steps + fine.info.steps;
         let e1 =
             2.0 * crate::contract::relative_change(scene.family, &coarse.history, &fine.history);
-        let aim = 0.316 * eps;
+        let aim = super::ON_REQUEST_AIM * eps;
         let h = if e1 > 0.0 {
             (h1 * aim / e1).min(h1)
         } else {

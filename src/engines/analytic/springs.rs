@@ -132,6 +132,15 @@ pub fn solve(scene: &Scene) -> Result<History, EngineError> {
     if dynamic.len() != 1 || dynamic[0] + 1 != scene.steps.len() {
         return unsupported("one dynamic step, after the static ones");
     }
+    if scene
+        .initial_velocities
+        .iter()
+        .any(|iv| iv.velocity != Vector3::zeros() || iv.angular != Vector3::zeros())
+    {
+        // The hand-derived forms release from rest; a start with velocity goes to the general
+        // linear solver.
+        return unsupported("released from rest (no initial velocity)");
+    }
     let step = dynamic[0];
     let system = System { end, middle, line };
     let middle_free = middle.is_some_and(|m| !held_along(scene, step, m, &line));

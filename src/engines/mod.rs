@@ -89,6 +89,10 @@ pub enum Needs {
     /// The explicit engine's increment for the scene, so that the two can be compared step for
     /// step; handed over as [`IncrementRule::Forced`] in [`RunSettings::increment`].
     MatchedIncrement,
+    /// Its own increment, except in a stability study (`--increment-ratio`, the stability
+    /// map), where it steps exactly with the ratio × the explicit engine's stable increment,
+    /// handed over as [`IncrementRule::Exact`].
+    StudyIncrement,
 }
 
 /// An engine.

@@ -16,10 +16,24 @@ pub fn job_settings(engine: &dyn Engine, scene: &Scene, settings: &RunSettings) 
         settings.increment.unwrap_or(scene.settings.increment),
         IncrementRule::Tolerance(_)
     );
+    let ratio = match settings.increment.unwrap_or(scene.settings.increment) {
+        IncrementRule::StableRatio(r) => Some(r),
+        _ => None,
+    };
     match engine.needs() {
         // Accuracy on request: every engine chooses its own increment for the tolerance.
         _ if on_request => *settings,
-        Needs::Nothing => *settings,
+        // A stability study: the ratio is of the explicit engine's stable increment, taken
+        // exactly (rapier has no stable increment of its own).
+        Needs::MatchedIncrement | Needs::StudyIncrement if ratio.is_some() => RunSettings {
+            increment: ratio.and_then(|r| {
+                ExplicitEngine::finite()
+                    .stable_increment(scene, settings)
+                    .map(|s| IncrementRule::Exact(r * s.increment))
+            }),
+            ..*settings
+        },
+        Needs::Nothing | Needs::StudyIncrement => *settings,
         Needs::MatchedIncrement => RunSettings {
             increment: Some(IncrementRule::Forced(matched_increment(scene, settings))),
             ..*settings

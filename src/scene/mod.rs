@@ -331,8 +331,17 @@ pub enum IncrementRule {
     Given(f64),
     /// From a target accumulated phase error of the highest structural mode.
     Accuracy(f64),
-    /// Used as given even above the stable increment: for stability studies only.
+    /// Used as given even above the stable increment (shortened, like every rule, to divide the
+    /// output interval): for refinement studies and matched runs.
     Forced(f64),
+    /// This multiple of the engine's own computed stable increment, used exactly: not capped,
+    /// not shortened (rows between increments are interpolated). For stability studies only
+    /// (`--increment-ratio`); an engine without a stable increment of its own is handed
+    /// [`IncrementRule::Exact`] instead.
+    StableRatio(f64),
+    /// Used exactly as given, even above a stable increment and when it does not divide the
+    /// output interval (rows between increments are interpolated). For stability studies only.
+    Exact(f64),
     /// Accuracy on request: the engine chooses its increment (and, with penalty contact, its
     /// penalty stiffness) so that its error against its own model's exact solution is at most
     /// this fraction of each column's peak, from its own error model and pilot runs.

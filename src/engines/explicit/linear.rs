@@ -126,6 +126,12 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
 impl<S: Space> Linearised<S> {
     /// Modes: frequencies and damping ratios, highest first.
     pub fn modes(&self) -> Vec<Mode> {
+        self.shapes().into_iter().map(|(m, _)| m).collect()
+    }
+
+    /// Modes with their shapes (mass-normalised, φᵀMφ = 1, in the order of [`Self::dofs`]),
+    /// highest first.
+    pub fn shapes(&self) -> Vec<(Mode, DVector<f64>)> {
         let n = self.dofs.len();
         if n == 0 {
             return Vec::new();
@@ -143,7 +149,7 @@ impl<S: Space> Linearised<S> {
         let a = &linv * &self.stiffness * linv.transpose();
         let a = (&a + a.transpose()) * 0.5;
         let eig = a.symmetric_eigen();
-        let mut modes: Vec<Mode> = (0..n)
+        let mut modes: Vec<(Mode, DVector<f64>)> = (0..n)
             .map(|i| {
                 let omega = eig.eigenvalues[i].max(0.0).sqrt();
                 let phi = linv.transpose() * eig.eigenvectors.column(i);
@@ -153,10 +159,10 @@ impl<S: Space> Linearised<S> {
                 } else {
                     0.0
                 };
-                Mode { omega, zeta }
+                (Mode { omega, zeta }, phi)
             })
             .collect();
-        modes.sort_by(|a, b| b.omega.total_cmp(&a.omega));
+        modes.sort_by(|a, b| b.0.omega.total_cmp(&a.0.omega));
         modes
     }
 }

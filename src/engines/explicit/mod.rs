@@ -1,5 +1,6 @@
 //! `explicit`: our central-difference explicit integrator with penalty contact.
 
+pub mod diagnosis;
 pub mod integrate;
 pub mod linear;
 pub mod model;

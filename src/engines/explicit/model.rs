@@ -107,6 +107,11 @@ impl<S: Space> Rates<S> {
             *o = *x + *y * s;
         }
     }
+    /// Whether every component is finite.
+    pub fn is_finite(&self) -> bool {
+        self.p.iter().chain(&self.b).all(|a| a.dot(a).is_finite())
+            && self.w.iter().all(|a| a.dot(a).is_finite())
+    }
     /// Largest Euclidean norm of any particle's, body's or angular difference, and the largest
     /// such norm of `self` (square roots taken once, of the maxima).
     pub fn max_difference(&self, other: &Self) -> (f64, f64) {
@@ -1120,6 +1125,15 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             Target::Particle(i, d) => d.dot(&forces.p[*i]),
             Target::Translation(b, d) => d.dot(&forces.b[*b]),
             Target::Rotation(b, g) => g.dot(&forces.m[*b]),
+        }
+    }
+
+    /// The rate of a generalised DOF.
+    pub fn rate_along(&self, rates: &Rates<S>, target: &Target<S>) -> f64 {
+        match target {
+            Target::Particle(i, d) => d.dot(&rates.p[*i]),
+            Target::Translation(b, d) => d.dot(&rates.b[*b]),
+            Target::Rotation(b, g) => g.dot(&rates.w[*b]),
         }
     }
 

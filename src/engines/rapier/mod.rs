@@ -264,7 +264,7 @@ impl Engine for RapierEngine {
     fn needs(&self) -> Needs {
         match self.configuration {
             Configuration::Matched(_) => Needs::MatchedIncrement,
-            Configuration::Default => Needs::Nothing,
+            Configuration::Default => Needs::StudyIncrement,
         }
     }
     fn increments(&self, scene: &Scene, settings: &RunSettings) -> Option<f64> {
@@ -395,18 +395,22 @@ pub fn own_increment(scene: &Scene, settings: &RunSettings) -> f64 {
         IncrementRule::Given(h) | IncrementRule::Forced(h) => {
             interval / (interval / h - 1e-9).ceil().max(1.0)
         }
-        IncrementRule::Accuracy(_) | IncrementRule::Stable { .. } | IncrementRule::Tolerance(_) => {
-            interval
-        }
+        // Stability studies: exactly as given (rows are interpolated between steps).
+        IncrementRule::Exact(h) => h,
+        IncrementRule::Accuracy(_)
+        | IncrementRule::Stable { .. }
+        | IncrementRule::Tolerance(_)
+        | IncrementRule::StableRatio(_) => interval,
     }
 }
 
 /// The increment of a default-configuration run: 1/60 s, unless a study forces another
-/// ([`IncrementRule::Forced`], as the discrepancy budget's refinement does); a case's or a
+/// ([`IncrementRule::Forced`], as the discrepancy budget's refinement does, or
+/// [`IncrementRule::Exact`], as the stability map does); a case's or a
 /// run's ordinary increment (`--increment`) does not apply to it.
 pub fn default_increment(settings: &RunSettings) -> f64 {
     match settings.increment {
-        Some(IncrementRule::Forced(h)) => h,
+        Some(IncrementRule::Forced(h) | IncrementRule::Exact(h)) => h,
         _ => DEFAULT_INCREMENT,
     }
 }

@@ -8,7 +8,7 @@
 
 use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand, ValueEnum};
 use crosscheck::case;
-use crosscheck::comparison::{discrepancy, work_precision};
+use crosscheck::comparison::{self, discrepancy, work_precision};
 use crosscheck::engines::RunSettings;
 use crosscheck::interrupt;
 use crosscheck::report::{self, staging};
@@ -64,6 +64,31 @@ enum Command {
     /// `OUT/figures/<case>.work-precision.svg`; orders, floors and time to accuracy on
     /// standard output.
     Sweep(SweepArgs),
+    /// Stability map: every engine that steps in time on every case at increments of 0.25 … 4
+    /// × the explicit engine's stable increment, each run classified accurate / inaccurate /
+    /// unstable / failed: `OUT/stability/<engine>.csv` and `OUT/figures/stability-<engine>.svg`.
+    Stability(StabilityArgs),
+}
+
+/// Options of `crosscheck stability`.
+#[derive(Debug, Args)]
+struct StabilityArgs {
+    /// Case ids from cases/ or paths to .toml case files (default: every case in cases/ and
+    /// cases/stress/).
+    #[arg(value_name = "CASE")]
+    cases: Vec<String>,
+    /// Comma-separated engines to map (default: every engine that steps in time).
+    #[arg(long, value_delimiter = ',', value_name = "NAMES")]
+    engines: Vec<String>,
+    /// Output directory.
+    #[arg(long, value_name = "DIR", default_value = "report")]
+    out: PathBuf,
+    /// Do not show the progress bar.
+    #[arg(long, short)]
+    quiet: bool,
+    /// Refuse (exit 2) when another run is writing the same output, instead of waiting.
+    #[arg(long)]
+    no_wait: bool,
 }
 
 /// Options of `crosscheck sweep`.
@@ -113,6 +138,10 @@ struct RunArgs {
     /// its error against its own model's exact solution is at most EPS of each column's peak.
     #[arg(long, value_name = "EPS", value_parser = positive, conflicts_with_all = ["increment", "penalty"])]
     tolerance: Option<f64>,
+    /// Stability study: step with R × each engine's computed stable increment (rapier: the
+    /// explicit engine's), exactly, R > 1 allowed; rows are interpolated between increments.
+    #[arg(long, value_name = "R", value_parser = positive, conflicts_with_all = ["increment", "tolerance"])]
+    increment_ratio: Option<f64>,
     /// How dashpots see the velocity.
     #[arg(long, value_enum)]
     damping: Option<DampingArg>,
@@ -138,6 +167,9 @@ struct RunArgs {
     /// `crosscheck sweep`; `crosscheck` with no arguments does).
     #[arg(long)]
     sweep: bool,
+    /// Also run the stability map (as `crosscheck stability`, into the same report).
+    #[arg(long)]
+    stability: bool,
     /// Runs per sweep point (with --sweep).
     #[arg(long, value_name = "N", default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..=100))]
     repeat: u64,
@@ -177,6 +209,7 @@ impl RunArgs {
             increment: None,
             penalty: None,
             tolerance: None,
+            increment_ratio: None,
             damping: None,
             contact_start: None,
             quiet: false,
@@ -185,6 +218,7 @@ impl RunArgs {
             max_rows: budget::Limits::default().max_rows,
             max_memory: budget::Limits::default().max_memory_bytes,
             sweep: true,
+            stability: true,
             repeat: 3,
         }
     }
@@ -202,7 +236,8 @@ impl RunArgs {
             increment: self
                 .increment
                 .map(IncrementRule::Given)
-                .or(self.tolerance.map(IncrementRule::Tolerance)),
+                .or(self.tolerance.map(IncrementRule::Tolerance))
+                .or(self.increment_ratio.map(IncrementRule::StableRatio)),
             penalty: self.penalty.map(PenaltyRule::Stiffness),
             damping: self.damping.map(|d| match d {
                 DampingArg::Centred => DampingTreatment::Centred,
@@ -235,6 +270,7 @@ fn main() -> ExitCode {
         Some(Command::Check { files }) => check(files, &dir),
         Some(Command::Scaling { max_n, out, quiet }) => scaling(max_n as usize, &out, quiet),
         Some(Command::Sweep(args)) => sweep_command(args, &dir),
+        Some(Command::Stability(args)) => stability_command(args, &dir),
     }
 }
 
@@ -376,7 +412,7 @@ fn case_files(dir: &Path) -> Result<Vec<PathBuf>, String> {
             dir.display()
         ));
     }
-    match case::discover(dir) {
+    match case::discover_suite(dir) {
         Ok(f) if f.is_empty() => Err(format!("no case files (*.toml) in {}", dir.display())),
         Ok(f) => Ok(f),
         Err(e) => Err(format!("{}: cannot list cases: {e}", dir.display())),
@@ -492,7 +528,17 @@ fn target_and_cases(
         eprintln!("error: {e}; nothing was run");
         return Err(ExitCode::from(2));
     }
-    let cases = run::load_cases(names, dir).map_err(|errors| {
+    // With no case named: the seed cases of `dir` and the stress family of `dir/stress`.
+    let suite: Vec<String> = if names.is_empty() {
+        case::discover_suite(dir)
+            .unwrap_or_default()
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect()
+    } else {
+        names.to_vec()
+    };
+    let cases = run::load_cases(&suite, dir).map_err(|errors| {
         report_load_errors(&errors);
         eprintln!("nothing was run");
         ExitCode::from(2)
@@ -581,17 +627,38 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
     if interrupt::requested() {
         return interrupted();
     }
+    let names: Vec<&str> = plan.engines.iter().map(|e| e.name()).collect();
     let sweeps = if args.sweep {
-        let names: Vec<&str> = plan.engines.iter().map(|e| e.name()).collect();
         let grid = sweep::Grid {
             repeat: args.repeat as usize,
             ..sweep::Grid::default()
         };
-        work_precision::measure(&plan, &outcome, &names, &grid, !args.quiet)
+        // The sweep covers the seed cases; the stress family is for the stability map.
+        let seeds = case::discover(dir).unwrap_or_default();
+        let seed = |s: &crosscheck::scene::Scene| {
+            seeds
+                .iter()
+                .any(|p| p.file_stem().is_some_and(|f| *f == *s.id))
+        };
+        let swept_plan = Plan {
+            cases: plan.cases.iter().filter(|s| seed(s)).cloned().collect(),
+            engines: Vec::new(),
+            settings: plan.settings,
+        };
+        work_precision::measure(&swept_plan, &outcome, &names, &grid, !args.quiet)
     } else {
         Vec::new()
     };
     let swept = started.elapsed().as_secs_f64();
+    if interrupt::requested() {
+        return interrupted();
+    }
+    let maps = if args.stability {
+        comparison::stability::measure(&plan, &outcome, &names, !args.quiet)
+    } else {
+        Vec::new()
+    };
+    let mapped = started.elapsed().as_secs_f64();
     if interrupt::requested() {
         return interrupted();
     }
@@ -603,9 +670,13 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
     if args.sweep {
         parts.push(("sweep", swept - budgeted));
     }
+    if args.stability {
+        parts.push(("stability map", mapped - swept));
+    }
     let study = report::Study {
         budgets: &budgets,
         sweeps: &sweeps,
+        stability: &maps,
         parts,
     };
     let summary = match report::write(staging.path(), &plan, &outcome, &study, staging.target()) {
@@ -637,12 +708,13 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
         checks.len()
     ));
     out.print(&format!(
-        "time: load and check {:.2} s, jobs {:.2} s, budget {:.2} s, sweep {:.2} s, report {:.2} s, swap {:.2} s; total {:.2} s\n",
+        "time: load and check {:.2} s, jobs {:.2} s, budget {:.2} s, sweep {:.2} s, stability map {:.2} s, report {:.2} s, swap {:.2} s; total {:.2} s\n",
         loaded,
         ran - loaded,
         budgeted - ran,
         swept - budgeted,
-        written - swept,
+        mapped - swept,
+        written - mapped,
         swapped - written,
         swapped
     ));
@@ -730,5 +802,76 @@ fn sweep_command(args: SweepArgs, dir: &Path) -> ExitCode {
         args.out.join("sweep").display(),
         args.out.join("figures").display()
     ));
+    out.finish(ExitCode::SUCCESS)
+}
+
+fn stability_command(args: StabilityArgs, dir: &Path) -> ExitCode {
+    use crosscheck::report::stability as written;
+    use crosscheck::run::stability;
+    let engines: Vec<&str> = if args.engines.is_empty() {
+        stability::ENGINES.to_vec()
+    } else {
+        let mut chosen = Vec::new();
+        for name in &args.engines {
+            match stability::ENGINES.iter().find(|e| **e == name.trim()) {
+                Some(e) => chosen.push(*e),
+                None => {
+                    eprintln!(
+                        "error: `{}` has no stability map; engines that step in time: {}",
+                        name.trim(),
+                        stability::ENGINES.join(", ")
+                    );
+                    return ExitCode::from(2);
+                }
+            }
+        }
+        chosen
+    };
+    let (target, cases) = match target_and_cases(&args.out, &args.cases, dir) {
+        Ok(x) => x,
+        Err(code) => return code,
+    };
+    let (_lock, staging) = match lock_and_stage(&target, !args.no_wait, &["stability", "figures"]) {
+        Ok(x) => x,
+        Err(code) => return code,
+    };
+    // The exact solutions every run is measured against.
+    let plan = Plan {
+        cases,
+        engines: ["analytic", "reference"]
+            .iter()
+            .filter_map(|n| crosscheck::engines::named(n))
+            .collect(),
+        settings: RunSettings::default(),
+    };
+    let outcome = run::execute(&plan, false);
+    if interrupt::requested() {
+        return interrupted();
+    }
+    let points = comparison::stability::measure(&plan, &outcome, &engines, !args.quiet);
+    if interrupt::requested() {
+        return interrupted();
+    }
+    match written::write(staging.path(), &points) {
+        Ok(()) => {}
+        Err(report::data::DataError::Interrupted) => return interrupted(),
+        Err(e) => {
+            eprintln!("error: cannot write the stability map (the previous one is unchanged): {e}");
+            return ExitCode::FAILURE;
+        }
+    }
+    if interrupt::checkpoint("swap").is_err() {
+        return interrupted();
+    }
+    if let Err(e) = staging.commit() {
+        eprintln!(
+            "error: cannot put the stability map in place (the previous one is unchanged): {e}"
+        );
+        return ExitCode::FAILURE;
+    }
+    let mut out = Stdout::default();
+    let mut text = String::new();
+    written::overview(&mut text, &written::read_all(&args.out));
+    out.print(&text);
     out.finish(ExitCode::SUCCESS)
 }

@@ -15,7 +15,15 @@ fn run_into_temporary_directory() -> &'static (tempfile::TempDir, Summary, Strin
     RUN.get_or_init(|| {
         let out = tempfile::tempdir().unwrap();
         let status = Command::new(env!("CARGO_BIN_EXE_crosscheck"))
-            .args(["run", "--quiet", "--sweep", "--repeat", "1", "--out"])
+            .args([
+                "run",
+                "--quiet",
+                "--sweep",
+                "--stability",
+                "--repeat",
+                "1",
+                "--out",
+            ])
             .arg(out.path())
             .stdout(std::process::Stdio::null())
             .status()
@@ -36,7 +44,12 @@ fn run_into_temporary_directory() -> &'static (tempfile::TempDir, Summary, Strin
 fn sweep_orders_and_floors_are_in_the_summary_and_the_report() {
     let (out, summary, report) = run_into_temporary_directory();
     let mut checked = 0;
-    for c in &summary.cases {
+    // The sweep covers the seed cases (the stress family is the stability map's).
+    for c in summary
+        .cases
+        .iter()
+        .filter(|c| !c.id.starts_with("stress_"))
+    {
         assert!(
             out.path()
                 .join("sweep")
@@ -87,11 +100,12 @@ fn sweep_orders_and_floors_are_in_the_summary_and_the_report() {
 #[test]
 fn summary_and_report_agree() {
     let (out, summary, report) = run_into_temporary_directory();
-    assert_eq!(summary.cases.len(), 13);
+    // The 13 seed cases and the 7 of the stress family.
+    assert_eq!(summary.cases.len(), 20);
 
     let mut checked = 0;
     for c in &summary.cases {
-        let scene = case::load(&case::cases_dir().join(format!("{}.toml", c.id))).unwrap();
+        let scene = case::load(&case::resolve(&c.id, &case::cases_dir()).unwrap()).unwrap();
         let csv = |engine: &str| {
             read_history(
                 &out.path()
@@ -171,9 +185,10 @@ fn summary_and_report_agree() {
             );
         }
     }
-    // Every declared tolerance: explicit and explicit_small on 13 cases, rapier_f64 on 13.
+    // Every declared tolerance: explicit and explicit_small on the 13 seed and 7 stress cases,
+    // rapier_f64 on the 13 seed cases.
     assert_eq!(
-        checked, 39,
+        checked, 53,
         "every run with a declared tolerance is in the report"
     );
     assert!(report.contains(&format!(
@@ -222,7 +237,7 @@ fn verdict_matrix_equals_the_summary_and_every_link_resolves() {
             cells += 1;
         }
     }
-    assert_eq!(cells, 13 * 7, "every case × engine but the closed form");
+    assert_eq!(cells, 20 * 7, "every case × engine but the closed form");
     let mut links = 0;
     for piece in report.split("](").skip(1) {
         let target = piece.split(')').next().unwrap();
@@ -282,6 +297,46 @@ fn equivalent_cases_are_found_and_agree() {
             .unwrap_or_else(|| panic!("no equivalence row for {} = {}", e.case, e.same_as));
         for d in e.differences.values() {
             assert!(row.contains(&sci(*d)), "{row} lacks {}", sci(*d));
+        }
+    }
+}
+
+/// The stability map is in REPORT.md, one table row per engine whose counts are those of its
+/// CSV, and the explicit engine's edge is at the stable increment on every case: unstable at
+/// every ratio above 1, never below.
+#[test]
+fn the_stability_map_is_in_the_report_and_matches_its_csvs() {
+    let (out, _, report) = run_into_temporary_directory();
+    assert!(report.contains("## Where each engine stays stable"));
+    for engine in crosscheck::run::stability::ENGINES {
+        let csv =
+            std::fs::read_to_string(out.path().join("stability").join(format!("{engine}.csv")))
+                .unwrap();
+        let rows: Vec<Vec<&str>> = csv
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').collect())
+            .collect();
+        assert_eq!(rows.len(), 20 * crosscheck::run::stability::RATIOS.len());
+        let count = |ratio: &str, outcome: &str| {
+            rows.iter()
+                .filter(|r| r[1] == ratio && r[3] == outcome)
+                .count()
+        };
+        let line = report
+            .lines()
+            .find(|l| l.starts_with(&format!("| `{engine}` |")))
+            .unwrap_or_else(|| panic!("{engine}: no table row"));
+        let cells: Vec<&str> = line.split('|').map(str::trim).collect();
+        assert_eq!(cells[2], "20");
+        assert_eq!(cells[3], count("2.5e-1", "accurate").to_string(), "{line}");
+        assert_eq!(cells[4], count("9.8e-1", "accurate").to_string(), "{line}");
+        assert_eq!(cells[6], count("1.02e0", "unstable").to_string(), "{line}");
+        if engine.starts_with("explicit") {
+            for r in &rows {
+                let ratio: f64 = r[1].parse().unwrap();
+                assert_eq!(r[3] == "unstable", ratio > 1.0, "{engine}: {r:?}");
+            }
         }
     }
 }

@@ -167,15 +167,33 @@ pub fn discover(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
     Ok(v)
 }
 
-/// Resolve a CASE argument: an id from `dir`, or a path to a TOML file.
+/// The directory of the stress family beside the seed cases: `dir/stress`.
+pub fn stress_dir(dir: &Path) -> PathBuf {
+    dir.join("stress")
+}
+
+/// The seed cases of `dir` and, where `dir/stress` exists, the stress family's: what a run
+/// with no case named runs.
+pub fn discover_suite(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
+    let mut v = discover(dir)?;
+    let stress = stress_dir(dir);
+    if stress.is_dir() {
+        v.extend(discover(&stress)?);
+    }
+    Ok(v)
+}
+
+/// Resolve a CASE argument: an id from `dir` (or from `dir/stress`), or a path to a TOML file.
 pub fn resolve(arg: &str, dir: &Path) -> Result<PathBuf, CaseError> {
     let as_path = PathBuf::from(arg);
     if as_path.extension().is_some_and(|x| x == "toml") && as_path.is_file() {
         return Ok(as_path);
     }
-    let in_dir = dir.join(format!("{arg}.toml"));
-    if in_dir.is_file() {
-        return Ok(in_dir);
+    for d in [dir.to_path_buf(), stress_dir(dir)] {
+        let in_dir = d.join(format!("{arg}.toml"));
+        if in_dir.is_file() {
+            return Ok(in_dir);
+        }
     }
     Err(CaseError::NotFound(arg.to_string()))
 }

@@ -19,6 +19,7 @@
 
 pub mod discrepancy;
 pub mod equivalence;
+pub mod stability;
 pub mod work_precision;
 
 use crate::contract::{self, History, VALID_COLUMN};

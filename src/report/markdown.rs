@@ -38,6 +38,7 @@ pub fn render(
     timings: &Timings,
     provenance: &Provenance,
     sweeps: &SweepRows,
+    maps: &std::collections::BTreeMap<String, Vec<crate::run::stability::Point>>,
     parts: &[(&str, f64)],
 ) -> String {
     let mut o = String::new();
@@ -45,6 +46,7 @@ pub fn render(
     let _ = writeln!(w, "# crosscheck report\n");
     at_a_glance(w, s, provenance, parts);
     work_precision::overview(w, s, sweeps);
+    crate::report::stability::overview(w, maps);
     let _ = writeln!(
         w,
         "crosscheck runs classic explicit-dynamics verification problems whose exact answer is known \

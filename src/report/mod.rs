@@ -9,6 +9,8 @@
 //! - [`sketch`]: `figures/<case>.sketch.svg`, each scene drawn from the `Scene` itself;
 //! - [`work_precision`]: `sweep/<case>.csv` and `figures/<case>.work-precision.svg`, what
 //!   each accuracy costs;
+//! - [`stability`]: `stability/<engine>.csv` and `figures/stability-<engine>.svg`, where each
+//!   engine stays stable and accurate;
 //! - [`markdown`]: `REPORT.md`, rendered from the summary and the timings;
 //! - [`provenance`]: what was run (version, commit, compiler, rapier, machine, date);
 //! - [`staging`]: how a report is assembled beside its target and swapped into place.
@@ -19,6 +21,7 @@ pub mod markdown;
 pub mod provenance;
 pub mod scaling;
 pub mod sketch;
+pub mod stability;
 pub mod staging;
 pub mod summary;
 pub mod work_precision;
@@ -34,10 +37,11 @@ use std::path::{Path, PathBuf};
 use summary::Summary;
 
 /// The report's own entries in its directory; nothing else there is the report's.
-pub const ENTRIES: [&str; 6] = [
+pub const ENTRIES: [&str; 7] = [
     "data",
     "figures",
     "sweep",
+    "stability",
     "summary.json",
     "timings.json",
     "REPORT.md",
@@ -50,6 +54,8 @@ pub struct Study<'a> {
     pub budgets: &'a [JobBudget],
     /// Each case's sweep (what accuracy costs).
     pub sweeps: &'a [CaseSweep],
+    /// The stability map's runs (empty when it did not run).
+    pub stability: &'a [crate::run::stability::Point],
     /// How long each part of the run took (name, wall seconds), in order.
     pub parts: Vec<(&'static str, f64)>,
 }
@@ -73,6 +79,7 @@ pub fn write(
     write_histories(out, outcome)?;
     write_budgets(out, study.budgets)?;
     work_precision::write(out, study.sweeps, &plan.cases)?;
+    stability::write(out, study.stability)?;
     checkpoint("summary")?;
     let mut summary = Summary::build(plan, outcome, out);
     summary.attach_budgets(study.budgets);
@@ -148,6 +155,7 @@ pub fn write(
             &timings,
             &provenance::Provenance::gather(&plan.settings),
             &work_precision::read_all(out, summary.cases.iter().map(|c| c.id.as_str())),
+            &stability::read_all(out),
             &study.parts,
         )
         .as_bytes(),

@@ -28,6 +28,7 @@ pub mod load;
 pub mod matching;
 pub mod refinement;
 pub mod scaling;
+pub mod stability;
 pub mod sweep;
 
 pub use load::{

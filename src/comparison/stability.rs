@@ -1,0 +1,42 @@
+//! The stability map measured: each run of [`crate::run::stability`] judged against the exact
+//! solution of its engine's own model (`reference` or `analytic`, as in the tolerance table).
+
+use crate::comparison::{baseline, compare};
+use crate::contract::History;
+use crate::run::stability::{self, Point};
+use crate::run::{Outcome, Plan};
+use crate::scene::Scene;
+
+/// Map every case of `plan` for the `engines` asked for (those of [`stability::ENGINES`]),
+/// measuring errors against the exact solutions in `outcome`.
+pub fn measure(plan: &Plan, outcome: &Outcome, engines: &[&str], progress: bool) -> Vec<Point> {
+    let history = |case: &str, engine: &str| -> Option<&History> {
+        outcome
+            .jobs
+            .iter()
+            .find(|j| j.case == case && j.engine == engine)?
+            .result
+            .as_ref()
+            .ok()
+            .map(|s| &s.history)
+    };
+    let error_of = |scene: &Scene, engine: &str, h: &History| {
+        let own = history(&scene.id, baseline(engine)?)?;
+        Some(compare(scene, own, h).worst_max)
+    };
+    let chosen: Vec<&str> = stability::ENGINES
+        .into_iter()
+        .filter(|e| engines.contains(e))
+        .collect();
+    let scenes: Vec<&Scene> = plan.cases.iter().collect();
+    let bar = crate::run::progress_bar(
+        stability::len(scenes.len(), chosen.len(), stability::RATIOS.len()),
+        progress,
+    );
+    bar.set_message("stability map");
+    let points = stability::run(&scenes, &chosen, &stability::RATIOS, &error_of, &|| {
+        bar.inc(1)
+    });
+    bar.finish_and_clear();
+    points
+}

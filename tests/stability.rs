@@ -1,0 +1,265 @@
+//! Hard cases stay stable: the stability limit at 0.98× and 1.02× of the computed stable
+//! increment with a diagnosis that names the growing mode, the extreme-ratio stress cases
+//! against their exact solutions, and the stability map's files.
+mod common;
+
+use crosscheck::case;
+use crosscheck::comparison::compare;
+use crosscheck::engines::analytic::AnalyticEngine;
+use crosscheck::engines::explicit::ExplicitEngine;
+use crosscheck::engines::{Engine, EngineError, RunSettings};
+use crosscheck::run::stability::energy_growth;
+use crosscheck::scene::{IncrementRule, Scene};
+use std::process::Command;
+
+fn stress(id: &str) -> Scene {
+    case::load(&case::stress_dir(&case::cases_dir()).join(format!("{id}.toml")))
+        .unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn stress_scenes() -> Vec<Scene> {
+    case::discover(&case::stress_dir(&case::cases_dir()))
+        .unwrap()
+        .iter()
+        .map(|f| case::load(f).unwrap_or_else(|e| panic!("{e}")))
+        .collect()
+}
+
+fn at_ratio(r: f64) -> RunSettings {
+    RunSettings {
+        increment: Some(IncrementRule::StableRatio(r)),
+        ..Default::default()
+    }
+}
+
+fn engines() -> [ExplicitEngine; 2] {
+    [ExplicitEngine::finite(), ExplicitEngine::small()]
+}
+
+/// 2/ω_max of a two-mass chain ground–k1–m1–k2–m2 along one line, from its 2×2 eigenproblem
+/// (written here, independently of the engine's linearisation).
+fn chain_limit(m1: f64, m2: f64, k1: f64, k2: f64) -> f64 {
+    // det(K − ω²M) = 0: m1 m2 ω⁴ − (m1 k2 + m2 (k1 + k2)) ω² + k1 k2 = 0.
+    let a = m1 * m2;
+    let b = m1 * k2 + m2 * (k1 + k2);
+    let c = k1 * k2;
+    let w2 = (b + (b * b - 4.0 * a * c).sqrt()) / (2.0 * a);
+    2.0 / w2.sqrt()
+}
+
+#[test]
+fn at_1_02_every_case_stops_with_the_growing_mode_named() {
+    let scenes: Vec<Scene> = common::all_scenes()
+        .into_iter()
+        .chain(stress_scenes())
+        .collect();
+    assert_eq!(scenes.len(), 20);
+    for scene in &scenes {
+        for engine in engines() {
+            let who = format!("{} / {}", scene.id, engine.name());
+            match engine.run(scene, &at_ratio(1.02)) {
+                Ok(out) => panic!(
+                    "{who}: ran to the end at 1.02× (energy growth {:?})",
+                    energy_growth(&out.history)
+                ),
+                Err(EngineError::Failed(m)) => {
+                    // The diagnosis: increment and time, the stable increment and the ratio,
+                    // the mode (DOFs and frequency). ω·h of the named mode is past 2 because
+                    // the ratio is 1.02 of 2/ω_max: 2.040 to round-off.
+                    for part in [
+                        "unstable at increment",
+                        "by t = ",
+                        "ratio 1.0200",
+                        "the growing mode is ω = ",
+                        "ω·h = 2.040",
+                    ] {
+                        assert!(m.contains(part), "{who}: `{part}` missing from: {m}");
+                    }
+                }
+                Err(e) => panic!("{who}: {e}"),
+            }
+        }
+    }
+}
+
+#[test]
+fn the_diagnosis_names_the_stiff_mode_of_the_pair() {
+    // ω_max of the soft–stiff pair (k1 = 1, k2 = 1e4, unit masses): 141.42 rad/s, moving mid
+    // and end against each other (components ±1 to ~1e-4).
+    let scene = stress("stress_pair_undamped");
+    let omega = 2.0 / chain_limit(1.0, 1.0, 1.0, 1.0e4);
+    let err = ExplicitEngine::finite()
+        .run(&scene, &at_ratio(1.02))
+        .expect_err("unstable at 1.02×")
+        .to_string();
+    assert!(
+        err.contains(&format!("ω = {omega:.4e} rad/s")),
+        "{err} (expected ω = {omega:.4e})"
+    );
+    assert!(
+        err.contains("end.ux (+1.00), mid.ux (-1.00)")
+            || err.contains("mid.ux (+1.00), end.ux (-1.00)"),
+        "{err}"
+    );
+}
+
+#[test]
+fn at_0_98_the_stress_cases_stay_bounded_and_meet_their_tolerance() {
+    for scene in stress_scenes() {
+        let exact = AnalyticEngine.run(&scene, &RunSettings::default()).unwrap();
+        for engine in engines() {
+            let who = format!("{} / {}", scene.id, engine.name());
+            let out = engine
+                .run(&scene, &at_ratio(0.98))
+                .unwrap_or_else(|e| panic!("{who}: {e}"));
+            // The increment is exactly 0.98 of the stable one (not shortened to the rows).
+            let stable = engine
+                .stable_increment(&scene, &RunSettings::default())
+                .unwrap()
+                .increment;
+            assert!(
+                (out.info.increment / stable - 0.98).abs() < 1e-12,
+                "{who}: ratio {}",
+                out.info.increment / stable
+            );
+            assert!(out.history.rows.iter().flatten().all(|x| x.is_finite()));
+            // Bounded: a conservative run holds at most what it started with plus the work
+            // done on it; the dashpots only remove energy. What the scheme conserves is its
+            // shadow energy: the energy measured at v(n) = (v(n−½) + v(n+½))/2 departs from it
+            // by a fraction of each mode's energy that grows as ω·h → 2, and the stiff modes
+            // here carry ~1e-4 of the energy (measured: at most 1.0001 × the budget).
+            let growth = energy_growth(&out.history).unwrap();
+            assert!(growth <= 1.0 + 1e-3, "{who}: energy growth {growth}");
+            let error = compare(&scene, &exact.history, &out.history).worst_max;
+            let tolerance = scene.tolerances[engine.name()];
+            assert!(error <= tolerance, "{who}: error {error:e} > {tolerance:e}");
+        }
+    }
+}
+
+#[test]
+fn the_stable_increment_adapts_to_extreme_ratios() {
+    // (case, m_mid, m_end, k1, k2): 2/ω_max from the chain's own eigenproblem. The engine's
+    // comes from a finite-difference linearisation (relative step 1e-6 on a linear scene:
+    // exact to round-off, 1e-9 allowed).
+    for (id, m1, m2, k1, k2) in [
+        ("stress_stiffness_ratio", 1.0, 1.0, 1.0, 1.0e8),
+        ("stress_mass_ratio", 1.0e6, 1.0, 1.0e6, 1.0e4),
+        ("stress_tiny_mass", 1.0, 1.0e-9, 1.0e4, 1.0),
+        ("stress_pair_undamped", 1.0, 1.0, 1.0, 1.0e4),
+    ] {
+        let scene = stress(id);
+        let expected = chain_limit(m1, m2, k1, k2);
+        let got = ExplicitEngine::finite()
+            .stable_increment(&scene, &RunSettings::default())
+            .unwrap()
+            .increment;
+        assert!(
+            (got / expected - 1.0).abs() < 1e-9,
+            "{id}: stable increment {got:e}, expected {expected:e}"
+        );
+    }
+}
+
+#[test]
+fn heavily_damped_centred_runs_solve_the_stiff_dashpot_directly() {
+    // ζ = 5 on the stiff mode: the centred velocity iteration contracts by ζ·ω·h ≈ 9.8 per pass
+    // at 0.98×, so it cannot converge; the engine solves the affine map instead, and the run is
+    // as accurate as the undamped one (the damped mode carries ~1e-4 of the motion).
+    let scene = stress("stress_pair_zeta5");
+    let exact = AnalyticEngine.run(&scene, &RunSettings::default()).unwrap();
+    let out = ExplicitEngine::finite()
+        .run(&scene, &at_ratio(0.98))
+        .unwrap();
+    let error = compare(&scene, &exact.history, &out.history).worst_max;
+    assert!(error < 1e-4, "error {error:e}");
+}
+
+#[test]
+fn a_run_at_1_02_exits_1_and_writes_nothing_non_finite() {
+    let out = tempfile::tempdir().unwrap();
+    let result = Command::new(env!("CARGO_BIN_EXE_crosscheck"))
+        .args([
+            "run",
+            "stress_pair_zeta1",
+            "--increment-ratio",
+            "1.02",
+            "-q",
+        ])
+        .arg("--out")
+        .arg(out.path())
+        .output()
+        .unwrap();
+    assert_eq!(result.status.code(), Some(1));
+    let text = String::from_utf8_lossy(&result.stdout);
+    assert!(text.contains("the growing mode is"), "{text}");
+    for entry in walk(&out.path().join("data")) {
+        let csv = std::fs::read_to_string(&entry).unwrap();
+        assert!(
+            !csv.contains("NaN") && !csv.contains("inf"),
+            "{}",
+            entry.display()
+        );
+    }
+}
+
+fn walk(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    if let Ok(entries) = std::fs::read_dir(dir) {
+        for e in entries.flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                out.extend(walk(&p));
+            } else {
+                out.push(p);
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn the_stability_command_writes_its_maps() {
+    let out = tempfile::tempdir().unwrap();
+    let status = Command::new(env!("CARGO_BIN_EXE_crosscheck"))
+        .args([
+            "stability",
+            "stress_pair_undamped",
+            "springs_grounded_a",
+            "--engines",
+            "explicit,rapier_f64",
+            "-q",
+        ])
+        .arg("--out")
+        .arg(out.path())
+        .status()
+        .unwrap();
+    assert!(status.success());
+    for engine in ["explicit", "rapier_f64"] {
+        let csv =
+            std::fs::read_to_string(out.path().join("stability").join(format!("{engine}.csv")))
+                .unwrap();
+        let mut lines = csv.lines();
+        assert_eq!(
+            lines.next(),
+            Some("case,ratio,increment,outcome,error_max,energy_growth")
+        );
+        let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+        assert_eq!(rows.len(), 2 * 10);
+        for r in &rows {
+            let ratio: f64 = r[1].parse().unwrap();
+            let outcome = r[3];
+            if engine == "explicit" {
+                // The explicit engine's map has its edge exactly at the stable increment.
+                assert_eq!(outcome == "unstable", ratio > 1.0, "{r:?}");
+            }
+        }
+        let svg = std::fs::read_to_string(
+            out.path()
+                .join("figures")
+                .join(format!("stability-{engine}.svg")),
+        )
+        .unwrap();
+        roxmltree::Document::parse(&svg).unwrap();
+    }
+}

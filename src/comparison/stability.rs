@@ -28,7 +28,8 @@ pub fn measure(plan: &Plan, outcome: &Outcome, engines: &[&str], progress: bool)
         .into_iter()
         .filter(|e| engines.contains(e))
         .collect();
-    let scenes: Vec<&Scene> = plan.cases.iter().collect();
+    let all: Vec<&Scene> = plan.cases.iter().collect();
+    let scenes = stability::mapped(&all);
     let bar = crate::run::progress_bar(
         stability::len(scenes.len(), chosen.len(), stability::RATIOS.len()),
         progress,

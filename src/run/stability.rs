@@ -15,6 +15,7 @@
 //! - **inaccurate**: bounded, but outside that tolerance.
 
 use crate::contract::History;
+use crate::engines::explicit::ExplicitEngine;
 use crate::engines::{self, RunSettings};
 use crate::run::matching;
 use crate::scene::{IncrementRule, Scene};
@@ -139,12 +140,12 @@ pub fn run(
     error_of: &(dyn Fn(&Scene, &str, &History) -> Option<f64> + Sync),
     tick: &(dyn Fn() + Sync),
 ) -> Vec<Point> {
-    let jobs: Vec<(&Scene, &str, f64)> = scenes
-        .iter()
+    let jobs: Vec<(&Scene, &str, f64)> = mapped(scenes)
+        .into_iter()
         .flat_map(|s| {
             engines
                 .iter()
-                .flat_map(move |e| ratios.iter().map(move |r| (*s, *e, *r)))
+                .flat_map(move |e| ratios.iter().map(move |r| (s, *e, *r)))
         })
         .collect();
     jobs.par_iter()
@@ -152,6 +153,20 @@ pub fn run(
             let point = map_point(scene, name, *ratio, error_of);
             tick();
             point
+        })
+        .collect()
+}
+
+/// The scenes a map covers: those with a stable increment (a scene without stiffness, such as
+/// a free body's spin, has none to take a ratio of).
+pub fn mapped<'a>(scenes: &[&'a Scene]) -> Vec<&'a Scene> {
+    scenes
+        .iter()
+        .copied()
+        .filter(|s| {
+            ExplicitEngine::finite()
+                .stable_increment(s, &RunSettings::default())
+                .is_some()
         })
         .collect()
 }

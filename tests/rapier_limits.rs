@@ -1,0 +1,145 @@
+//! Rapier where the problem gets hard: its implicit springs lose energy as backward Euler
+//! predicts, and f32 loses the pinned case's accuracy as the scene moves away from the origin.
+mod common;
+
+use crosscheck::comparison::compare;
+use crosscheck::engines::rapier::{Precision, RapierEngine};
+use crosscheck::engines::reference::ReferenceEngine;
+use crosscheck::engines::{Engine, History, RunSettings};
+use crosscheck::scene::IncrementRule;
+
+fn column(h: &History, name: &str) -> Vec<f64> {
+    let i = h.columns.iter().position(|c| c == name).unwrap();
+    h.rows.iter().map(|r| r[i]).collect()
+}
+
+#[test]
+fn rapier_springs_lose_energy_as_backward_euler_predicts() {
+    // The undamped grounded oscillator (springs_grounded_a without its dashpot), 2 s. Rapier
+    // (matched: 4 substeps per step) treats the spring implicitly; backward Euler on an
+    // undamped oscillator multiplies its energy by 1/(1 + (ω·h_s)²) per substep h_s, so after
+    // time t it holds E0 · (1 + (ω·h_s)²)^(−t/h_s): 5.2 % lost per period at h = 1e-3 s.
+    let omega = (30.0f64 / 0.02588).sqrt();
+    let scene = common::variant(
+        "springs_grounded_a",
+        &[
+            ("damping = 0.12", "damping = 0.0"),
+            ("duration = 1.0", "duration = 2.0"),
+        ],
+    );
+    for h in [2e-4, 1e-3, 2e-3] {
+        for precision in [Precision::F64, Precision::F32] {
+            let engine = RapierEngine::matched(precision);
+            let out = engine
+                .run(
+                    &scene,
+                    &RunSettings {
+                        increment: Some(IncrementRule::Forced(h)),
+                        ..Default::default()
+                    },
+                )
+                .unwrap();
+            let t = column(&out.history, "t");
+            let energy: Vec<f64> = column(&out.history, "e_kinetic")
+                .iter()
+                .zip(column(&out.history, "e_elastic"))
+                .map(|(k, e)| k + e)
+                .collect();
+            let hs = out.info.increment / 4.0;
+            let last = t.len() - 1;
+            let predicted = (1.0 + (omega * hs).powi(2)).powf(-t[last] / hs);
+            let measured = energy[last] / energy[0];
+            let per_period = |r: f64| 1.0 - r.powf(std::f64::consts::TAU / (omega * t[last]));
+            println!(
+                "{} h = {h:e}: energy after {:.1} s {measured:.6} of E0, backward Euler {predicted:.6}; lost per period {:.4} (predicted {:.4})",
+                engine.name(),
+                t[last],
+                per_period(measured),
+                per_period(predicted)
+            );
+            // The loss per period as predicted to 1 % of itself in f64 (measured within
+            // 0.2 %), 5 % in f32 (its round-off on the spring's stretch).
+            let allowed = if precision == Precision::F64 {
+                0.01
+            } else {
+                0.05
+            };
+            let (m, p) = (per_period(measured), per_period(predicted));
+            assert!(
+                (m / p - 1.0).abs() < allowed,
+                "{} h = {h:e}: lost {m} per period, predicted {p}",
+                engine.name()
+            );
+        }
+    }
+}
+
+/// `rigid2d_pin_lumped` with every point of the scene moved by (d, d).
+fn translated(d: f64) -> crosscheck::scene::Scene {
+    let text =
+        std::fs::read_to_string(crosscheck::case::cases_dir().join("rigid2d_pin_lumped.toml"))
+            .unwrap();
+    let mut out = String::new();
+    for line in text.lines() {
+        let moved = ["at = [", "face_point = ["].iter().find_map(|key| {
+            let rest = line.strip_prefix(key)?.strip_suffix(']')?;
+            let xy: Vec<f64> = rest.split(',').map(|v| v.trim().parse().unwrap()).collect();
+            Some(format!("{key}{:?}, {:?}]", xy[0] + d, xy[1] + d))
+        });
+        out += &moved.unwrap_or_else(|| line.to_string());
+        out.push('\n');
+    }
+    let path = crosscheck::case::cases_dir().join("rigid2d_pin_lumped.toml");
+    crosscheck::case::parse(&out, &path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn f32_loses_the_pinned_case_far_from_the_origin() {
+    // The contract columns are displacements and rotations, so every translated scene has the
+    // same exact answer: the reference of the untranslated one.
+    let origin = translated(0.0);
+    let exact = ReferenceEngine
+        .run(&origin, &RunSettings::default())
+        .unwrap()
+        .history;
+    let error = |d: f64, precision: Precision| {
+        let scene = translated(d);
+        let out = RapierEngine::matched(precision)
+            .run(&scene, &RunSettings::default())
+            .unwrap();
+        compare(&origin, &exact, &out.history).worst_max
+    };
+    let base32 = error(0.0, Precision::F32);
+    let base64 = error(0.0, Precision::F64);
+    let mut doubled_at = None;
+    let mut far = 0.0;
+    // 10^-2 … 10^5 in half decades (the issue asks from 10 up; f32 has doubled before that).
+    for k in -4..=10 {
+        let d = 10f64.powf(k as f64 / 2.0);
+        let e32 = error(d, Precision::F32);
+        let e64 = error(d, Precision::F64);
+        println!(
+            "translated by {d:.3e}: rapier_f32 error {e32:.3e} ({:.2}× at the origin), rapier_f64 {e64:.3e} ({:.4}×)",
+            e32 / base32,
+            e64 / base64
+        );
+        // f64 does not notice: its round-off at 1e5 is 1e5 · 1.1e-16 = 1e-11, against motions
+        // of 1e-3 and more.
+        assert!((e64 / base64 - 1.0).abs() < 0.01, "f64 at {d:e}: {e64:e}");
+        // Close to the origin f32 does not either: its round-off on coordinates of ~3 is 2e-7.
+        if d <= 0.1 {
+            assert!((e32 / base32 - 1.0).abs() < 0.05, "f32 at {d:e}: {e32:e}");
+        }
+        if doubled_at.is_none() && e32 >= 2.0 * base32 {
+            doubled_at = Some(d);
+        }
+        far = e32;
+    }
+    println!("rapier_f32's error doubles at a translation of {doubled_at:?}");
+    assert!(doubled_at.is_some());
+    // At 1e5 an f32 coordinate is a multiple of 2^-7 = 7.8e-3, so a position is off by up to
+    // 3.9e-3: 19 % of the contact node's peak displacement (2.1e-2), and the penalty-like
+    // contact turns such offsets into forces. The error cannot stay below 0.1 of the peak
+    // (measured: 268, the run is lost).
+    assert!(far >= 0.1, "f32 at 1e5: error {far:e}");
+}

@@ -100,8 +100,8 @@ fn sweep_orders_and_floors_are_in_the_summary_and_the_report() {
 #[test]
 fn summary_and_report_agree() {
     let (out, summary, report) = run_into_temporary_directory();
-    // The 13 seed cases and the 10 of the stress family.
-    assert_eq!(summary.cases.len(), 23);
+    // The 13 seed cases and the 11 of the stress family.
+    assert_eq!(summary.cases.len(), 24);
 
     let mut checked = 0;
     for c in &summary.cases {
@@ -185,10 +185,10 @@ fn summary_and_report_agree() {
             );
         }
     }
-    // Every declared tolerance: explicit and explicit_small on the 13 seed and 7 stress cases,
+    // Every declared tolerance: explicit and explicit_small on the 13 seed and 8 stress cases,
     // explicit on the 3 spins, rapier_f64 on the 13 seed cases.
     assert_eq!(
-        checked, 56,
+        checked, 58,
         "every run with a declared tolerance is in the report"
     );
     assert!(report.contains(&format!(
@@ -237,7 +237,7 @@ fn verdict_matrix_equals_the_summary_and_every_link_resolves() {
             cells += 1;
         }
     }
-    assert_eq!(cells, 23 * 7, "every case × engine but the closed form");
+    assert_eq!(cells, 24 * 7, "every case × engine but the closed form");
     let mut links = 0;
     for piece in report.split("](").skip(1) {
         let target = piece.split(')').next().unwrap();
@@ -303,7 +303,7 @@ fn equivalent_cases_are_found_and_agree() {
 
 /// The stability map is in REPORT.md, one table row per engine whose counts are those of its
 /// CSV, and the explicit engine's edge is at the stable increment on every case: unstable at
-/// every ratio above 1, never below. It maps the 20 cases with a stable increment (not the
+/// every ratio above 1, never below. It maps the 21 cases with a stable increment (not the
 /// free spins).
 #[test]
 fn the_stability_map_is_in_the_report_and_matches_its_csvs() {
@@ -318,7 +318,7 @@ fn the_stability_map_is_in_the_report_and_matches_its_csvs() {
             .skip(1)
             .map(|l| l.split(',').collect())
             .collect();
-        assert_eq!(rows.len(), 20 * crosscheck::run::stability::RATIOS.len());
+        assert_eq!(rows.len(), 21 * crosscheck::run::stability::RATIOS.len());
         let count = |ratio: &str, outcome: &str| {
             rows.iter()
                 .filter(|r| r[1] == ratio && r[3] == outcome)
@@ -329,7 +329,7 @@ fn the_stability_map_is_in_the_report_and_matches_its_csvs() {
             .find(|l| l.starts_with(&format!("| `{engine}` |")))
             .unwrap_or_else(|| panic!("{engine}: no table row"));
         let cells: Vec<&str> = line.split('|').map(str::trim).collect();
-        assert_eq!(cells[2], "20");
+        assert_eq!(cells[2], "21");
         assert_eq!(cells[3], count("2.5e-1", "accurate").to_string(), "{line}");
         assert_eq!(cells[4], count("9.8e-1", "accurate").to_string(), "{line}");
         assert_eq!(cells[6], count("1.02e0", "unstable").to_string(), "{line}");

@@ -7,6 +7,7 @@ use crosscheck::case;
 use crosscheck::comparison::compare;
 use crosscheck::engines::analytic::AnalyticEngine;
 use crosscheck::engines::explicit::ExplicitEngine;
+use crosscheck::engines::reference::ReferenceEngine;
 use crosscheck::engines::{Engine, EngineError, RunSettings};
 use crosscheck::run::stability::energy_growth;
 use crosscheck::scene::{IncrementRule, Scene};
@@ -60,8 +61,8 @@ fn at_1_02_every_case_stops_with_the_growing_mode_named() {
         .chain(stress_scenes())
         .filter(has_stable_increment)
         .collect();
-    // The 13 seed cases and the 7 stress cases with stiffness (the free spins have none).
-    assert_eq!(scenes.len(), 20);
+    // The 13 seed cases and the 8 stress cases with stiffness (the free spins have none).
+    assert_eq!(scenes.len(), 21);
     for scene in &scenes {
         for engine in engines() {
             let who = format!("{} / {}", scene.id, engine.name());
@@ -114,9 +115,19 @@ fn the_diagnosis_names_the_stiff_mode_of_the_pair() {
 #[test]
 fn at_0_98_the_stress_cases_stay_bounded_and_meet_their_tolerance() {
     for scene in stress_scenes().into_iter().filter(has_stable_increment) {
-        let exact = AnalyticEngine.run(&scene, &RunSettings::default()).unwrap();
+        // Each engine against the exact solution of its own model: `explicit` against the
+        // finite-rotation reference, `explicit_small` against the closed form.
+        let analytic = AnalyticEngine.run(&scene, &RunSettings::default()).unwrap();
+        let reference = ReferenceEngine
+            .run(&scene, &RunSettings::default())
+            .unwrap();
         for engine in engines() {
             let who = format!("{} / {}", scene.id, engine.name());
+            let exact = if engine.name() == "explicit" {
+                &reference
+            } else {
+                &analytic
+            };
             let out = engine
                 .run(&scene, &at_ratio(0.98))
                 .unwrap_or_else(|e| panic!("{who}: {e}"));
@@ -133,11 +144,12 @@ fn at_0_98_the_stress_cases_stay_bounded_and_meet_their_tolerance() {
             assert!(out.history.rows.iter().flatten().all(|x| x.is_finite()));
             // Bounded: a conservative run holds at most what it started with plus the work
             // done on it; the dashpots only remove energy. What the scheme conserves is its
-            // shadow energy: the energy measured at v(n) = (v(n−½) + v(n+½))/2 departs from it
-            // by a fraction of each mode's energy that grows as ω·h → 2, and the stiff modes
-            // here carry ~1e-4 of the energy (measured: at most 1.0001 × the budget).
+            // shadow energy; the energy measured at v(n) = (v(n−½) + v(n+½))/2 exceeds it by
+            // (ω·h)²/4 of each mode's elastic energy: 0.96 of the top mode's at 0.98×. The top
+            // modes here carry ~1e-4 of the energy (the stiff springs' share, and the light
+            // body's (ω_A/ω_B)² in stress_inertia_ratio).
             let growth = energy_growth(&out.history).unwrap();
-            assert!(growth <= 1.0 + 1e-3, "{who}: energy growth {growth}");
+            assert!(growth <= 1.0 + 0.96 * 2e-4, "{who}: energy growth {growth}");
             let error = compare(&scene, &exact.history, &out.history).worst_max;
             let tolerance = scene.tolerances[engine.name()];
             assert!(error <= tolerance, "{who}: error {error:e} > {tolerance:e}");
@@ -155,6 +167,8 @@ fn the_stable_increment_adapts_to_extreme_ratios() {
         ("stress_mass_ratio", 1.0e6, 1.0, 1.0e6, 1.0e4),
         ("stress_tiny_mass", 1.0, 1.0e-9, 1.0e4, 1.0),
         ("stress_pair_undamped", 1.0, 1.0, 1.0, 1.0e4),
+        // Rotations: inertias 1e6 and 1 (about the pins), k1 = 1e6·1², k2 = 1e4·1².
+        ("stress_inertia_ratio", 1.0e6, 1.0, 1.0e6, 1.0e4),
     ] {
         let scene = stress(id);
         let expected = chain_limit(m1, m2, k1, k2);

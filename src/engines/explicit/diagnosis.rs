@@ -80,11 +80,7 @@ pub fn growing_mode<S: Space, const FINITE: bool>(
     if !(total.is_finite() && total > 0.0) {
         return None;
     }
-    let limit = |m: &Mode| match treatment {
-        DampingTreatment::Centred => 2.0 / m.omega,
-        DampingTreatment::Lagged => (2.0 / m.omega) * ((1.0 + m.zeta * m.zeta).sqrt() - m.zeta),
-    };
-    let past = |i: &usize| shapes[*i].0.omega > 0.0 && h > limit(&shapes[*i].0);
+    let past = |i: &usize| shapes[*i].0.omega > 0.0 && h > limit(&shapes[*i].0, treatment);
     let candidates: Vec<usize> = if (0..shapes.len()).any(|i| past(&i)) {
         (0..shapes.len()).filter(past).collect()
     } else {
@@ -107,7 +103,7 @@ pub fn growing_mode<S: Space, const FINITE: bool>(
     dofs.truncate(4);
     Some(GrowingMode {
         omega: mode.omega,
-        limit: limit(mode),
+        limit: limit(mode, treatment),
         share: energy / total,
         dofs,
     })
@@ -139,4 +135,75 @@ fn label<S: Space, const FINITE: bool>(
 
 fn compact(d: &Vector3<f64>) -> String {
     format!("({:.2},{:.2},{:.2})", d[0], d[1], d[2])
+}
+
+/// The modes an increment puts past their stability limit, watched while a run goes on: by
+/// linear theory their energy can only grow, so a 100-fold growth is instability even where a
+/// nonlinearity keeps the total energy bounded (a light body under finite rotation detunes its
+/// own mode as its swing grows, and its energy saturates below the guard).
+pub struct PastLimit<S: Space> {
+    dofs: Vec<Target<S>>,
+    /// M·φ per mode past the limit (φ mass-normalised): the modal velocity is (Mφ)ᵀ q̇.
+    weights: Vec<DVector<f64>>,
+    /// Their kinetic energy in the first look.
+    initial: Option<f64>,
+}
+
+/// How much the watched modes' energy may grow before the run is stopped.
+pub const PAST_LIMIT_GROWTH: f64 = 100.0;
+
+impl<S: Space> PastLimit<S> {
+    /// The modes of the scene linearised at `cfg` that increment `h` puts past their limit
+    /// under `treatment`; `None` when there are none (every run at or below its stable
+    /// increment).
+    pub fn new<const FINITE: bool>(
+        model: &Model<S, FINITE>,
+        cfg: &Config<S>,
+        held: &Constraints<S>,
+        h: f64,
+        treatment: DampingTreatment,
+    ) -> Option<Self> {
+        let lin = model.linearise(cfg, held, true, &mut Counters::default());
+        let weights: Vec<DVector<f64>> = lin
+            .shapes()
+            .into_iter()
+            .filter(|(m, _)| m.omega > 0.0 && h > limit(m, treatment) * (1.0 + 1e-12))
+            .map(|(_, phi)| &lin.mass * phi)
+            .collect();
+        (!weights.is_empty()).then_some(PastLimit {
+            dofs: lin.dofs,
+            weights,
+            initial: None,
+        })
+    }
+
+    /// Whether the watched modes' kinetic energy in `rates` has grown past
+    /// [`PAST_LIMIT_GROWTH`] × its first value (or × `floor`, a round-off level of the run's
+    /// energy, when that was smaller): `Some(growth)` when it has.
+    pub fn grown<const FINITE: bool>(
+        &mut self,
+        model: &Model<S, FINITE>,
+        rates: &Rates<S>,
+        floor: f64,
+    ) -> Option<f64> {
+        let qdot = DVector::from_iterator(
+            self.dofs.len(),
+            self.dofs.iter().map(|d| model.rate_along(rates, d)),
+        );
+        let energy: f64 = self
+            .weights
+            .iter()
+            .map(|w| 0.5 * w.dot(&qdot).powi(2))
+            .sum();
+        let base = self.initial.get_or_insert(energy).max(floor);
+        (energy > PAST_LIMIT_GROWTH * base).then_some(energy / base)
+    }
+}
+
+/// The largest increment at which mode `m` alone is stable under `treatment`.
+fn limit(m: &Mode, treatment: DampingTreatment) -> f64 {
+    match treatment {
+        DampingTreatment::Centred => 2.0 / m.omega,
+        DampingTreatment::Lagged => (2.0 / m.omega) * ((1.0 + m.zeta * m.zeta).sqrt() - m.zeta),
+    }
 }

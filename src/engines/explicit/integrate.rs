@@ -8,7 +8,7 @@
 //! `v(n−½) + (h/2)·a(n−1)`, which keeps the scheme second order; the lagged treatment uses
 //! `v(n−½)` (first order, the classic explicit form). Scenes without such forces skip the pass.
 
-use super::diagnosis::growing_mode;
+use super::diagnosis::{PAST_LIMIT_GROWTH, PastLimit, growing_mode};
 use super::linear::{StableIncrement, static_step};
 use super::model::{Config, Constraints, ContactMode, Counters, Forces, Model, Rates, Target};
 use super::space::{Lin, Space};
@@ -277,6 +277,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
     let mut dissipated = 0.0;
     let mut last_power = 0.0;
     let mut cfg_start = cfg.clone();
+    let mut past_limit: Option<PastLimit<S>> = None;
     let mut forces = model.zero_forces();
     let mut total: Forces<S> = model.zero_forces();
     let mut acc = model.zero_rates();
@@ -328,6 +329,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 consistent_start(&model, &mut cfg, &mut vel, &held, h, &mut counters);
             }
             cfg_start = cfg.clone();
+            past_limit = PastLimit::new(&model, &cfg, &held, h, settings.damping);
         }
         let velocity_pass = model.has_dashpots() || held.any_velocity_terms();
         // Without centripetal or gyroscopic terms the centred velocity map is affine (the
@@ -583,6 +585,15 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 // What the run may hold is what it started with plus the work done on it; a
                 // stable run stays at or below that (dissipation only removes energy).
                 let budget = energy0 + work.abs();
+                // Above the stable increment: the modes past their limit may not grow, even
+                // where a nonlinearity keeps the total energy under the guard.
+                if let Some(watch) = past_limit.as_mut()
+                    && let Some(growth) = watch.grown(&model, &v_next, 1e-12 * budget)
+                {
+                    return Err(unstable(&format!(
+                        "the modes past their stability limit grew {growth:.3e}-fold in kinetic energy (over {PAST_LIMIT_GROWTH}×)"
+                    )));
+                }
                 if kinetic + forces.elastic > ENERGY_GUARD * budget + f64::MIN_POSITIVE {
                     return Err(unstable(&format!(
                         "energy grew to {:e}, over {ENERGY_GUARD}× the initial energy plus the work of the loads ({budget:e})",

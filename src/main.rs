@@ -731,24 +731,9 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
 
 fn sweep_command(args: SweepArgs, dir: &Path) -> ExitCode {
     use crosscheck::report::work_precision as written;
-    let engines: Vec<&str> = if args.engines.is_empty() {
-        sweep::ENGINES.to_vec()
-    } else {
-        let mut chosen = Vec::new();
-        for name in &args.engines {
-            match sweep::ENGINES.iter().find(|e| **e == name.trim()) {
-                Some(e) => chosen.push(*e),
-                None => {
-                    eprintln!(
-                        "error: `{}` cannot be swept; engines that step in time: {}",
-                        name.trim(),
-                        sweep::ENGINES.join(", ")
-                    );
-                    return ExitCode::from(2);
-                }
-            }
-        }
-        chosen
+    let engines = match chosen_engines(&args.engines, &sweep::ENGINES, "cannot be swept") {
+        Ok(e) => e,
+        Err(code) => return code,
     };
     let (target, cases) = match target_and_cases(&args.out, &args.cases, dir) {
         Ok(x) => x,
@@ -758,16 +743,7 @@ fn sweep_command(args: SweepArgs, dir: &Path) -> ExitCode {
         Ok(x) => x,
         Err(code) => return code,
     };
-    // The exact solutions every point is measured against.
-    let plan = Plan {
-        cases,
-        engines: ["analytic", "reference"]
-            .iter()
-            .filter_map(|n| crosscheck::engines::named(n))
-            .collect(),
-        settings: RunSettings::default(),
-    };
-    let outcome = run::execute(&plan, false);
+    let (plan, outcome) = exact_solutions(cases);
     if interrupt::requested() {
         return interrupted();
     }
@@ -780,20 +756,10 @@ fn sweep_command(args: SweepArgs, dir: &Path) -> ExitCode {
     if interrupt::requested() {
         return interrupted();
     }
-    match written::write(staging.path(), &sweeps, &plan.cases) {
-        Ok(()) => {}
-        Err(report::data::DataError::Interrupted) => return interrupted(),
-        Err(e) => {
-            eprintln!("error: cannot write the sweep (the previous one is unchanged): {e}");
-            return ExitCode::FAILURE;
-        }
-    }
-    if interrupt::checkpoint("swap").is_err() {
-        return interrupted();
-    }
-    if let Err(e) = staging.commit() {
-        eprintln!("error: cannot put the sweep in place (the previous one is unchanged): {e}");
-        return ExitCode::FAILURE;
+    if let Err(code) = put_in_place(staging, "the sweep", |dir| {
+        written::write(dir, &sweeps, &plan.cases)
+    }) {
+        return code;
     }
     let mut out = Stdout::default();
     out.print(&written::text(&sweeps));
@@ -808,24 +774,9 @@ fn sweep_command(args: SweepArgs, dir: &Path) -> ExitCode {
 fn stability_command(args: StabilityArgs, dir: &Path) -> ExitCode {
     use crosscheck::report::stability as written;
     use crosscheck::run::stability;
-    let engines: Vec<&str> = if args.engines.is_empty() {
-        stability::ENGINES.to_vec()
-    } else {
-        let mut chosen = Vec::new();
-        for name in &args.engines {
-            match stability::ENGINES.iter().find(|e| **e == name.trim()) {
-                Some(e) => chosen.push(*e),
-                None => {
-                    eprintln!(
-                        "error: `{}` has no stability map; engines that step in time: {}",
-                        name.trim(),
-                        stability::ENGINES.join(", ")
-                    );
-                    return ExitCode::from(2);
-                }
-            }
-        }
-        chosen
+    let engines = match chosen_engines(&args.engines, &stability::ENGINES, "has no stability map") {
+        Ok(e) => e,
+        Err(code) => return code,
     };
     let (target, cases) = match target_and_cases(&args.out, &args.cases, dir) {
         Ok(x) => x,
@@ -835,7 +786,58 @@ fn stability_command(args: StabilityArgs, dir: &Path) -> ExitCode {
         Ok(x) => x,
         Err(code) => return code,
     };
-    // The exact solutions every run is measured against.
+    let (plan, outcome) = exact_solutions(cases);
+    if interrupt::requested() {
+        return interrupted();
+    }
+    let points = comparison::stability::measure(&plan, &outcome, &engines, !args.quiet);
+    if interrupt::requested() {
+        return interrupted();
+    }
+    if let Err(code) = put_in_place(staging, "the stability map", |dir| {
+        written::write(dir, &points)
+    }) {
+        return code;
+    }
+    let mut out = Stdout::default();
+    let mut text = String::new();
+    written::overview(&mut text, &written::read_all(&args.out));
+    out.print(&text);
+    out.finish(ExitCode::SUCCESS)
+}
+
+/// The engines named in `asked` among `allowed` (all of them when none is named); an engine
+/// outside them is an error (exit 2) saying `refusal` and listing the allowed ones.
+fn chosen_engines(
+    asked: &[String],
+    allowed: &[&'static str],
+    refusal: &str,
+) -> Result<Vec<&'static str>, ExitCode> {
+    if asked.is_empty() {
+        return Ok(allowed.to_vec());
+    }
+    asked
+        .iter()
+        .map(|name| {
+            allowed
+                .iter()
+                .find(|e| **e == name.trim())
+                .copied()
+                .ok_or_else(|| {
+                    eprintln!(
+                        "error: `{}` {refusal}; engines that step in time: {}",
+                        name.trim(),
+                        allowed.join(", ")
+                    );
+                    ExitCode::from(2)
+                })
+        })
+        .collect()
+}
+
+/// The exact solutions (`analytic`, `reference`) of `cases`, which every study's runs are
+/// measured against.
+fn exact_solutions(cases: Vec<crosscheck::scene::Scene>) -> (Plan, run::Outcome) {
     let plan = Plan {
         cases,
         engines: ["analytic", "reference"]
@@ -845,33 +847,29 @@ fn stability_command(args: StabilityArgs, dir: &Path) -> ExitCode {
         settings: RunSettings::default(),
     };
     let outcome = run::execute(&plan, false);
-    if interrupt::requested() {
-        return interrupted();
-    }
-    let points = comparison::stability::measure(&plan, &outcome, &engines, !args.quiet);
-    if interrupt::requested() {
-        return interrupted();
-    }
-    match written::write(staging.path(), &points) {
+    (plan, outcome)
+}
+
+/// Write a study's files into the staging directory with `write`, then swap them into place;
+/// on failure the previous files stay, and the exit code says why (130 interrupted, 1 else).
+fn put_in_place(
+    staging: staging::Staging,
+    what: &str,
+    write: impl FnOnce(&Path) -> Result<(), report::data::DataError>,
+) -> Result<(), ExitCode> {
+    match write(staging.path()) {
         Ok(()) => {}
-        Err(report::data::DataError::Interrupted) => return interrupted(),
+        Err(report::data::DataError::Interrupted) => return Err(interrupted()),
         Err(e) => {
-            eprintln!("error: cannot write the stability map (the previous one is unchanged): {e}");
-            return ExitCode::FAILURE;
+            eprintln!("error: cannot write {what} (the previous one is unchanged): {e}");
+            return Err(ExitCode::FAILURE);
         }
     }
     if interrupt::checkpoint("swap").is_err() {
-        return interrupted();
+        return Err(interrupted());
     }
-    if let Err(e) = staging.commit() {
-        eprintln!(
-            "error: cannot put the stability map in place (the previous one is unchanged): {e}"
-        );
-        return ExitCode::FAILURE;
-    }
-    let mut out = Stdout::default();
-    let mut text = String::new();
-    written::overview(&mut text, &written::read_all(&args.out));
-    out.print(&text);
-    out.finish(ExitCode::SUCCESS)
+    staging.commit().map_err(|e| {
+        eprintln!("error: cannot put {what} in place (the previous one is unchanged): {e}");
+        ExitCode::FAILURE
+    })
 }

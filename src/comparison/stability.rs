@@ -10,18 +10,8 @@ use crate::scene::Scene;
 /// Map every case of `plan` for the `engines` asked for (those of [`stability::ENGINES`]),
 /// measuring errors against the exact solutions in `outcome`.
 pub fn measure(plan: &Plan, outcome: &Outcome, engines: &[&str], progress: bool) -> Vec<Point> {
-    let history = |case: &str, engine: &str| -> Option<&History> {
-        outcome
-            .jobs
-            .iter()
-            .find(|j| j.case == case && j.engine == engine)?
-            .result
-            .as_ref()
-            .ok()
-            .map(|s| &s.history)
-    };
     let error_of = |scene: &Scene, engine: &str, h: &History| {
-        let own = history(&scene.id, baseline(engine)?)?;
+        let own = outcome.history(&scene.id, baseline(engine)?)?;
         Some(compare(scene, own, h).worst_max)
     };
     let chosen: Vec<&str> = stability::ENGINES

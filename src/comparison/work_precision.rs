@@ -180,16 +180,7 @@ pub fn measure(
     grid: &Grid,
     progress: bool,
 ) -> Vec<CaseSweep> {
-    let history = |case: &str, engine: &str| -> Option<&History> {
-        outcome
-            .jobs
-            .iter()
-            .find(|j| j.case == case && j.engine == engine)?
-            .result
-            .as_ref()
-            .ok()
-            .map(|s| &s.history)
-    };
+    let history = |case: &str, engine: &str| outcome.history(case, engine);
     let error_of = |scene: &Scene, engine: &str, h: &History| {
         let own = history(&scene.id, baseline(engine)?)?;
         let c = compare(scene, own, h);

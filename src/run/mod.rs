@@ -100,6 +100,17 @@ pub struct Outcome {
 }
 
 impl Outcome {
+    /// The history a job produced, where it succeeded.
+    pub fn history(&self, case: &str, engine: &str) -> Option<&History> {
+        self.jobs
+            .iter()
+            .find(|j| j.case == case && j.engine == engine)?
+            .result
+            .as_ref()
+            .ok()
+            .map(|s| &s.history)
+    }
+
     /// Number of failed jobs.
     pub fn failures(&self) -> usize {
         self.jobs.iter().filter(|j| !j.is_ok()).count()

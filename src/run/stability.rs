@@ -24,15 +24,8 @@ use rayon::prelude::*;
 /// The ratios of the map.
 pub const RATIOS: [f64; 10] = [0.25, 0.5, 0.75, 0.9, 0.98, 1.02, 1.1, 1.5, 2.0, 4.0];
 
-/// The engines mapped (every engine that steps in time).
-pub const ENGINES: [&str; 6] = [
-    "explicit",
-    "explicit_small",
-    "rapier_f64",
-    "rapier_f32",
-    "rapier_f64_default",
-    "rapier_f32_default",
-];
+/// The engines mapped (every engine that steps in time, as the sweep's).
+pub const ENGINES: [&str; 6] = crate::run::sweep::ENGINES;
 
 /// A run is unstable when its energy rose above this multiple of what it may hold: the
 /// explicit engine's own guard ([`crate::engines::explicit::integrate::ENERGY_GUARD`]), applied

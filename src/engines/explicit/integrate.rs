@@ -419,76 +419,67 @@ pub fn integrate<S: Space, const FINITE: bool>(
                             }
                             model.accelerations(&cfg, &total, &v_n, &held, &mut acc, &mut counters);
                         }
-                        DampingTreatment::Centred if affine_solve => {
-                            model.dashpot_directions(&cfg, &mut directions);
-                            centred_affine(
-                                &model,
-                                &cfg,
-                                &forces,
-                                &directions,
-                                &v_half,
-                                h,
-                                &held,
-                                &dofs,
-                                &mut total,
-                                &mut acc,
-                                &mut v_n,
-                                &mut counters,
-                            )?;
-                            power = total.dissipation;
-                        }
                         DampingTreatment::Centred => {
-                            v_guess.set_plus(&v_half, 0.5 * h, &acc_prev);
                             model.dashpot_directions(&cfg, &mut directions);
-                            let mut converged = false;
-                            let mut previous_change = 0.0;
-                            for pass in 0..MAX_DAMPING_ITERATIONS {
-                                total.copy_from(&forces);
-                                if model.has_dashpots() {
-                                    model.damping_along(
+                            if !affine_solve {
+                                v_guess.set_plus(&v_half, 0.5 * h, &acc_prev);
+                                let mut converged = false;
+                                let mut previous_change = 0.0;
+                                for pass in 0..MAX_DAMPING_ITERATIONS {
+                                    total.copy_from(&forces);
+                                    if model.has_dashpots() {
+                                        model.damping_along(
+                                            &cfg,
+                                            &directions,
+                                            &v_guess,
+                                            &mut total,
+                                            &mut counters,
+                                        );
+                                        power = total.dissipation;
+                                    }
+                                    model.accelerations(
                                         &cfg,
-                                        &directions,
+                                        &total,
                                         &v_guess,
-                                        &mut total,
+                                        &held,
+                                        &mut acc,
                                         &mut counters,
                                     );
-                                    power = total.dissipation;
+                                    v_n.set_plus(&v_half, 0.5 * h, &acc);
+                                    let (change, size) = v_n.max_difference(&v_guess);
+                                    std::mem::swap(&mut v_n, &mut v_guess);
+                                    // The iteration contracts by ρ per pass (ρ ≈ (h/2)·|∂a/∂v|,
+                                    // estimated as change / previous change), so the iterate just
+                                    // made is within ρ/(1−ρ) · change of the fixed point. With
+                                    // ρ < ½ that test reads change² ≤ tol·size·(previous − change).
+                                    let tolerance = VELOCITY_TOLERANCE * size;
+                                    let contracting = 2.0 * change < previous_change;
+                                    let bound_met =
+                                        change * change <= tolerance * (previous_change - change);
+                                    let diverging = pass >= 3 && change > previous_change;
+                                    previous_change = change;
+                                    if change <= tolerance || (contracting && bound_met) {
+                                        converged = true;
+                                        break;
+                                    }
+                                    if diverging && affine {
+                                        break;
+                                    }
                                 }
-                                model.accelerations(
-                                    &cfg,
-                                    &total,
-                                    &v_guess,
-                                    &held,
-                                    &mut acc,
-                                    &mut counters,
-                                );
-                                v_n.set_plus(&v_half, 0.5 * h, &acc);
-                                let (change, size) = v_n.max_difference(&v_guess);
                                 std::mem::swap(&mut v_n, &mut v_guess);
-                                // The iteration contracts by ρ per pass (ρ ≈ (h/2)·|∂a/∂v|,
-                                // estimated as change / previous change), so the iterate just
-                                // made is within ρ/(1−ρ) · change of the fixed point. With
-                                // ρ < ½ that test reads change² ≤ tol·size·(previous − change).
-                                let tolerance = VELOCITY_TOLERANCE * size;
-                                let contracting = 2.0 * change < previous_change;
-                                let bound_met =
-                                    change * change <= tolerance * (previous_change - change);
-                                let diverging = pass >= 3 && change > previous_change;
-                                previous_change = change;
-                                if change <= tolerance || (contracting && bound_met) {
-                                    converged = true;
-                                    break;
-                                }
-                                if diverging && affine {
-                                    break;
+                                // Stiff dashpots (h·|M⁻¹C|/2 ≥ 1): the iteration
+                                // cannot contract, but where the map is affine it is solved
+                                // directly from now on.
+                                if !converged && affine {
+                                    affine_solve = true;
+                                } else if !converged {
+                                    return Err(EngineError::Failed(format!(
+                                        "centred velocity iteration did not converge at t = {:e}: the dashpots are too stiff for increment {h:e}; use damping = \"lagged\" or a smaller increment",
+                                        n as f64 * h
+                                    )));
                                 }
                             }
-                            std::mem::swap(&mut v_n, &mut v_guess);
-                            if !converged && affine {
-                                // Stiff dashpots (h·|M⁻¹C|/2 ≥ 1): the iteration cannot
-                                // contract, but the map is affine, so solve it directly from
-                                // now on.
-                                affine_solve = true;
+                            if affine_solve {
                                 centred_affine(
                                     &model,
                                     &cfg,
@@ -504,11 +495,6 @@ pub fn integrate<S: Space, const FINITE: bool>(
                                     &mut counters,
                                 )?;
                                 power = total.dissipation;
-                            } else if !converged {
-                                return Err(EngineError::Failed(format!(
-                                    "centred velocity iteration did not converge at t = {:e}: the dashpots are too stiff for increment {h:e}; use damping = \"lagged\" or a smaller increment",
-                                    n as f64 * h
-                                )));
                             }
                         }
                     }

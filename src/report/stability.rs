@@ -232,9 +232,10 @@ pub fn overview(w: &mut String, maps: &BTreeMap<String, Vec<Point>>) {
          the explicit one's), each increment exactly. A run is *unstable* when the engine stopped it \
          as such or its kinetic plus elastic energy rose above {ENERGY_GROWTH_LIMIT}× what it may hold \
          (its initial energy plus the work of the loads), *accurate* when its largest error against \
-         its own model's exact solution is within the case's tolerance for it (the tightest the \
-         case declares, where none is declared for the engine), *inaccurate* when bounded but \
-         outside it. Data: `stability/<engine>.csv`.\n",
+         its own model's exact solution is within the case's tolerance for it (a rapier engine \
+         without one takes the case's `rapier_f64` tolerance, any other the tightest the case \
+         declares), *inaccurate* when bounded but outside it. Cases without a stable increment \
+         (the free spins) are not mapped. Data: `stability/<engine>.csv`.\n",
         RATIOS
             .iter()
             .map(|r| r.to_string())

@@ -329,7 +329,13 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 consistent_start(&model, &mut cfg, &mut vel, &held, h, &mut counters);
             }
             cfg_start = cfg.clone();
-            past_limit = PastLimit::new(&model, &cfg, &held, h, settings.damping);
+            // Only above the stable increment (a stability study), and only where the scene's
+            // modes are computed at all (not above the dense limit).
+            if stable.is_some_and(|s| h > s.increment * (1.0 + 1e-12))
+                && model.free_dofs(&held).len() <= DENSE_LIMIT
+            {
+                past_limit = PastLimit::new(&model, &cfg, &held, h, settings.damping);
+            }
         }
         let velocity_pass = model.has_dashpots() || held.any_velocity_terms();
         // Without centripetal or gyroscopic terms the centred velocity map is affine (the
@@ -545,7 +551,8 @@ pub fn integrate<S: Space, const FINITE: bool>(
                     let limit = stable.map_or("none computed".to_string(), |s| {
                         format!("{:e}, ratio {:.4}", s.increment, h / s.increment)
                     });
-                    let mode = if v_next.is_finite() {
+                    // The modes of a scene above the dense limit are not computed.
+                    let mode = if v_next.is_finite() && dofs.len() <= DENSE_LIMIT {
                         growing_mode(
                             &model,
                             scene,

@@ -37,6 +37,11 @@ pub const E_BALANCE: &str = "e_balance";
 /// Column of a closed form marking the rows where its assumptions hold (1) or not (0).
 pub const VALID_COLUMN: &str = "valid";
 
+/// Column of an event-driven exact solution: the number of impacts so far. An impact is
+/// instantaneous there, so its contact force carries no impulse, and contact forces are
+/// compared only on the rows before the first impact.
+pub const IMPACTS_COLUMN: &str = "impacts";
+
 /// The fewest output rows a history may have.
 pub const MIN_ROWS: usize = 200;
 

@@ -253,7 +253,37 @@ const CORPUS: &[(&str, usize, &str, &str)] = &[
         "contact_off_face",
         115,
         "contacts[0].node",
-        "from the face at t = 0; it must start on it",
+        "from the face at t = 0; a closed contact must start on it",
+    ),
+    (
+        "contact_inside_solid",
+        76,
+        "contacts[0].node",
+        "is inside the cuboid's surface at t = 0",
+    ),
+    (
+        "contact_extent_zero",
+        80,
+        "contacts[0].half_extents",
+        "every half extent must be a finite number > 0, got 0",
+    ),
+    (
+        "contact_restitution_above_one",
+        82,
+        "contacts[0].restitution",
+        "a coefficient of restitution is in [0, 1], got 1.5",
+    ),
+    (
+        "contact_shape_key",
+        81,
+        "contacts[0].radius",
+        "a cuboid contact has no `radius`",
+    ),
+    (
+        "contact_shape_unknown",
+        78,
+        "contacts[0].shape",
+        "`torus`: use plane, ball, cuboid or capsule",
     ),
     (
         "contact_node_on_body",

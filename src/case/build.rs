@@ -154,6 +154,101 @@ impl<'a> Builder<'a> {
         in_range(field, v)
     }
 
+    /// The surface of a contact pair: a plane, or a solid with positive extents.
+    fn surface(&self, field: &str, c: &ContactPairTable) -> Result<Surface, SceneError> {
+        let shape = c.shape.as_deref().unwrap_or("plane");
+        let allowed: &[&str] = match shape {
+            "plane" => &["face_point", "face_normal"],
+            "ball" => &["centre", "radius"],
+            "cuboid" => &["centre", "half_extents"],
+            "capsule" => &["centre", "radius", "half_height"],
+            other => {
+                return err(
+                    format!("{field}.shape"),
+                    format!("`{other}`: use plane, ball, cuboid or capsule"),
+                );
+            }
+        };
+        let given = [
+            ("face_point", c.face_point.is_some()),
+            ("face_normal", c.face_normal.is_some()),
+            ("centre", c.centre.is_some()),
+            ("radius", c.radius.is_some()),
+            ("half_extents", c.half_extents.is_some()),
+            ("half_height", c.half_height.is_some()),
+        ];
+        for (key, present) in given {
+            if present && !allowed.contains(&key) {
+                return err(
+                    format!("{field}.{key}"),
+                    format!(
+                        "a {shape} contact has no `{key}`; it takes {}",
+                        allowed.join(" and ")
+                    ),
+                );
+            }
+        }
+        for key in allowed {
+            if !given.iter().any(|(k, present)| k == key && *present) {
+                return err(
+                    format!("{field}.{key}"),
+                    format!("a {shape} contact needs `{key}`"),
+                );
+            }
+        }
+        let centre = || {
+            self.vector(
+                &format!("{field}.centre"),
+                c.centre.as_deref().unwrap_or_default(),
+            )
+        };
+        let radius = || {
+            self.positive(
+                &format!("{field}.radius"),
+                c.radius.unwrap_or_default(),
+                "a radius",
+            )
+        };
+        Ok(match shape {
+            "plane" => Surface::Plane {
+                point: self.vector(
+                    &format!("{field}.face_point"),
+                    c.face_point.as_deref().unwrap_or_default(),
+                )?,
+                normal: self.unit(
+                    &format!("{field}.face_normal"),
+                    c.face_normal.as_deref().unwrap_or_default(),
+                )?,
+            },
+            "ball" => Surface::Solid {
+                solid: Solid::Ball { radius: radius()? },
+                centre: centre()?,
+            },
+            "cuboid" => {
+                let key = format!("{field}.half_extents");
+                let h = self.vector(&key, c.half_extents.as_deref().unwrap_or_default())?;
+                for i in 0..self.dim.count() {
+                    self.positive(&key, h[i], "every half extent")?;
+                }
+                Surface::Solid {
+                    solid: Solid::Cuboid { half_extents: h },
+                    centre: centre()?,
+                }
+            }
+            _ => Surface::Solid {
+                solid: Solid::Capsule {
+                    half_height: self.positive(
+                        &format!("{field}.half_height"),
+                        c.half_height.unwrap_or_default(),
+                        "a half height",
+                    )?,
+                    radius: radius()?,
+                },
+                centre: centre()?,
+            },
+        })
+    }
+
     fn angular(&self, field: &str, v: &toml::Value) -> Result<Vector3<f64>, SceneError> {
         match (self.dim, v) {
             (Dimension::Two, toml::Value::Float(_) | toml::Value::Integer(_)) => {
@@ -169,6 +264,14 @@ impl<'a> Builder<'a> {
             (Dimension::Two, _) => err(field, "in 2D an angular velocity is a number (about z)"),
             (Dimension::Three, _) => err(field, "in 3D an angular velocity is [wx, wy, wz]"),
         }
+    }
+}
+
+/// How an error message names a surface.
+fn surface_name(surface: &Surface) -> String {
+    match surface {
+        Surface::Plane { .. } => "face".into(),
+        Surface::Solid { solid, .. } => format!("{}'s surface", solid.name()),
     }
 }
 
@@ -497,17 +600,59 @@ pub fn scene(case: &CaseFile, stem: Option<&str>) -> Result<Scene, SceneError> {
                 "the contact node must be an independent node, not part of a body",
             );
         }
-        let face_point = b.vector(&format!("{field}.face_point"), &c.face_point)?;
-        let face_normal = b.unit(&format!("{field}.face_normal"), &c.face_normal)?;
-        let gap = face_normal.dot(&(nodes[node].position - face_point));
-        if gap.abs() > 1e-9 * (1.0 + face_point.norm()) {
-            return err(
-                format!("{field}.node"),
-                format!(
-                    "node `{}` is {gap:e} from the face at t = 0; it must start on it",
-                    c.node
-                ),
-            );
+        let surface = b.surface(&field, c)?;
+        let initially = match c.initially.as_deref() {
+            None | Some("closed") => ContactState::Closed,
+            Some("open") => ContactState::Open,
+            Some(other) => {
+                return err(
+                    format!("{field}.initially"),
+                    format!("`{other}`: use closed (the node starts on the surface) or open"),
+                );
+            }
+        };
+        let restitution = match c.restitution {
+            None => 1.0,
+            Some(e) if e.is_finite() && (0.0..=1.0).contains(&e) => {
+                in_range(&format!("{field}.restitution"), e)?
+            }
+            Some(e) => {
+                return err(
+                    format!("{field}.restitution"),
+                    format!("a coefficient of restitution is in [0, 1], got {e}"),
+                );
+            }
+        };
+        let (gap, _) = surface_distance(&surface, &nodes[node].position);
+        let scale = 1.0
+            + nodes[node].position.norm().max(match surface {
+                Surface::Plane { point, .. } => point.norm(),
+                Surface::Solid { centre, .. } => centre.norm(),
+            });
+        let on_it = gap.abs() <= 1e-9 * scale;
+        match initially {
+            ContactState::Closed if !on_it => {
+                return err(
+                    format!("{field}.node"),
+                    format!(
+                        "node `{}` is {gap:e} from the {} at t = 0; a closed contact must start on it (or say `initially = \"open\"`)",
+                        c.node,
+                        surface_name(&surface)
+                    ),
+                );
+            }
+            ContactState::Open if gap <= 0.0 || on_it => {
+                return err(
+                    format!("{field}.node"),
+                    format!(
+                        "node `{}` is {} the {} at t = 0 (gap {gap:e}); an open contact must start clear of it (or say `initially = \"closed\"` for a node on it)",
+                        c.node,
+                        if on_it { "on" } else { "inside" },
+                        surface_name(&surface)
+                    ),
+                );
+            }
+            _ => {}
         }
         identifier(&format!("{field}.id"), &c.id)?;
         if contacts.iter().any(|p: &ContactPair| p.name == c.id) {
@@ -520,8 +665,9 @@ pub fn scene(case: &CaseFile, stem: Option<&str>) -> Result<Scene, SceneError> {
             name: c.id.clone(),
             node,
             body,
-            face_point,
-            face_normal,
+            surface,
+            initially,
+            restitution,
         });
     }
 

@@ -194,7 +194,8 @@ pub struct ElementTable {
     pub damping: Option<f64>,
 }
 
-/// `[[contacts]]`: a node against a planar face of a rigid body.
+/// `[[contacts]]`: a node against a surface of a rigid body: a planar face (the source
+/// problems) or the boundary of a solid (parry's ball, cuboid or capsule).
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ContactPairTable {
@@ -202,12 +203,28 @@ pub struct ContactPairTable {
     pub id: String,
     /// The slave node.
     pub node: String,
-    /// The body whose face it touches.
+    /// The body whose surface it touches.
     pub body: String,
-    /// A point of the face at t = 0 (global coordinates).
-    pub face_point: Vec<f64>,
-    /// Outward normal of the face at t = 0.
-    pub face_normal: Vec<f64>,
+    /// `plane` (default), `ball`, `cuboid` or `capsule`.
+    pub shape: Option<String>,
+    /// Plane: a point of the face at t = 0 (global coordinates).
+    pub face_point: Option<Vec<f64>>,
+    /// Plane: outward normal of the face at t = 0.
+    pub face_normal: Option<Vec<f64>>,
+    /// Solid: its centre at t = 0 (global coordinates; its axes are the global axes at t = 0
+    /// and turn with the body).
+    pub centre: Option<Vec<f64>>,
+    /// Ball and capsule: radius.
+    pub radius: Option<f64>,
+    /// Cuboid: half extents along x, y (and z).
+    pub half_extents: Option<Vec<f64>>,
+    /// Capsule: half the length of its segment, which lies along y.
+    pub half_height: Option<f64>,
+    /// `closed` (default: the node starts on the surface) or `open` (it starts clear of it).
+    pub initially: Option<String>,
+    /// Coefficient of restitution of an impact, in [0, 1] (default 1: elastic). Penalty
+    /// contact gets a contact dashpot sized for it; rapier its `restitution`.
+    pub restitution: Option<f64>,
 }
 
 /// `[[loads]]`: constant force at a material point, fixed in direction.

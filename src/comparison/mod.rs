@@ -22,7 +22,7 @@ pub mod equivalence;
 pub mod stability;
 pub mod work_precision;
 
-use crate::contract::{self, History, VALID_COLUMN};
+use crate::contract::{self, History, IMPACTS_COLUMN, VALID_COLUMN};
 use crate::scene::{Probe, Scene};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -125,6 +125,15 @@ pub fn compare(scene: &Scene, reference: &History, candidate: &History) -> Compa
         .filter_map(|name| {
             let a = reference.column(name)?;
             let b = candidate.column(name)?;
+            // Contact forces only before the first impact of an event-driven solution.
+            let n = if first_compared_row(scene, name) > 0 {
+                reference
+                    .column(IMPACTS_COLUMN)
+                    .and_then(|i| i.iter().position(|x| *x > 0.0))
+                    .map_or(n, |k| k.min(n))
+            } else {
+                n
+            };
             let (a, b) = (&a[..n], &b[..n]);
             let (peak, candidate_peak) = (peak(a), peak(b));
             // A reference that is (numerically) zero, such as a held DOF that a soft joint lets

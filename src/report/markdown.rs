@@ -105,19 +105,22 @@ pub fn render(
             sci(c.measured)
         );
     }
-    let failed: Vec<String> = s
-        .cases
-        .iter()
-        .flat_map(|c| {
-            c.runs.iter().filter_map(move |r| {
-                r.error
-                    .as_ref()
-                    .map(|e| format!("- {} / {}: {e}", c.id, r.engine))
+    for (title, applicable) in [("Failed runs", true), ("Engines that do not apply", false)] {
+        let listed: Vec<String> = s
+            .cases
+            .iter()
+            .flat_map(|c| {
+                c.runs.iter().filter_map(move |r| {
+                    r.error
+                        .as_ref()
+                        .filter(|e| not_applicable(e) != applicable)
+                        .map(|e| format!("- {} / {}: {e}", c.id, r.engine))
+                })
             })
-        })
-        .collect();
-    if !failed.is_empty() {
-        let _ = writeln!(w, "\nFailed runs:\n\n{}", failed.join("\n"));
+            .collect();
+        if !listed.is_empty() {
+            let _ = writeln!(w, "\n{title}:\n\n{}", listed.join("\n"));
+        }
     }
 
     // Accuracy and cost.
@@ -135,6 +138,9 @@ pub fn render(
         for r in &c.runs {
             let (max, rms, end) = match worst(r) {
                 Some((col, max, rms, end)) => (format!("{} ({col})", sci(max)), sci(rms), sci(end)),
+                None if r.error.as_deref().is_some_and(not_applicable) => {
+                    ("n/a".into(), "–".into(), "–".into())
+                }
                 None if r.error.is_some() => ("failed".into(), "–".into(), "–".into()),
                 None => ("closed form".into(), "–".into(), "–".into()),
             };
@@ -749,10 +755,15 @@ fn equivalence_table(w: &mut String, s: &Summary, engines: &[&String]) {
     }
 }
 
+/// Whether a run's error says its engine does not apply to the scene.
+fn not_applicable(error: &str) -> bool {
+    error.starts_with(crate::run::NOT_APPLICABLE)
+}
+
 /// A verdict matrix cell: ✓/✗ and the worst error against the engine's own model.
 pub fn verdict_cell(r: &EngineSummary) -> String {
-    if r.error.is_some() {
-        return "failed".into();
+    if let Some(e) = &r.error {
+        return if not_applicable(e) { "n/a" } else { "failed" }.into();
     }
     let Some(a) = &r.against_baseline else {
         return "–".into();

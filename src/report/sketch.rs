@@ -9,7 +9,8 @@
 
 use crate::report::figures::tick;
 use crate::scene::{
-    Attachment, BodyId, Connection, Dimension, Dof, Element, NodeId, Scene, StepKind,
+    Attachment, BodyId, Connection, Dimension, Dof, Element, NodeId, Scene, Solid, StepKind,
+    Surface,
 };
 use nalgebra::Vector3;
 use plotters::prelude::*;
@@ -844,6 +845,37 @@ struct Present {
     roller: bool,
 }
 
+/// Points on a contact surface's outline in the x–y plane through its anchor (a plane: its
+/// point only).
+fn outline(surface: &Surface) -> Vec<Vector3<f64>> {
+    let Surface::Solid { solid, centre } = *surface else {
+        return vec![surface.anchor()];
+    };
+    let arc = |at: Vector3<f64>, radius: f64, from: f64, to: f64| {
+        (0..=16).map(move |i| {
+            let a = from + (to - from) * f64::from(i) / 16.0;
+            at + Vector3::new(a.cos(), a.sin(), 0.0) * radius
+        })
+    };
+    let pi = std::f64::consts::PI;
+    match solid {
+        Solid::Ball { radius } => arc(centre, radius, 0.0, 2.0 * pi).take(16).collect(),
+        Solid::Cuboid { half_extents: h } => [(1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)]
+            .iter()
+            .map(|(x, y)| centre + Vector3::new(x * h.x, y * h.y, 0.0))
+            .collect(),
+        Solid::Capsule {
+            half_height,
+            radius,
+        } => {
+            let up = Vector3::new(0.0, half_height, 0.0);
+            arc(centre + up, radius, 0.0, pi)
+                .chain(arc(centre - up, radius, pi, 2.0 * pi))
+                .collect()
+        }
+    }
+}
+
 /// A sketch of a scene drawn from the `Scene` itself: nodes (filled where they carry a point
 /// mass), rigid bodies (outline of their nodes, reference node and centre of mass), springs and
 /// dashpots, contact faces, loads, initial velocities and the DOFs held during the run, with a
@@ -861,7 +893,7 @@ pub fn render(scene: &Scene) -> Option<String> {
     };
     let node = |i: NodeId| scene.nodes.get(i);
     let mut world: Vec<Vector3<f64>> = scene.nodes.iter().map(|n| n.position).collect();
-    world.extend(scene.contacts.iter().map(|c| c.face_point));
+    world.extend(scene.contacts.iter().flat_map(|c| outline(&c.surface)));
     world.extend(scene.bodies.iter().filter_map(com));
     let (a, b) = axes(&world);
     let proto = View {
@@ -904,10 +936,12 @@ pub fn render(scene: &Scene) -> Option<String> {
         }
     }
     for c in &scene.contacts {
-        if let Some(nd) = proto.dir(&c.face_normal) {
+        if let Some((point, normal)) = c.plane()
+            && let Some(nd) = proto.dir(&normal)
+        {
             let t = nd.perp();
             for s in [-1.0, 1.0] {
-                reach.push((c.face_point, t * (s * FACE_LENGTH / 2.0) + nd * 30.0));
+                reach.push((point, t * (s * FACE_LENGTH / 2.0) + nd * 30.0));
             }
         }
     }
@@ -927,7 +961,8 @@ pub fn render(scene: &Scene) -> Option<String> {
                 .contacts
                 .iter()
                 .filter(|c| c.body == k)
-                .map(|c| view.px(&c.face_point)),
+                .flat_map(|c| outline(&c.surface))
+                .map(|p| view.px(&p)),
         );
         let mut outline = hull(&pts);
         if outline.len() < 3 || polygon_area(&outline) < 40.0 {
@@ -1095,8 +1130,16 @@ pub fn render(scene: &Scene) -> Option<String> {
     // Contact faces: a segment across the normal, with a short normal arrow.
     for c in &scene.contacts {
         present.contact = true;
-        let fp = view.px(&c.face_point);
-        let Some(nd) = view.dir(&c.face_normal) else {
+        let Some((point, normal)) = c.plane() else {
+            // A solid: its outline in the sketch plane, named at its centre.
+            let mut ring: Vec<V2> = outline(&c.surface).iter().map(|p| view.px(p)).collect();
+            ring.push(ring[0]);
+            canvas.line(ELEMENT_LAYER, ring, CONTACT, 3);
+            canvas.label(Label::new(c.name.clone(), view.px(&c.anchor()), CONTACT, 3));
+            continue;
+        };
+        let fp = view.px(&point);
+        let Some(nd) = view.dir(&normal) else {
             canvas.circle(ELEMENT_LAYER, fp, 4.0, CONTACT, false);
             canvas.label(Label::new(
                 format!("{} (face ⟂ sketch)", c.name),
@@ -1749,7 +1792,9 @@ mod tests {
                 n.position = Vector3::new(0.5, 0.5, 0.0);
             }
             for c in &mut point.contacts {
-                c.face_point = Vector3::new(0.5, 0.5, 0.0);
+                if let Surface::Plane { point, .. } = &mut c.surface {
+                    *point = Vector3::new(0.5, 0.5, 0.0);
+                }
             }
             assert!(render(&point).is_some(), "{}", scene.id);
             // The scene turned into the x–z plane: drawn in x–z.
@@ -1759,8 +1804,10 @@ mod tests {
                 swap(&mut n.position);
             }
             for c in &mut turned.contacts {
-                swap(&mut c.face_point);
-                swap(&mut c.face_normal);
+                if let Surface::Plane { point, normal } = &mut c.surface {
+                    swap(point);
+                    swap(normal);
+                }
             }
             for l in &mut turned.loads {
                 swap(&mut l.force);

@@ -37,7 +37,7 @@ pub use load::{
 };
 
 use crate::contract::{self, History};
-use crate::engines::{Engine, RunInfo, RunSettings};
+use crate::engines::{Engine, EngineError, RunInfo, RunSettings};
 use crate::scene::Scene;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
@@ -83,6 +83,9 @@ pub struct JobResult {
     pub elapsed: f64,
     /// The run, or why there is none.
     pub result: Result<JobSuccess, String>,
+    /// False where the engine does not do what the scene asks for (its refusal, with the
+    /// reason, is in `result`): not a failure, and not counted as one.
+    pub applicable: bool,
 }
 
 impl JobResult {
@@ -111,9 +114,12 @@ impl Outcome {
             .map(|s| &s.history)
     }
 
-    /// Number of failed jobs.
+    /// Number of failed jobs (an engine that does not apply to a scene has not failed).
     pub fn failures(&self) -> usize {
-        self.jobs.iter().filter(|j| !j.is_ok()).count()
+        self.jobs
+            .iter()
+            .filter(|j| !j.is_ok() && j.applicable)
+            .count()
     }
 
     /// Whether every job succeeded.
@@ -141,7 +147,11 @@ impl Outcome {
                     "-".to_string(),
                     "-".to_string(),
                     format!("{:.3} s", j.elapsed),
-                    format!("FAILED: {e}"),
+                    if j.applicable {
+                        format!("FAILED: {e}")
+                    } else {
+                        e.clone()
+                    },
                 ],
             };
             rows.push(row);
@@ -229,30 +239,43 @@ fn run_job(scene: &Scene, engine: &dyn Engine, settings: &RunSettings) -> JobRes
             engine: name,
             elapsed: 0.0,
             result: Err("interrupted before it ran".to_string()),
+            applicable: true,
         };
     }
     let result = panic::catch_unwind(AssertUnwindSafe(|| {
         let settings = matching::job_settings(engine, scene, settings);
         engine.run(scene, &settings)
     }))
-    .map_err(|payload| format!("engine panicked: {}", panic_message(payload.as_ref())))
-    .and_then(|r| r.map_err(|e| e.to_string()))
-    .and_then(|output| {
-        contract::check(scene, &output.history)
-            .map_err(|e| format!("history breaks the output contract: {e}"))?;
-        contract::check_finite(&output.history)?;
-        Ok(JobSuccess {
-            info: output.info,
-            history: output.history,
-        })
-    });
+    .map_err(|payload| format!("engine panicked: {}", panic_message(payload.as_ref())));
+    let applicable = !matches!(result, Ok(Err(EngineError::Unsupported(_))));
+    let result = result
+        .and_then(|r| r.map_err(|e| e.to_string()))
+        .and_then(|output| {
+            contract::check(scene, &output.history)
+                .map_err(|e| format!("history breaks the output contract: {e}"))?;
+            contract::check_finite(&output.history)?;
+            Ok(JobSuccess {
+                info: output.info,
+                history: output.history,
+            })
+        });
     JobResult {
         case: scene.id.clone(),
         engine: name,
         elapsed: start.elapsed().as_secs_f64(),
-        result,
+        result: result.map_err(|e| {
+            if applicable {
+                e
+            } else {
+                format!("{NOT_APPLICABLE}{e}")
+            }
+        }),
+        applicable,
     }
 }
+
+/// How the error of a job whose engine does not apply to the scene begins.
+pub const NOT_APPLICABLE: &str = "not applicable: ";
 
 fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
     if let Some(s) = payload.downcast_ref::<&str>() {

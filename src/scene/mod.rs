@@ -201,7 +201,93 @@ pub struct Element {
     pub coefficient: f64,
 }
 
-/// A frictionless node-to-surface contact pair: a node against a planar face of a body.
+/// A solid shape carried by a body, as parry builds it (`parry2d-f64` / `parry3d-f64`); its
+/// axes are the world axes at t = 0 and turn with the body.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Solid {
+    /// A ball (a disc in 2D) of this radius.
+    Ball {
+        /// Radius.
+        radius: f64,
+    },
+    /// A box with these half extents along x, y (and z).
+    Cuboid {
+        /// Half extents (2D: z is zero).
+        half_extents: Vector3<f64>,
+    },
+    /// A capsule: the points within `radius` of the segment from −`half_height` to
+    /// +`half_height` along y.
+    Capsule {
+        /// Half the length of the segment.
+        half_height: f64,
+        /// Radius.
+        radius: f64,
+    },
+}
+
+impl Solid {
+    /// Name as written in case files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Solid::Ball { .. } => "ball",
+            Solid::Cuboid { .. } => "cuboid",
+            Solid::Capsule { .. } => "capsule",
+        }
+    }
+
+    /// The thinnest extent: the depth a node can penetrate before it is nearer the far side.
+    pub fn half_thickness(&self) -> f64 {
+        match self {
+            Solid::Ball { radius } | Solid::Capsule { radius, .. } => *radius,
+            Solid::Cuboid { half_extents } => half_extents
+                .iter()
+                .copied()
+                .filter(|h| *h > 0.0)
+                .fold(f64::INFINITY, f64::min),
+        }
+    }
+}
+
+/// The surface a contact node touches on a body.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Surface {
+    /// An unbounded plane: the face of the source problems.
+    Plane {
+        /// A point of the plane at t = 0.
+        point: Vector3<f64>,
+        /// Unit outward normal at t = 0.
+        normal: Vector3<f64>,
+    },
+    /// The boundary of a solid placed with its centre at `centre` at t = 0.
+    Solid {
+        /// The shape.
+        solid: Solid,
+        /// Its centre at t = 0 (world).
+        centre: Vector3<f64>,
+    },
+}
+
+impl Surface {
+    /// Its anchor at t = 0: the plane's point, the solid's centre.
+    pub fn anchor(&self) -> Vector3<f64> {
+        match *self {
+            Surface::Plane { point, .. } => point,
+            Surface::Solid { centre, .. } => centre,
+        }
+    }
+}
+
+/// Whether a contact pair is closed at t = 0.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ContactState {
+    /// The node starts on the surface, pressed against it (the source problems).
+    Closed,
+    /// The node starts clear of the surface (gap > 0).
+    Open,
+}
+
+/// A frictionless node-to-surface contact pair: a node against a surface of a body. Contact
+/// is unilateral: it opens when the contact force reaches zero and closes when the gap does.
 #[derive(Debug, Clone)]
 pub struct ContactPair {
     /// Name.
@@ -210,10 +296,81 @@ pub struct ContactPair {
     pub node: NodeId,
     /// The master body.
     pub body: BodyId,
-    /// A point of the face at t = 0.
-    pub face_point: Vector3<f64>,
-    /// Unit outward normal of the face at t = 0.
-    pub face_normal: Vector3<f64>,
+    /// What the node touches.
+    pub surface: Surface,
+    /// Closed or open at t = 0.
+    pub initially: ContactState,
+    /// Coefficient of restitution of an impact, in [0, 1] (1: elastic, the default).
+    pub restitution: f64,
+}
+
+impl ContactPair {
+    /// The plane of a planar contact (point and unit normal at t = 0).
+    pub fn plane(&self) -> Option<(Vector3<f64>, Vector3<f64>)> {
+        match self.surface {
+            Surface::Plane { point, normal } => Some((point, normal)),
+            Surface::Solid { .. } => None,
+        }
+    }
+
+    /// A point of the surface at t = 0 (the plane's point, the solid's centre).
+    pub fn anchor(&self) -> Vector3<f64> {
+        self.surface.anchor()
+    }
+}
+
+/// Signed distance from `p` to a surface at its t = 0 placement (negative inside) and the
+/// unit outward normal at the nearest surface point, by closed-form geometry (the
+/// validation's and the closed forms' own; the engines use parry's queries).
+pub fn surface_distance(surface: &Surface, p: &Vector3<f64>) -> (f64, Vector3<f64>) {
+    match *surface {
+        Surface::Plane { point, normal } => (normal.dot(&(p - point)), normal),
+        Surface::Solid { solid, centre } => solid_distance(&solid, &(p - centre)),
+    }
+}
+
+/// Signed distance from `s` (relative to the solid's centre, in its axes) to a solid's
+/// boundary and the outward unit normal there (closed form).
+pub fn solid_distance(solid: &Solid, s: &Vector3<f64>) -> (f64, Vector3<f64>) {
+    let round = |from: Vector3<f64>, radius: f64| {
+        let d = s - from;
+        let r = d.norm();
+        let n = if r > 0.0 { d / r } else { Vector3::y() };
+        (r - radius, n)
+    };
+    match *solid {
+        Solid::Ball { radius } => round(Vector3::zeros(), radius),
+        Solid::Capsule {
+            half_height,
+            radius,
+        } => round(
+            Vector3::new(0.0, s.y.clamp(-half_height, half_height), 0.0),
+            radius,
+        ),
+        Solid::Cuboid { half_extents } => {
+            let h = half_extents;
+            let outside = Vector3::from_fn(|i, _| (s[i].abs() - h[i]).max(0.0));
+            if outside.norm() > 0.0 {
+                let n = Vector3::from_fn(|i, _| outside[i] * s[i].signum());
+                (outside.norm(), n / n.norm())
+            } else {
+                // Inside: the nearest face (2D: z has no face).
+                let mut best = (f64::NEG_INFINITY, Vector3::zeros());
+                for i in 0..3 {
+                    if h[i] == 0.0 {
+                        continue;
+                    }
+                    let d = s[i].abs() - h[i];
+                    if d > best.0 {
+                        let mut n = Vector3::zeros();
+                        n[i] = if s[i] < 0.0 { -1.0 } else { 1.0 };
+                        best = (d, n);
+                    }
+                }
+                best
+            }
+        }
+    }
 }
 
 /// A constant force at a material point, fixed in direction.

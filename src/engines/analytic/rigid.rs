@@ -20,7 +20,7 @@
 use super::{exponential_states, history, unsupported};
 use crate::engines::{EngineError, History};
 use crate::scene::{
-    Attachment, Connection, Dimension, Dof, Element, NodeId, Probe, Scene, StepKind,
+    Attachment, Connection, ContactState, Dimension, Dof, Element, NodeId, Probe, Scene, StepKind,
 };
 use nalgebra::{DMatrix, DVector, Matrix2x3, RowVector3, Vector2, Vector3};
 
@@ -98,7 +98,13 @@ pub fn solve(scene: &Scene) -> Result<RigidSolution, EngineError> {
     let [e] = node_free.as_slice() else {
         return unsupported("the contact node must move along exactly one direction");
     };
-    let n = planar(&contact.face_normal);
+    let Some((_, face_normal)) = contact.plane() else {
+        return unsupported("the rigid-contact form has a planar face");
+    };
+    if contact.initially == ContactState::Open {
+        return unsupported("the rigid-contact form keeps the contact closed from t = 0");
+    }
+    let n = planar(&face_normal);
     if n.dot(e).abs() < 1e-9 {
         return unsupported("the contact node's direction is tangent to the face");
     }

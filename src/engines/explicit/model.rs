@@ -5,8 +5,12 @@
 //! `FINITE` const parameter selects finite rotation (`explicit`) or the benchmark's
 //! small-rotation idealisation (`explicit_small`); it is resolved at compile time.
 
+use super::space::SharedSolid;
 use super::space::{BodyInertia, Lin, Space, solve_body};
-use crate::scene::{Attachment, BoundaryCondition, Connection, Dof, Scene, Step};
+use crate::scene::{
+    Attachment, BoundaryCondition, Connection, ContactPair, ContactState, Dof, Scene, Step,
+    StepKind, Surface, surface_distance,
+};
 use std::marker::PhantomData;
 
 /// Kahan summation step: `x += dx`, carrying the rounding error in `carry`.
@@ -242,10 +246,29 @@ struct LineSpring<S: Space> {
 /// A [`LineSpring`] end that does not move.
 const GROUND: usize = usize::MAX;
 
+/// Where a contact node is relative to its solid (see [`Model::solid_positions`]).
 #[derive(Debug, Clone, Copy)]
+pub struct SolidPosition<S: Space> {
+    /// Position relative to the solid's centre, in its axes.
+    pub local: S::V,
+    /// Signed gap.
+    pub gap: f64,
+    /// Outward normal at the nearest surface point (solid's axes).
+    pub normal: S::V,
+}
+
+#[derive(Debug, Clone)]
 struct Contact<S: Space> {
     particle: usize,
     body: usize,
+    /// A solid's centre relative to the reference node (body frame) and its parry shape; `None`
+    /// for a plane.
+    solid: Option<(S::V, SharedSolid<S>)>,
+    /// Contact dashpot (sized for the pair's restitution; 0 when elastic).
+    damping: f64,
+    /// The gap at t = 0 of a pair that starts open: the linearisation's penalty is unstressed
+    /// there (0 for a closed pair).
+    open_gap: f64,
     /// A face point relative to the reference node (body frame).
     face: S::V,
     /// Outward normal (body frame).
@@ -399,6 +422,42 @@ pub struct Model<S: Space, const FINITE: bool> {
     _space: PhantomData<S>,
 }
 
+/// The contact dashpot of a pair: c = 2ζ√(k_p m), with ζ the damping ratio whose linear
+/// spring–dashpot impact rebounds with the pair's restitution e (e = exp(−ζπ/√(1 − ζ²)), so
+/// ζ = −ln e / √(π² + ln² e); e = 0: critical, ζ = 1) and m the node's mass, or its reduced
+/// mass with the body's when the body is not held in every DOF of every dynamic step.
+fn contact_damping(scene: &Scene, c: &ContactPair, penalty: f64) -> f64 {
+    let e = c.restitution;
+    if e >= 1.0 {
+        return 0.0;
+    }
+    let zeta = if e <= 0.0 {
+        1.0
+    } else {
+        -e.ln() / (std::f64::consts::PI.powi(2) + e.ln().powi(2)).sqrt()
+    };
+    let node = scene.nodes[c.node].mass;
+    let body = &scene.bodies[c.body];
+    let every = Dof::all(scene.dimension, true);
+    let held = scene
+        .steps
+        .iter()
+        .filter(|s| matches!(s.kind, StepKind::Dynamic { .. }))
+        .all(|s| {
+            every.iter().all(|d| {
+                s.conditions
+                    .iter()
+                    .any(|b| b.node == body.reference && b.dof == *d && b.value.is_none())
+            })
+        });
+    let mass = if held {
+        node
+    } else {
+        node * body.mass / (node + body.mass)
+    };
+    2.0 * zeta * (penalty * mass).sqrt()
+}
+
 impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// Compile a scene with penalty stiffness `penalty`.
     pub fn compile(scene: &Scene, penalty: f64) -> Self {
@@ -534,14 +593,27 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                     unreachable!("validated: contact nodes are free nodes with mass")
                 };
                 let origin = bodies[c.body].x0;
-                let (face, normal, arm0) = (
-                    S::v(&c.face_point) - origin,
-                    S::v(&c.face_normal),
-                    x0(c.node) - origin,
-                );
+                let arm0 = x0(c.node) - origin;
+                let (face, normal, solid) = match c.surface {
+                    Surface::Plane { point, normal } => {
+                        (S::v(&point) - origin, S::v(&normal), None)
+                    }
+                    Surface::Solid { solid, centre } => (
+                        S::v(&centre) - origin,
+                        S::V::zero(),
+                        Some((S::v(&centre) - origin, S::solid(&solid))),
+                    ),
+                };
+                let (gap0, _) = surface_distance(&c.surface, &scene.nodes[c.node].position);
                 Contact {
                     particle,
                     body: c.body,
+                    solid,
+                    damping: contact_damping(scene, c, penalty),
+                    open_gap: match c.initially {
+                        ContactState::Open => gap0,
+                        ContactState::Closed => 0.0,
+                    },
                     face,
                     normal,
                     arm0,
@@ -596,7 +668,9 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
 
     /// Whether the scene has dashpots.
     pub fn has_dashpots(&self) -> bool {
-        !self.grounded_dashpots.is_empty() || !self.dashpots.is_empty()
+        !self.grounded_dashpots.is_empty()
+            || !self.dashpots.is_empty()
+            || self.has_contact_dashpots()
     }
 
     /// Number of contact pairs.
@@ -684,11 +758,15 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         }
     }
 
-    /// Signed gap of a contact pair (negative: penetration) and the current face normal.
+    /// Signed gap of a contact pair (negative: penetration) and the current outward normal.
     #[inline]
     pub fn gap(&self, cfg: &Config<S>, k: usize) -> (f64, S::V) {
         let c = &self.contacts[k];
         let relative = cfg.u[c.particle] - cfg.bu[c.body];
+        if let Some((centre, shape)) = &c.solid {
+            let (d, n) = S::solid_gap(shape, &self.local(cfg, k, centre));
+            return (d, self.to_world(cfg, c.body, &n));
+        }
         if FINITE {
             let r = &cfg.br[c.body];
             let n = S::rotate(r, &c.normal);
@@ -698,6 +776,120 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             let d = c.gap0 + c.normal.dot(&relative) - c.normal.dot(&S::cross(th, &c.arm0));
             (d, c.normal)
         }
+    }
+
+    /// A contact node's position relative to its solid's centre, in the body frame (small
+    /// rotation: Rᵀ ≈ 1 − [θ]×).
+    #[inline]
+    fn local(&self, cfg: &Config<S>, k: usize, centre: &S::V) -> S::V {
+        let c = &self.contacts[k];
+        let arm = c.arm0 + (cfg.u[c.particle] - cfg.bu[c.body]);
+        if FINITE {
+            S::unrotate(&cfg.br[c.body], &arm) - *centre
+        } else {
+            arm - S::cross(&cfg.bth[c.body], &arm) - *centre
+        }
+    }
+
+    /// A body-frame direction in the world (small rotation: R ≈ 1 + [θ]×).
+    #[inline]
+    fn to_world(&self, cfg: &Config<S>, body: usize, x: &S::V) -> S::V {
+        if FINITE {
+            S::rotate(&cfg.br[body], x)
+        } else {
+            *x + S::cross(&cfg.bth[body], x)
+        }
+    }
+
+    /// From the body's reference node to a contact node (small rotation: at t = 0).
+    #[inline]
+    fn contact_arm(&self, cfg: &Config<S>, k: usize) -> S::V {
+        let c = &self.contacts[k];
+        if FINITE {
+            c.arm0 + (cfg.u[c.particle] - cfg.bu[c.body])
+        } else {
+            c.arm0
+        }
+    }
+
+    /// Rate of a contact's gap along the normal `n`: the node's velocity relative to the body
+    /// point it passes, n·(ṗ − v − ω × (p − x)) (any surface: the normal's own turning moves
+    /// the gap only at second order).
+    #[inline]
+    fn normal_rate(&self, cfg: &Config<S>, vel: &Rates<S>, k: usize, n: &S::V) -> f64 {
+        let c = &self.contacts[k];
+        let (i, b) = (c.particle, c.body);
+        n.dot(&(vel.p[i] - vel.b[b] - S::cross(&vel.w[b], &self.contact_arm(cfg, k))))
+    }
+
+    /// Whether the scene has contacts with solids (parry shapes).
+    pub fn has_solids(&self) -> bool {
+        self.contacts.iter().any(|c| c.solid.is_some())
+    }
+
+    /// Whether every contact pair is a plane closed at t = 0 (what the consistent start
+    /// assumes: it carries the rigid model's persistent contact forces).
+    pub fn closed_planes_only(&self) -> bool {
+        self.contacts
+            .iter()
+            .all(|c| c.solid.is_none() && c.open_gap == 0.0)
+    }
+
+    /// Whether any contact pair has a dashpot.
+    pub fn has_contact_dashpots(&self) -> bool {
+        self.contacts.iter().any(|c| c.damping > 0.0)
+    }
+
+    /// Each solid contact's node position in the solid's frame, its gap and the outward
+    /// normal there (for [`Model::through_solid`]); planes get `None`.
+    pub fn solid_positions(&self, cfg: &Config<S>, out: &mut Vec<Option<SolidPosition<S>>>) {
+        out.clear();
+        for (k, c) in self.contacts.iter().enumerate() {
+            out.push(c.solid.as_ref().map(|(centre, shape)| {
+                let local = self.local(cfg, k, centre);
+                let (gap, normal) = S::solid_gap(shape, &local);
+                SolidPosition { local, gap, normal }
+            }));
+        }
+    }
+
+    /// The first solid contact whose node went through its solid between two sets of
+    /// [`Model::solid_positions`]: crossed it within one increment (outside before and after,
+    /// the segment through it), or, inside it, came nearer the far side than the side it
+    /// entered by (its nearest face turned against the one it entered through: the penalty
+    /// now pushes it out of the far side). `entry` keeps each pair's entry normal. Returns the
+    /// pair and the distance moved relative to the solid in the increment.
+    pub fn through_solid(
+        &self,
+        before: &[Option<SolidPosition<S>>],
+        after: &[Option<SolidPosition<S>>],
+        entry: &mut Vec<Option<S::V>>,
+    ) -> Option<(usize, f64)> {
+        entry.resize(self.contacts.len(), None);
+        for (k, c) in self.contacts.iter().enumerate() {
+            let (Some(a), Some(b), Some((_, shape))) = (&before[k], &after[k], &c.solid) else {
+                continue;
+            };
+            let moved = b.local - a.local;
+            let distance = moved.dot(&moved).sqrt();
+            if a.gap >= 0.0 && b.gap >= 0.0 {
+                entry[k] = None;
+                if S::crosses(shape, &a.local, &b.local) {
+                    return Some((k, distance));
+                }
+                continue;
+            }
+            if b.gap < 0.0 {
+                let inward =
+                    *entry[k].get_or_insert(if a.gap >= 0.0 { a.normal } else { b.normal });
+                if b.normal.dot(&inward) < 0.0 {
+                    return Some((k, distance));
+                }
+            } else {
+                entry[k] = None;
+            }
+        }
+        None
     }
 
     /// From the contact pair's face point to its node (finite rotation).
@@ -764,7 +956,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 let (d, n) = self.gap(cfg, k);
                 let f = match mode {
                     ContactMode::Unilateral => self.penalty * (-d).max(0.0),
-                    ContactMode::Bilateral => -self.penalty * d,
+                    ContactMode::Bilateral => -self.penalty * (d - c.open_gap),
                     ContactMode::Given(f) => f[k],
                     ContactMode::Off => unreachable!(),
                 };
@@ -773,13 +965,8 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 }
                 out.contact[k] = f;
                 out.p[c.particle] += n * f;
-                let arm = if FINITE {
-                    c.arm0 + (cfg.u[c.particle] - cfg.bu[c.body])
-                } else {
-                    c.arm0
-                };
                 out.b[c.body] -= n * f;
-                out.m[c.body] -= S::moment(&arm, &n) * f;
+                out.m[c.body] -= S::moment(&self.contact_arm(cfg, k), &n) * f;
             }
         }
         for l in &self.loads {
@@ -846,6 +1033,23 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             let f = *dir * (s.c * rate);
             self.apply(cfg, &s.a, f, out);
             self.apply(cfg, &s.b, -f, out);
+        }
+        // Contact dashpots act while the node penetrates, against the gap's rate.
+        for (k, c) in self.contacts.iter().enumerate() {
+            if c.damping == 0.0 {
+                continue;
+            }
+            let (d, n) = self.gap(cfg, k);
+            if d >= 0.0 {
+                continue;
+            }
+            let rate = self.normal_rate(cfg, vel, k, &n);
+            power += c.damping * rate * rate;
+            let f = -c.damping * rate;
+            out.contact[k] += f;
+            out.p[c.particle] += n * f;
+            out.b[c.body] -= n * f;
+            out.m[c.body] -= S::moment(&self.contact_arm(cfg, k), &n) * f;
         }
         out.dissipation = power;
     }
@@ -1353,6 +1557,10 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// Time derivative of a contact pair's gap.
     pub fn gap_rate(&self, cfg: &Config<S>, vel: &Rates<S>, k: usize) -> f64 {
         let c = &self.contacts[k];
+        if c.solid.is_some() {
+            let (_, n) = self.gap(cfg, k);
+            return self.normal_rate(cfg, vel, k, &n);
+        }
         let (i, b) = (c.particle, c.body);
         if FINITE {
             let r = &cfg.br[b];

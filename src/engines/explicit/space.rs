@@ -1,8 +1,10 @@
 //! Planar and spatial kinematics behind one trait, so the engine is written once and a 2D case
 //! compiles to 2D arithmetic only (no 3D rotation, no 6×6 solve).
 
+use crate::scene::Solid;
 use nalgebra::{Matrix3, UnitComplex, UnitQuaternion, Vector2, Vector3};
 use std::fmt::Debug;
+use std::marker::PhantomData;
 use std::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
 
 /// A linear quantity: translations (`Vector2`/`Vector3`) and angular quantities (`f64`/`Vector3`).
@@ -106,6 +108,39 @@ pub trait Space: Copy + Debug + Send + Sync + 'static {
     fn gyroscopic(w: &Self::W, i: &Self::Inertia) -> Self::W;
     /// An orthonormal basis of the rotation axes left free by the held ones (orthonormal).
     fn free_rotations(held: &[Self::W]) -> Vec<Self::W>;
+    /// Rotate a world vector into the body frame (the inverse of [`Space::rotate`]).
+    fn unrotate(r: &Self::R, x: &Self::V) -> Self::V;
+    /// A solid as parry builds it in this space (centred at its own origin).
+    fn solid(solid: &Solid) -> SharedSolid<Self>;
+    /// Signed distance (negative inside) from `local` (relative to the solid's centre, in its
+    /// axes) to the solid's boundary, and the outward unit normal there: parry's point
+    /// projection.
+    fn solid_gap(solid: &SharedSolid<Self>, local: &Self::V) -> (f64, Self::V);
+    /// Whether the segment from `from` to `to` (local, as in [`Space::solid_gap`]) passes
+    /// through the solid: parry's ray cast.
+    fn crosses(solid: &SharedSolid<Self>, from: &Self::V, to: &Self::V) -> bool;
+}
+
+/// A parry shape of one space, shared (cheap to clone, `Send + Sync`).
+#[derive(Clone, Debug)]
+pub enum SharedSolid<S: Space> {
+    /// 2D (`parry2d-f64`).
+    Planar(parry2d_f64::shape::SharedShape, PhantomData<S>),
+    /// 3D (`parry3d-f64`).
+    Spatial(parry3d_f64::shape::SharedShape, PhantomData<S>),
+}
+
+/// Signed distance and outward normal from a projection: `delta` = query − projected point.
+/// A query exactly on the boundary has no direction of its own: the normal is then the
+/// central difference of the signed distance, `probe` builds it.
+fn signed(distance: f64, inside: bool) -> f64 {
+    if inside { -distance } else { distance }
+}
+
+/// Whether a signed distance is inside (the normal then points from the query to the
+/// boundary, and is turned outward).
+fn projection_inside(gap: f64) -> bool {
+    gap < 0.0
 }
 
 /// Below this angle (rad) the increment's rotation takes its sine and cosine from their
@@ -147,6 +182,57 @@ pub struct Planar;
 pub struct Spatial;
 
 impl Space for Planar {
+    fn unrotate(r: &Self::R, x: &Self::V) -> Self::V {
+        r.inverse_transform_vector(x)
+    }
+    fn solid(solid: &Solid) -> SharedSolid<Self> {
+        use parry2d_f64::shape::SharedShape;
+        SharedSolid::Planar(
+            match *solid {
+                Solid::Ball { radius } => SharedShape::ball(radius),
+                Solid::Cuboid { half_extents: h } => SharedShape::cuboid(h.x, h.y),
+                Solid::Capsule {
+                    half_height,
+                    radius,
+                } => SharedShape::capsule_y(half_height, radius),
+            },
+            PhantomData,
+        )
+    }
+    fn solid_gap(solid: &SharedSolid<Self>, local: &Self::V) -> (f64, Self::V) {
+        let SharedSolid::Planar(shape, _) = solid else {
+            unreachable!("a 2D model holds 2D shapes")
+        };
+        let at = |p: &Vector2<f64>| {
+            let q = parry2d_f64::math::Vector::new(p.x, p.y);
+            let projection = shape.project_local_point(q, false);
+            let d = q - projection.point;
+            (
+                signed(d.length(), projection.is_inside),
+                Vector2::new(d.x, d.y),
+            )
+        };
+        let (gap, delta) = at(local);
+        let norm = delta.norm();
+        if norm > 0.0 {
+            let n = delta / norm;
+            return (gap, if projection_inside(gap) { -n } else { n });
+        }
+        let e = 1e-7 * shape.compute_local_aabb().half_extents().length();
+        let n = Vector2::new(
+            at(&(local + Vector2::x() * e)).0 - at(&(local - Vector2::x() * e)).0,
+            at(&(local + Vector2::y() * e)).0 - at(&(local - Vector2::y() * e)).0,
+        );
+        (gap, n / n.norm())
+    }
+    fn crosses(solid: &SharedSolid<Self>, from: &Self::V, to: &Self::V) -> bool {
+        let SharedSolid::Planar(shape, _) = solid else {
+            unreachable!("a 2D model holds 2D shapes")
+        };
+        let v = |p: &Vector2<f64>| parry2d_f64::math::Vector::new(p.x, p.y);
+        let ray = parry2d_f64::query::Ray::new(v(from), v(to) - v(from));
+        shape.intersects_local_ray(&ray, 1.0)
+    }
     type V = Vector2<f64>;
     type W = f64;
     type R = UnitComplex<f64>;
@@ -228,6 +314,57 @@ fn basis_with(leading: &[Vector3<f64>]) -> Matrix3<f64> {
 }
 
 impl Space for Spatial {
+    fn unrotate(r: &Self::R, x: &Self::V) -> Self::V {
+        r.inverse_transform_vector(x)
+    }
+    fn solid(solid: &Solid) -> SharedSolid<Self> {
+        use parry3d_f64::shape::SharedShape;
+        SharedSolid::Spatial(
+            match *solid {
+                Solid::Ball { radius } => SharedShape::ball(radius),
+                Solid::Cuboid { half_extents: h } => SharedShape::cuboid(h.x, h.y, h.z),
+                Solid::Capsule {
+                    half_height,
+                    radius,
+                } => SharedShape::capsule_y(half_height, radius),
+            },
+            PhantomData,
+        )
+    }
+    fn solid_gap(solid: &SharedSolid<Self>, local: &Self::V) -> (f64, Self::V) {
+        let SharedSolid::Spatial(shape, _) = solid else {
+            unreachable!("a 3D model holds 3D shapes")
+        };
+        let at = |p: &Vector3<f64>| {
+            let q = parry3d_f64::math::Vector::new(p.x, p.y, p.z);
+            let projection = shape.project_local_point(q, false);
+            let d = q - projection.point;
+            (
+                signed(d.length(), projection.is_inside),
+                Vector3::new(d.x, d.y, d.z),
+            )
+        };
+        let (gap, delta) = at(local);
+        let norm = delta.norm();
+        if norm > 0.0 {
+            let n = delta / norm;
+            return (gap, if projection_inside(gap) { -n } else { n });
+        }
+        let e = 1e-7 * shape.compute_local_aabb().half_extents().length();
+        let n = Vector3::from_fn(|i, _| {
+            let step = Vector3::from_fn(|j, _| if i == j { e } else { 0.0 });
+            at(&(local + step)).0 - at(&(local - step)).0
+        });
+        (gap, n / n.norm())
+    }
+    fn crosses(solid: &SharedSolid<Self>, from: &Self::V, to: &Self::V) -> bool {
+        let SharedSolid::Spatial(shape, _) = solid else {
+            unreachable!("a 3D model holds 3D shapes")
+        };
+        let v = |p: &Vector3<f64>| parry3d_f64::math::Vector::new(p.x, p.y, p.z);
+        let ray = parry3d_f64::query::Ray::new(v(from), v(to) - v(from));
+        shape.intersects_local_ray(&ray, 1.0)
+    }
     type V = Vector3<f64>;
     type W = Vector3<f64>;
     type R = UnitQuaternion<f64>;

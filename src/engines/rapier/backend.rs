@@ -278,18 +278,28 @@ macro_rules! backend {
                     })
                     .collect();
 
+                // Each collider takes its pair's restitution (rapier averages the two).
+                let mut restitution = vec![0.0; plan.colliders.len()];
+                for c in &plan.contacts {
+                    restitution[c.ball] = c.restitution;
+                    restitution[c.slab] = c.restitution;
+                }
                 let colliders: Vec<ColliderHandle> = plan
                     .colliders
                     .iter()
-                    .map(|c| {
+                    .enumerate()
+                    .map(|(i, c)| {
                         let builder = match c.shape {
                             Shape::Ball(r) => ColliderBuilder::ball(r as Real),
                             Shape::Cuboid(half) => cuboid(&half),
+                            Shape::Capsule(half_height, r) => {
+                                ColliderBuilder::capsule_y(half_height as Real, r as Real)
+                            }
                         }
                         .position(pose(&c.frame))
                         .density(0.0)
                         .friction(0.0)
-                        .restitution(0.0);
+                        .restitution(restitution[i] as Real);
                         world.colliders.insert_with_parent(
                             builder,
                             handles[c.body],

@@ -39,8 +39,10 @@
 //! contact face (a slab `size` thick behind it, in-plane half-extent `size`, where `size` is
 //! twice the spread of the body's nodes and the contact node) and a ball of radius
 //! r = 1e-3 `size` on the node's body, centred on the node, the slab moved back by r so the
-//! two touch exactly at t = 0. Friction 0; restitution 0 (the benchmark's contact is persistent:
-//! node and face move together from t = 0 with no impact, so there is nothing to bounce).
+//! two touch exactly at t = 0. A solid (ball, cuboid, capsule) is the same parry shape as the
+//! explicit engine's, shrunk by r so the node itself touches where the solid's surface is
+//! (corners rounded by r). Friction 0; restitution the pair's (1 by default: the benchmark's
+//! contact is persistent, node and face move together from t = 0 with no impact).
 //!
 //! # Steps
 //!
@@ -51,7 +53,9 @@
 //! velocities are applied, converted to centre-of-mass velocities v_G = v_O + ω × (R c)).
 
 use crate::engines::EngineError;
-use crate::scene::{Attachment, BodyId, Connection, Dimension, Dof, NodeId, Scene, StepKind};
+use crate::scene::{
+    Attachment, BodyId, Connection, Dimension, Dof, NodeId, Scene, Solid, StepKind, Surface,
+};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 /// Which kind of rapier body.
@@ -190,6 +194,8 @@ pub enum Shape {
     Ball(f64),
     /// Cuboid with half extents along its frame axes (2D: z unused).
     Cuboid(Vector3<f64>),
+    /// Capsule along its frame's y axis: half height of the segment, radius.
+    Capsule(f64, f64),
 }
 
 /// A collider.
@@ -214,10 +220,10 @@ pub struct ContactSpec {
     pub node: NodeId,
     /// The face's body.
     pub body: usize,
-    /// Face point in the face body's coordinates.
-    pub face_point: Vector3<f64>,
-    /// Face normal in the face body's coordinates.
-    pub face_normal: Vector3<f64>,
+    /// The surface in the face body's coordinates (its reference node at the origin).
+    pub surface: Surface,
+    /// Coefficient of restitution (rapier's `restitution` on both colliders, averaged).
+    pub restitution: f64,
 }
 
 /// A point load.
@@ -797,7 +803,7 @@ pub fn plan(scene: &Scene) -> Result<Plan, EngineError> {
         });
     }
 
-    // Contact: a slab on the face's body, a small ball on the node's body.
+    // Contact: a slab (or the solid) on the face's body, a small ball on the node's body.
     let mut colliders = Vec::new();
     let mut contacts = Vec::new();
     for pair in &scene.contacts {
@@ -818,21 +824,61 @@ pub fn plan(scene: &Scene) -> Result<Plan, EngineError> {
                 *i == pair.node
                     || matches!(n.attachment, Attachment::Reference(b) | Attachment::OnBody(b) if b == pair.body)
             })
-            .map(|(_, n)| (n.position - pair.face_point).norm())
+            .map(|(_, n)| (n.position - pair.anchor()).norm())
             .fold(0.0f64, f64::max);
         let size = 2.0 * spread.max(f64::MIN_POSITIVE.sqrt());
-        let radius = 1e-3 * size;
-        let n = pair.face_normal;
-        let face_point = pair.face_point - origin;
-        let rotation = x_to(&n, dim);
-        colliders.push(ColliderSpec {
-            body: face_body,
-            shape: Shape::Cuboid(Vector3::new(0.5 * size, size, size)),
-            frame: Frame {
-                origin: face_point - n * (radius + 0.5 * size),
-                rotation,
-            },
-        });
+        let (collider, surface, radius) = match pair.surface {
+            Surface::Plane { point, normal } => {
+                let radius = 1e-3 * size;
+                let face_point = point - origin;
+                (
+                    ColliderSpec {
+                        body: face_body,
+                        shape: Shape::Cuboid(Vector3::new(0.5 * size, size, size)),
+                        frame: Frame {
+                            origin: face_point - normal * (radius + 0.5 * size),
+                            rotation: x_to(&normal, dim),
+                        },
+                    },
+                    Surface::Plane {
+                        point: face_point,
+                        normal,
+                    },
+                    radius,
+                )
+            }
+            Surface::Solid { solid, centre } => {
+                // The solid shrunk by the node's ball radius, so the ball's centre (the node)
+                // touches where it touches the solid itself (corners rounded by the radius).
+                let radius = (1e-3 * size).min(0.1 * solid.half_thickness());
+                let shape = match solid {
+                    Solid::Ball { radius: a } => Shape::Ball(a - radius),
+                    Solid::Cuboid { half_extents } => {
+                        Shape::Cuboid(half_extents.map(|h| (h - radius).max(0.0)))
+                    }
+                    Solid::Capsule {
+                        half_height,
+                        radius: a,
+                    } => Shape::Capsule(half_height, a - radius),
+                };
+                (
+                    ColliderSpec {
+                        body: face_body,
+                        shape,
+                        frame: Frame {
+                            origin: centre - origin,
+                            rotation: UnitQuaternion::identity(),
+                        },
+                    },
+                    Surface::Solid {
+                        solid,
+                        centre: centre - origin,
+                    },
+                    radius,
+                )
+            }
+        };
+        colliders.push(collider);
         colliders.push(ColliderSpec {
             body: r.body,
             shape: Shape::Ball(radius),
@@ -846,8 +892,8 @@ pub fn plan(scene: &Scene) -> Result<Plan, EngineError> {
             slab: colliders.len() - 2,
             node: pair.node,
             body: face_body,
-            face_point,
-            face_normal: n,
+            surface,
+            restitution: pair.restitution,
         });
     }
 

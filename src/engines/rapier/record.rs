@@ -151,8 +151,8 @@ impl Kinematics<'_> {
     fn gap(&self, s: &[BodyState], k: usize) -> f64 {
         let c = &self.plan.contacts[k];
         let face = &s[c.body];
-        let n = face.rotation * c.face_normal;
-        n.dot(&(self.position(s, c.node) - face.point(&c.face_point)))
+        let local = face.rotation.inverse() * (self.position(s, c.node) - face.position);
+        crate::scene::surface_distance(&c.surface, &local).0
     }
 }
 

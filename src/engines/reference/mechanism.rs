@@ -25,8 +25,9 @@
 //! line joining the nodes); loads are constant global forces at nodes. A force f at a body point
 //! p adds f to F and (p − x) × f to M_O.
 //!
-//! A contact pair is a bilateral constraint: the node keeps its initial distance to the face,
-//! g = n·(p_N − a) = g₀ with n = R n₀ and a = x + R r_f. Its velocity row G gives
+//! A closed contact pair is a constraint: the node keeps its distance to the surface,
+//! g = g₀ (a plane: g = n·(p_N − a) with n = R n₀ and a = x + R r_f; a solid: the signed
+//! distance φ(Rᵀ(p_N − x)), whose curvature adds ṡᵀHṡ to Ġu). Its velocity row G gives
 //! ġ = n·ṗ_N − n·v − ((p_N − x) × n)·ω, and g̈ = G u̇ + Ġu with
 //! Ġu = (ω × n)·(ṗ_N − v) − ω·((ṗ_N − v) × n + (p_N − x) × (ω × n)). With A = TᵀMT, b = Tᵀf and
 //! B = GT, each evaluation solves
@@ -36,7 +37,10 @@
 //! λ being the contact forces (on the node λ n: compressive positive).
 
 use crate::engines::EngineError;
-use crate::scene::{Attachment, Connection, Dimension, Dof, Element, NodeId, Scene, Step};
+use crate::scene::{
+    Attachment, Connection, ContactState, Dimension, Dof, Element, NodeId, Scene, Solid, Step,
+    Surface, surface_distance,
+};
 use nalgebra::{DMatrix, DVector, Matrix3, Quaternion, UnitQuaternion, Vector3};
 
 /// Where a node lives in the coordinates.
@@ -62,9 +66,15 @@ struct Body {
 struct Contact {
     particle: usize,
     body: usize,
-    face: Vector3<f64>,
-    normal: Vector3<f64>,
-    gap0: f64,
+    /// The surface in the body frame, its reference node at the origin.
+    surface: Surface,
+    /// The gap a closed contact keeps: the initial one for a pair closed at t = 0 (zero to
+    /// the validation's round-off), zero for one that closes later.
+    level: f64,
+    /// Coefficient of restitution.
+    restitution: f64,
+    /// Closed at t = 0.
+    closed: bool,
 }
 
 /// The mechanism: constant data of a scene, and its equations.
@@ -171,14 +181,28 @@ impl Mechanism {
                 ));
             };
             let origin = scene.nodes[scene.bodies[c.body].reference].position;
+            let surface = match c.surface {
+                Surface::Plane { point, normal } => Surface::Plane {
+                    point: point - origin,
+                    normal,
+                },
+                Surface::Solid { solid, centre } => Surface::Solid {
+                    solid,
+                    centre: centre - origin,
+                },
+            };
+            let closed = c.initially == ContactState::Closed;
             contacts.push(Contact {
                 particle,
                 body: c.body,
-                face: c.face_point - origin,
-                normal: c.face_normal,
-                gap0: c
-                    .face_normal
-                    .dot(&(scene.nodes[c.node].position - c.face_point)),
+                surface,
+                level: if closed {
+                    surface_distance(&c.surface, &scene.nodes[c.node].position).0
+                } else {
+                    0.0
+                },
+                restitution: c.restitution,
+                closed,
             });
         }
         for e in scene.springs.iter().chain(&scene.dashpots) {
@@ -537,24 +561,47 @@ impl Mechanism {
         (m, q)
     }
 
-    /// Each contact's gap minus its initial gap, its velocity row G (on u) and Ġu.
+    /// Which contacts are closed at t = 0.
+    pub fn initially_closed(&self) -> Vec<bool> {
+        self.contacts.iter().map(|c| c.closed).collect()
+    }
+
+    /// Coefficient of restitution of contact `k`.
+    pub fn restitution(&self, k: usize) -> f64 {
+        self.contacts[k].restitution
+    }
+
+    /// Each contact's gap above the level it closes at (negative: penetrating), the velocity
+    /// rows G (on u) and Ġu of the closed (`active`) contacts.
+    ///
+    /// With s = Rᵀ(p − x) the node in the body frame and φ(s) the signed distance to the
+    /// surface (closed-form geometry), ġ = n·(ṗ − v − ω × (p − x)) with n = R ∇φ, for any
+    /// surface; g̈ = G u̇ + Ġu adds to the plane's terms the surface's curvature, ṡᵀ H ṡ with H
+    /// the Hessian of φ.
     pub fn constraints(
         &self,
         at: &Placement,
         u: &DVector<f64>,
+        active: &[bool],
     ) -> (Vec<f64>, DMatrix<f64>, DVector<f64>) {
         let n = self.velocity_len();
-        let mut drift = Vec::with_capacity(self.contacts.len());
-        let mut g = DMatrix::zeros(self.contacts.len(), n);
-        let mut gdot_u = DVector::zeros(self.contacts.len());
+        let rows = active.iter().filter(|a| **a).count();
+        let mut gaps = Vec::with_capacity(self.contacts.len());
+        let mut g = DMatrix::zeros(rows, n);
+        let mut gdot_u = DVector::zeros(rows);
         let base = 3 * self.particles.len();
-        for (row, c) in self.contacts.iter().enumerate() {
+        let mut row = 0;
+        for (c, closed) in self.contacts.iter().zip(active) {
             let rot = at.orientations[c.body];
             let x = at.origins[c.body];
-            let normal = rot * c.normal;
-            let face = x + rot * c.face;
             let p = at.particles[c.particle];
-            drift.push(normal.dot(&(p - face)) - c.gap0);
+            let local = rot.inverse() * (p - x);
+            let (phi, normal0) = surface_distance(&c.surface, &local);
+            gaps.push(phi - c.level);
+            if !closed {
+                continue;
+            }
+            let normal = rot * normal0;
             let k = base + 6 * c.body;
             let pd = u.fixed_rows::<3>(3 * c.particle).into_owned();
             let v = u.fixed_rows::<3>(k).into_owned();
@@ -567,9 +614,26 @@ impl Mechanism {
             }
             let relative = pd - v;
             let wn = w.cross(&normal);
-            gdot_u[row] = wn.dot(&relative) - w.dot(&(relative.cross(&normal) + arm.cross(&wn)));
+            let sliding = rot.inverse() * (relative - w.cross(&arm));
+            gdot_u[row] = wn.dot(&relative) - w.dot(&(relative.cross(&normal) + arm.cross(&wn)))
+                + sliding.dot(&(curvature(&c.surface, &local) * sliding));
+            row += 1;
         }
-        (drift, g, gdot_u)
+        (gaps, g, gdot_u)
+    }
+
+    /// Rate of contact `k`'s gap, n·(ṗ − v − ω × (p − x)).
+    pub fn gap_rate(&self, at: &Placement, u: &DVector<f64>, k: usize) -> f64 {
+        let c = &self.contacts[k];
+        let rot = at.orientations[c.body];
+        let x = at.origins[c.body];
+        let p = at.particles[c.particle];
+        let (_, normal0) = surface_distance(&c.surface, &(rot.inverse() * (p - x)));
+        let base = 3 * self.particles.len() + 6 * c.body;
+        let pd = u.fixed_rows::<3>(3 * c.particle).into_owned();
+        let v = u.fixed_rows::<3>(base).into_owned();
+        let w = u.fixed_rows::<3>(base + 3).into_owned();
+        (rot * normal0).dot(&(pd - v - w.cross(&(p - x))))
     }
 
     /// Accelerations of the free coordinates and contact forces at a placement and velocity.
@@ -578,11 +642,12 @@ impl Mechanism {
         at: &Placement,
         basis: &DMatrix<f64>,
         w: &DVector<f64>,
+        active: &[bool],
     ) -> Result<Evaluation, EngineError> {
         let u = basis * w;
         let (mass, inertial) = self.inertia(at, &u);
         let force = self.applied(at, &u)? + inertial;
-        let (_, g, gdot_u) = self.constraints(at, &u);
+        let (_, g, gdot_u) = self.constraints(at, &u, active);
         let nf = basis.ncols();
         let nc = g.nrows();
         let mut kkt = DMatrix::zeros(nf + nc, nf + nc);
@@ -601,9 +666,24 @@ impl Mechanism {
                     .into(),
             )
         })?;
+        let mut closed = solution
+            .rows(nf, nc)
+            .iter()
+            .copied()
+            .collect::<Vec<_>>()
+            .into_iter();
         Ok(Evaluation {
             acceleration: solution.rows(0, nf).into_owned(),
-            contact: solution.rows(nf, nc).iter().copied().collect(),
+            contact: active
+                .iter()
+                .map(|a| {
+                    if *a {
+                        closed.next().unwrap_or(0.0)
+                    } else {
+                        0.0
+                    }
+                })
+                .collect(),
         })
     }
 
@@ -642,28 +722,108 @@ impl Mechanism {
         u
     }
 
-    /// The free velocity closest to u (in the kinetic-energy norm) that satisfies the contact
-    /// constraints: the projection on T, then the impulse that makes ġ = 0.
+    /// The free velocity closest to u (in the kinetic-energy norm) that satisfies the closed
+    /// contacts' constraints: the projection on T, then the impulse that makes ġ = 0.
     pub fn admissible(
         &self,
         at: &Placement,
         basis: &DMatrix<f64>,
         u: &DVector<f64>,
+        active: &[bool],
     ) -> Result<DVector<f64>, EngineError> {
         let w = basis.transpose() * u;
-        if self.contacts.is_empty() || basis.ncols() == 0 {
-            return Ok(w);
+        self.impact(at, basis, &w, active, None)
+    }
+
+    /// The free velocity after an impact: the impulse along the closed contacts' rows that
+    /// leaves their ġ = 0 and, for `striking = Some((k, e))`, turns contact k's approach rate
+    /// ġ⁻ into −e ġ⁻ (Newton's law of restitution; k need not be closed). Frictionless, so the
+    /// impulse acts along the normals only and the kinetic energy changes by the factor the
+    /// law prescribes.
+    pub fn impact(
+        &self,
+        at: &Placement,
+        basis: &DMatrix<f64>,
+        w: &DVector<f64>,
+        active: &[bool],
+        striking: Option<(usize, f64)>,
+    ) -> Result<DVector<f64>, EngineError> {
+        let mut rows = active.to_vec();
+        if let Some((k, _)) = striking {
+            rows[k] = true;
         }
-        let full = basis * &w;
+        if !rows.iter().any(|r| *r) || basis.ncols() == 0 {
+            return Ok(w.clone());
+        }
+        let full = basis * w;
         let (mass, _) = self.inertia(at, &full);
-        let (_, g, _) = self.constraints(at, &full);
+        let (_, g, _) = self.constraints(at, &full, &rows);
         let a = basis.transpose() * mass * basis;
         let b = g * basis;
         let singular =
             || EngineError::Unsupported("reference: singular mass or constraint matrix".into());
         let a_inv = a.try_inverse().ok_or_else(singular)?;
         let s = &b * &a_inv * b.transpose();
-        let impulse = s.lu().solve(&(&b * &w)).ok_or_else(singular)?;
-        Ok(&w - a_inv * b.transpose() * impulse)
+        let rate = &b * w;
+        let mut target = DVector::zeros(rate.len());
+        if let Some((k, e)) = striking {
+            let row = rows[..k].iter().filter(|r| **r).count();
+            target[row] = -e * rate[row];
+        }
+        let impulse = s.lu().solve(&(rate - target)).ok_or_else(singular)?;
+        Ok(w - a_inv * b.transpose() * impulse)
+    }
+}
+
+/// Hessian of a surface's signed distance at `s` (body frame, relative to the reference
+/// node): zero on a plane and a cuboid's faces; (P − n nᵀ)/ρ at distance ρ from a ball's
+/// centre, a capsule's axis or a cuboid's edge or corner, P projecting out the directions
+/// along which the nearest feature extends.
+fn curvature(surface: &Surface, s: &Vector3<f64>) -> Matrix3<f64> {
+    let Surface::Solid { solid, centre } = *surface else {
+        return Matrix3::zeros();
+    };
+    let s = s - centre;
+    let round = |d: Vector3<f64>, extends: Matrix3<f64>| {
+        let rho = d.norm();
+        if rho == 0.0 {
+            return Matrix3::zeros();
+        }
+        let n = d / rho;
+        (Matrix3::identity() - extends - n * n.transpose()) / rho
+    };
+    match solid {
+        Solid::Ball { .. } => round(s, Matrix3::zeros()),
+        Solid::Capsule { half_height, .. } => {
+            let along = if s.y.abs() < half_height {
+                Matrix3::from_diagonal(&Vector3::y())
+            } else {
+                Matrix3::zeros()
+            };
+            round(
+                s - Vector3::new(0.0, s.y.clamp(-half_height, half_height), 0.0),
+                along,
+            )
+        }
+        Solid::Cuboid { half_extents: h } => {
+            let outside = Vector3::from_fn(|i, _| s[i].abs() > h[i] && h[i] > 0.0);
+            if !outside.iter().any(|o| *o) {
+                return Matrix3::zeros();
+            }
+            let d = Vector3::from_fn(|i, _| {
+                if outside[i] {
+                    s[i] - s[i].signum() * h[i]
+                } else {
+                    0.0
+                }
+            });
+            let extends =
+                Matrix3::from_diagonal(&Vector3::from_fn(
+                    |i, _| {
+                        if outside[i] { 0.0 } else { 1.0 }
+                    },
+                ));
+            round(d, extends)
+        }
     }
 }

@@ -26,7 +26,7 @@
 pub mod mechanism;
 
 use super::{Engine, EngineError, History, RunInfo, RunOutput, RunSettings};
-use crate::contract::VALID_COLUMN;
+use crate::contract::{IMPACTS_COLUMN, VALID_COLUMN};
 use crate::scene::{Probe, Scene, StepKind};
 use mechanism::{Mechanism, Placement, twist};
 use nalgebra::{DMatrix, DVector, Vector3};
@@ -36,6 +36,9 @@ use std::time::Instant;
 
 /// Relative tolerance of the integration (the absolute one is this × 10^-3).
 pub const TOLERANCE: f64 = 1e-12;
+
+/// Contact events whose times are reported as measures (`impact_<i>_time`, …).
+const EVENTS_REPORTED: usize = 5;
 
 /// Most integration steps between two output rows (each run is bounded in time).
 const MAX_STEPS_PER_ROW: u32 = 1_000_000;
@@ -51,6 +54,7 @@ struct Solution {
     drift: f64,
     steps: u64,
     evaluations: u64,
+    events: Vec<ContactEvent>,
 }
 
 impl Engine for ReferenceEngine {
@@ -81,6 +85,33 @@ impl Engine for ReferenceEngine {
             if valid < fine.history.rows.len() {
                 measures.insert("valid_until".into(), fine.history.rows[valid][0]);
             }
+            let mut impacts = 0;
+            let mut openings = 0;
+            for event in &fine.events {
+                match *event {
+                    ContactEvent::Impact {
+                        time,
+                        speed,
+                        rebound,
+                        ..
+                    } => {
+                        impacts += 1;
+                        if impacts <= EVENTS_REPORTED {
+                            measures.insert(format!("impact_{impacts}_time"), time);
+                            measures.insert(format!("impact_{impacts}_speed"), speed);
+                            measures.insert(format!("impact_{impacts}_rebound"), rebound);
+                        }
+                    }
+                    ContactEvent::Opening { time, .. } => {
+                        openings += 1;
+                        if openings <= EVENTS_REPORTED {
+                            measures.insert(format!("opening_{openings}_time"), time);
+                        }
+                    }
+                }
+            }
+            measures.insert("impacts".into(), impacts as f64);
+            measures.insert("openings".into(), openings as f64);
         }
         let mut counters = BTreeMap::new();
         counters.insert("integration_steps".into(), fine.steps);
@@ -115,6 +146,9 @@ fn valid_rows(history: &History) -> usize {
 fn largest_change(a: &History, b: &History) -> f64 {
     let mut largest = 0.0_f64;
     for c in 1..a.columns.len() - 1 {
+        if a.columns[c] == IMPACTS_COLUMN {
+            continue;
+        }
         let peak = a.rows.iter().fold(0.0_f64, |m, r| m.max(r[c].abs()));
         if peak == 0.0 {
             continue;
@@ -129,10 +163,12 @@ fn largest_change(a: &History, b: &History) -> f64 {
     largest
 }
 
-/// The equations for the ODE solver over one dynamic step (fixed free basis).
+/// The equations for the ODE solver over one dynamic step (fixed free basis) with a fixed
+/// set of closed contacts.
 struct Motion<'a> {
     mechanism: &'a Mechanism,
     basis: &'a DMatrix<f64>,
+    active: &'a [bool],
     error: &'a RefCell<Option<EngineError>>,
 }
 
@@ -142,7 +178,7 @@ impl ode_solvers::System<f64, ode_solvers::DVector<f64>> for Motion<'_> {
         let np = m.position_len();
         let at = m.unpack(y.as_slice());
         let w = DVector::from_column_slice(&y.as_slice()[np..]);
-        match m.evaluate(&at, self.basis, &w) {
+        match m.evaluate(&at, self.basis, &w, self.active) {
             Ok(e) => {
                 let u = self.basis * &w;
                 m.position_rate(&at, &u, &mut dy.as_mut_slice()[..np]);
@@ -163,6 +199,139 @@ impl ode_solvers::System<f64, ode_solvers::DVector<f64>> for Motion<'_> {
     ) -> bool {
         self.error.borrow().is_some()
     }
+}
+
+/// Checks for contact events per output interval: a contact that closes and opens again
+/// within one check would be missed, so the interval is split.
+const EVENT_CHECKS_PER_ROW: usize = 4;
+
+/// Below this fraction of the largest approach speed met so far, an impact is taken as
+/// plastic: a bouncing node's impacts accumulate (their times form a geometric series), and
+/// this ends the series where what is left of it is below the integration's tolerance.
+const RESTING_SPEED: f64 = 1e-6;
+
+/// What happened to a contact pair, and when.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ContactEvent {
+    /// The gap reached zero: an impact with this approach speed, after which the contact
+    /// closed (plastic, or an approach below [`RESTING_SPEED`]) or rebounded.
+    Impact {
+        /// Pair index.
+        contact: usize,
+        /// Time.
+        time: f64,
+        /// Approach speed −ġ before the impact.
+        speed: f64,
+        /// Separation speed ġ after it.
+        rebound: f64,
+    },
+    /// The contact force reached zero: the pair opened.
+    Opening {
+        /// Pair index.
+        contact: usize,
+        /// Time.
+        time: f64,
+    },
+}
+
+/// One integration from `(t, y)` to `to` with the closed set `active`.
+struct Leg<'a> {
+    mechanism: &'a Mechanism,
+    basis: &'a DMatrix<f64>,
+    rtol: f64,
+    max_step: f64,
+    steps: u64,
+    evaluations: u64,
+}
+
+impl Leg<'_> {
+    fn run(
+        &mut self,
+        active: &[bool],
+        t: f64,
+        y: &ode_solvers::DVector<f64>,
+        to: f64,
+    ) -> Result<ode_solvers::DVector<f64>, EngineError> {
+        let failure = RefCell::new(None);
+        let motion = Motion {
+            mechanism: self.mechanism,
+            basis: self.basis,
+            active,
+            error: &failure,
+        };
+        let mut stepper = ode_solvers::Dop853::from_param(
+            motion,
+            t,
+            to,
+            to - t,
+            y.clone(),
+            self.rtol,
+            self.rtol * 1e-3,
+            0.9,
+            0.0,
+            0.333,
+            6.0,
+            (to - t) * self.max_step,
+            0.0,
+            MAX_STEPS_PER_ROW,
+            1000,
+            ode_solvers::dop_shared::OutputType::Sparse,
+        );
+        let stats = stepper
+            .integrate()
+            .map_err(|e| EngineError::Failed(format!("reference: integration to t = {to:e}: {e}")));
+        if let Some(e) = failure.take() {
+            return Err(e);
+        }
+        let stats = stats?;
+        self.steps += u64::from(stats.accepted_steps);
+        self.evaluations += u64::from(stats.num_eval);
+        Ok(stepper.y_out().last().expect("the end state").clone())
+    }
+
+    /// Whether any contact event has happened by state `y`: an open pair's gap below zero, or
+    /// a closed pair's force below zero.
+    fn fired(&self, active: &[bool], y: &ode_solvers::DVector<f64>) -> Result<bool, EngineError> {
+        let m = self.mechanism;
+        if m.contact_count() == 0 {
+            return Ok(false);
+        }
+        let np = m.position_len();
+        let at = m.unpack(y.as_slice());
+        let w = DVector::from_column_slice(&y.as_slice()[np..]);
+        let (gaps, _, _) = m.constraints(&at, &(self.basis * &w), active);
+        if gaps.iter().zip(active).any(|(g, a)| !a && *g < 0.0) {
+            return Ok(true);
+        }
+        if active.iter().any(|a| *a) {
+            let e = m.evaluate(&at, self.basis, &w, active)?;
+            return Ok(e.contact.iter().zip(active).any(|(f, a)| *a && *f < 0.0));
+        }
+        Ok(false)
+    }
+}
+
+/// Open every closed pair that pulls (negative force) or separates (ġ > 0) at `y`, and let it
+/// go without an impulse.
+fn release(
+    mechanism: &Mechanism,
+    basis: &DMatrix<f64>,
+    active: &mut [bool],
+    y: &ode_solvers::DVector<f64>,
+    time: f64,
+    events: &mut Vec<ContactEvent>,
+) -> Result<(), EngineError> {
+    let np = mechanism.position_len();
+    let at = mechanism.unpack(y.as_slice());
+    let w = DVector::from_column_slice(&y.as_slice()[np..]);
+    let e = mechanism.evaluate(&at, basis, &w, active)?;
+    for (k, (closed, force)) in active.iter_mut().zip(&e.contact).enumerate() {
+        if *closed && *force < 0.0 {
+            *closed = false;
+            events.push(ContactEvent::Opening { contact: k, time });
+        }
+    }
+    Ok(())
 }
 
 /// Newton's method on the equilibrium of the free DOFs of a static step.
@@ -232,6 +401,11 @@ fn equilibrium(
 /// `max_step` is the largest integration step as a fraction of the output interval: 1 for the
 /// solution, ½ for the check (otherwise, where one step per row already meets both tolerances,
 /// halving the tolerance would retrace the same steps and prove nothing).
+///
+/// Contact is event-driven: between events the set of closed pairs is fixed; an open pair
+/// whose gap reaches zero strikes (Newton's restitution law on the approach rate; plastic
+/// impacts and resting approaches close it), a closed pair whose force reaches zero opens.
+/// Each event's time is found by bisection on the integrated state to a few ulps.
 fn solve(
     scene: &Scene,
     mechanism: &Mechanism,
@@ -241,19 +415,22 @@ fn solve(
     let times = scene.output_times();
     let duration = scene.duration();
     let tol = 1e-12 * duration.max(f64::MIN_POSITIVE);
+    let interval = duration / (times.len() - 1).max(1) as f64;
     let length = scene
         .nodes
         .iter()
         .fold(1.0_f64, |m, n| m.max(n.position.amax()));
     let mut at = mechanism.initial_placement();
     let mut u = DVector::zeros(mechanism.velocity_len());
+    let mut active = mechanism.initially_closed();
+    let mut events: Vec<ContactEvent> = Vec::new();
+    let mut fastest = 0.0_f64;
     let mut first_dynamic = true;
     let mut t0 = 0.0;
     let mut next = 0;
     let mut rows: Vec<Vec<f64>> = Vec::with_capacity(times.len());
     let mut contact_history = Vec::with_capacity(times.len());
     let mut previous_rotation = vec![0.0; scene.columns.len()];
-    let mut valid = true;
     let mut drift = 0.0_f64;
     let (mut steps, mut evaluations) = (0_u64, 0_u64);
     let dynamic_count = scene
@@ -262,6 +439,7 @@ fn solve(
         .filter(|s| matches!(s.kind, StepKind::Dynamic { .. }))
         .count();
     let mut dynamic_index = 0;
+    let np = mechanism.position_len();
     for step in &scene.steps {
         let basis = mechanism.free_basis(step)?;
         mechanism.prescribe(step, &mut at);
@@ -275,65 +453,113 @@ fn solve(
         if first_dynamic {
             u = mechanism.initial_velocity(scene);
             first_dynamic = false;
+            // A pair closed at t = 0 whose node already moves away from the surface opens.
+            let w = basis.transpose() * &u;
+            let full = &basis * &w;
+            for (k, a) in active.iter_mut().enumerate() {
+                let scale = full.amax().max(f64::MIN_POSITIVE);
+                if *a && mechanism.gap_rate(&at, &full, k) > 1e-12 * scale {
+                    *a = false;
+                    events.push(ContactEvent::Opening {
+                        contact: k,
+                        time: t0,
+                    });
+                }
+            }
         }
-        let mut w = mechanism.admissible(&at, &basis, &u)?;
+        let mut w = mechanism.admissible(&at, &basis, &u, &active)?;
+        let mut y = ode_solvers::DVector::zeros(np + w.len());
+        mechanism.pack(&at, &mut y.as_mut_slice()[..np]);
+        y.as_mut_slice()[np..].copy_from_slice(w.as_slice());
+        release(mechanism, &basis, &mut active, &y, t0, &mut events)?;
+        let mut leg = Leg {
+            mechanism,
+            basis: &basis,
+            rtol,
+            max_step,
+            steps: 0,
+            evaluations: 0,
+        };
         dynamic_index += 1;
         let end = t0 + duration;
-        let np = mechanism.position_len();
         let mut t = t0;
+        let check = interval / EVENT_CHECKS_PER_ROW as f64;
         // This step reports the output times up to its end (the last step: all the rest);
         // a time on a boundary belongs to the later step.
         while next < times.len() && (dynamic_index == dynamic_count || times[next] < end - tol) {
             let target = times[next];
-            if target > t + tol {
-                let mut y = ode_solvers::DVector::zeros(np + w.len());
-                mechanism.pack(&at, &mut y.as_mut_slice()[..np]);
-                y.as_mut_slice()[np..].copy_from_slice(w.as_slice());
-                let failure = RefCell::new(None);
-                let motion = Motion {
-                    mechanism,
-                    basis: &basis,
-                    error: &failure,
+            while target > t + tol {
+                let to = if target - t > 1.5 * check {
+                    t + check
+                } else {
+                    target
                 };
-                let mut stepper = ode_solvers::Dop853::from_param(
-                    motion,
-                    t,
-                    target,
-                    target - t,
-                    y,
-                    rtol,
-                    rtol * 1e-3,
-                    0.9,
-                    0.0,
-                    0.333,
-                    6.0,
-                    (target - t) * max_step,
-                    0.0,
-                    MAX_STEPS_PER_ROW,
-                    1000,
-                    ode_solvers::dop_shared::OutputType::Sparse,
-                );
-                let stats = stepper.integrate().map_err(|e| {
-                    EngineError::Failed(format!("reference: integration to t = {target:e}: {e}"))
-                });
-                if let Some(e) = failure.take() {
-                    return Err(e);
+                let reached = leg.run(&active, t, &y, to)?;
+                if !leg.fired(&active, &reached)? {
+                    (t, y) = (to, reached);
+                    continue;
                 }
-                let stats = stats?;
-                steps += u64::from(stats.accepted_steps);
-                evaluations += u64::from(stats.num_eval);
-                let y = stepper.y_out().last().expect("the end state").clone();
-                at = mechanism.unpack(y.as_slice());
-                w = DVector::from_column_slice(&y.as_slice()[np..]);
-                t = target;
+                // Bisect for the first event: none by `lo`, one by `hi`.
+                let (mut lo, mut hi, mut at_hi) = (t, to, reached);
+                for _ in 0..200 {
+                    let mid = 0.5 * (lo + hi);
+                    if mid <= lo || mid >= hi {
+                        break;
+                    }
+                    let state = leg.run(&active, t, &y, mid)?;
+                    if leg.fired(&active, &state)? {
+                        (hi, at_hi) = (mid, state);
+                    } else {
+                        lo = mid;
+                    }
+                }
+                t = hi;
+                y = at_hi;
+                let placed = mechanism.unpack(y.as_slice());
+                let mut wv = DVector::from_column_slice(&y.as_slice()[np..]);
+                let full = &basis * &wv;
+                let (gaps, _, _) = mechanism.constraints(&placed, &full, &active);
+                for k in 0..active.len() {
+                    if active[k] || gaps[k] >= 0.0 {
+                        continue;
+                    }
+                    let speed = -mechanism.gap_rate(&placed, &(&basis * &wv), k);
+                    fastest = fastest.max(speed);
+                    let e = mechanism.restitution(k);
+                    let rests = e == 0.0 || speed <= RESTING_SPEED * fastest;
+                    wv = mechanism.impact(
+                        &placed,
+                        &basis,
+                        &wv,
+                        &active,
+                        Some((k, if rests { 0.0 } else { e })),
+                    )?;
+                    events.push(ContactEvent::Impact {
+                        contact: k,
+                        time: t,
+                        speed,
+                        rebound: mechanism.gap_rate(&placed, &(&basis * &wv), k),
+                    });
+                    if rests {
+                        active[k] = true;
+                    }
+                }
+                y.as_mut_slice()[np..].copy_from_slice(wv.as_slice());
+                release(mechanism, &basis, &mut active, &y, t, &mut events)?;
+                if t >= target - tol {
+                    t = target;
+                }
             }
+            at = mechanism.unpack(y.as_slice());
+            w = DVector::from_column_slice(&y.as_slice()[np..]);
             let full = &basis * &w;
-            let evaluation = mechanism.evaluate(&at, &basis, &w)?;
-            let (gaps, _, _) = mechanism.constraints(&at, &full);
-            drift = gaps.iter().fold(drift, |m, g| m.max(g.abs()));
-            if evaluation.contact.iter().any(|&f| f < 0.0) {
-                valid = false;
-            }
+            let evaluation = mechanism.evaluate(&at, &basis, &w, &active)?;
+            let (gaps, _, _) = mechanism.constraints(&at, &full, &active);
+            drift = gaps
+                .iter()
+                .zip(&active)
+                .filter(|(_, a)| **a)
+                .fold(drift, |m, (g, _)| m.max(g.abs()));
             contact_history.push(evaluation.contact.first().copied().unwrap_or(0.0));
             let mut row = Vec::with_capacity(scene.columns.len() + 2);
             row.push(target);
@@ -355,7 +581,16 @@ fn solve(
                     Probe::Zero { .. } => 0.0,
                 });
             }
-            row.push(if valid { 1.0 } else { 0.0 });
+            if mechanism.contact_count() > 0 {
+                row.push(
+                    events
+                        .iter()
+                        .filter(|e| matches!(e, ContactEvent::Impact { .. }))
+                        .count() as f64,
+                );
+            }
+            // Exact through every contact event: every row is valid.
+            row.push(1.0);
             if row.iter().any(|x| !x.is_finite()) {
                 return Err(EngineError::Failed(format!(
                     "reference: a non-finite value at t = {target:e}"
@@ -364,11 +599,16 @@ fn solve(
             rows.push(row);
             next += 1;
         }
+        steps += leg.steps;
+        evaluations += leg.evaluations;
+        at = mechanism.unpack(y.as_slice());
+        w = DVector::from_column_slice(&y.as_slice()[np..]);
         u = &basis * &w;
         t0 = end;
     }
     let columns = std::iter::once("t".to_string())
         .chain(scene.columns.iter().map(|c| c.name.clone()))
+        .chain((mechanism.contact_count() > 0).then(|| IMPACTS_COLUMN.to_string()))
         .chain(std::iter::once(VALID_COLUMN.to_string()))
         .collect();
     Ok(Solution {
@@ -377,5 +617,6 @@ fn solve(
         drift,
         steps,
         evaluations,
+        events,
     })
 }

@@ -180,7 +180,7 @@ fn runs_are_deterministic_across_thread_counts() {
     // A CSV per case and engine, a budget CSV per case and stepping engine (all but the closed
     // form and the reference), and the summary.
     let stepping = engines::all().len() - 2;
-    // 24 cases: the 13 seed cases and the 11 of the stress family.
-    assert_eq!(snaps[0].len(), 24 * (engines::all().len() + stepping) + 1);
+    // 32 cases: the 13 seed cases and the 19 of the stress family.
+    assert_eq!(snaps[0].len(), 32 * (engines::all().len() + stepping) + 1);
     assert_eq!(snaps[0], snaps[1]);
 }

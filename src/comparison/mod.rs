@@ -17,6 +17,7 @@
 //! first increment, not the instantaneous force of the initial state, so the t = 0 value is
 //! measured separately (`initial_errors`) and reported beside the others, not mixed into them.
 
+pub mod contact;
 pub mod discrepancy;
 pub mod equivalence;
 pub mod stability;

@@ -167,6 +167,7 @@ pub fn render(
     }
 
     cross_check_section(w, s);
+    crate::report::contact::section(w, s);
 
     // Per case.
     let _ = writeln!(w, "\n## Cases");

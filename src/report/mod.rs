@@ -11,10 +11,12 @@
 //!   each accuracy costs;
 //! - [`stability`]: `stability/<engine>.csv` and `figures/stability-<engine>.svg`, where each
 //!   engine stays stable and accurate;
+//! - [`contact`]: the report's section on contact that opens and closes;
 //! - [`markdown`]: `REPORT.md`, rendered from the summary and the timings;
 //! - [`provenance`]: what was run (version, commit, compiler, rapier, machine, date);
 //! - [`staging`]: how a report is assembled beside its target and swapped into place.
 
+pub mod contact;
 pub mod data;
 pub mod figures;
 pub mod markdown;

@@ -1,6 +1,7 @@
 //! `summary.json`: every metric of a run, per case and engine, with what each run used and
 //! cost. REPORT.md is rendered from the same [`Summary`], so their numbers agree.
 
+use crate::comparison::contact::{self, Impacts};
 use crate::comparison::discrepancy::{ColumnBudget, JobBudget, PARTS};
 use crate::comparison::equivalence::{self, Equivalence};
 use crate::comparison::work_precision::{CaseSweep, Floor, ObservedOrder};
@@ -125,6 +126,10 @@ pub struct EngineSummary {
     /// Where the sweep stopped improving (value and named cause), where it did.
     #[serde(default)]
     pub floor: Option<Floor>,
+    /// Contact that opens and closes: impact times, energy per impact, first rebound
+    /// ([`comparison::contact`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub impacts: Option<Impacts>,
 }
 
 impl EngineSummary {
@@ -405,6 +410,7 @@ fn engine_summary(
             observed_order: None,
             order_fit: None,
             floor: None,
+            impacts: None,
         },
         Ok(s) => {
             let against = (job.engine != CLOSED_FORM)
@@ -434,6 +440,7 @@ fn engine_summary(
                 observed_order: None,
                 order_fit: None,
                 floor: None,
+                impacts: contact::measure(scene, &s.history, &s.info.measures),
             }
         }
     }

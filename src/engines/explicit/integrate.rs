@@ -31,6 +31,9 @@ pub struct Integration {
     pub stable: Option<StableIncrement>,
     /// Work counters.
     pub counters: Counters,
+    /// Times at which a contact pair closed (its penalty force turned positive after an
+    /// increment without force): the impacts, to the increment.
+    pub impacts: Vec<f64>,
 }
 
 const MAX_DAMPING_ITERATIONS: usize = 100;
@@ -312,6 +315,10 @@ pub fn integrate<S: Space, const FINITE: bool>(
     let solids = model.has_solids();
     let (mut solid_before, mut solid_now) = (Vec::new(), Vec::new());
     let mut entry = Vec::new();
+    // Whether each pair pressed at the last increment (None before the first), and the
+    // impacts: the increments where a pair that did not press starts to.
+    let mut pressed: Vec<Option<bool>> = vec![None; model.contact_count()];
+    let mut impacts = Vec::new();
     let mut watching = false;
     if settings.damping == DampingTreatment::Lagged && model.has_contact_dashpots() {
         return Err(EngineError::Unsupported(
@@ -355,9 +362,9 @@ pub fn integrate<S: Space, const FINITE: bool>(
         model.enforce(&mut vel, &held);
         if !started {
             // The consistent start carries the rigid model's persistent contact forces: for
-            // planes closed at t = 0 (a solid, or a pair that starts open, starts as it is).
+            // pairs closed at t = 0 (a pair that starts open starts as it is).
             if model.contact_count() > 0
-                && model.closed_planes_only()
+                && model.closed_only()
                 && settings.contact_start == ContactStart::Consistent
             {
                 consistent_start(&model, &mut cfg, &mut vel, &held, h, &mut counters);
@@ -407,6 +414,13 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 return Err(EngineError::Failed(format!("interrupted at increment {n}")));
             }
             model.forces(&cfg, ContactMode::Unilateral, &mut forces, &mut counters);
+            for (was, force) in pressed.iter_mut().zip(&forces.contact) {
+                let now = *force > 0.0;
+                if now && *was == Some(false) {
+                    impacts.push(n as f64 * h);
+                }
+                *was = Some(now);
+            }
             if solids {
                 model.solid_positions(&cfg, &mut solid_now);
                 if watching
@@ -656,6 +670,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
         steps: n_global,
         stable,
         counters,
+        impacts,
     })
 }
 

@@ -14,6 +14,9 @@ use space::{Planar, Spatial};
 use std::collections::BTreeMap;
 use std::time::Instant;
 
+/// Impacts whose times are reported as measures (`impact_<i>_time`; `impacts` counts all).
+const IMPACTS_REPORTED: usize = 5;
+
 /// Rotation kinematics of rigid bodies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Kinematics {
@@ -84,6 +87,12 @@ impl Engine for ExplicitEngine {
         ]);
         if let Some(n) = pilot_increments {
             counters.insert("pilot_increments".to_string(), n);
+        }
+        if !scene.contacts.is_empty() {
+            measures.insert("impacts".to_string(), run.impacts.len() as f64);
+            for (i, t) in run.impacts.iter().take(IMPACTS_REPORTED).enumerate() {
+                measures.insert(format!("impact_{}_time", i + 1), *t);
+            }
         }
         Ok(RunOutput {
             engine: self.name().to_string(),

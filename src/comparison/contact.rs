@@ -1,0 +1,116 @@
+//! Contact that opens and closes, measured from each run: when it strikes, what each impact
+//! does to the energy, and how high the first rebound rises (what the report's contact
+//! section shows against the event-driven `reference`).
+
+use crate::contract::{E_ELASTIC, E_KINETIC, History, W_EXTERNAL};
+use crate::scene::{ContactState, Probe, Scene, parallel, surface_distance};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// What a run did at its contact events.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Impacts {
+    /// Impact times: the engine's own (`impact_<i>_time` measures: the reference's located
+    /// events, the explicit engine's increments) or, for an engine that reports none, the
+    /// rows where the first pair's contact force turns positive.
+    pub times: Vec<f64>,
+    /// How many impacts the engine counted (where it reports them).
+    pub count: Option<u64>,
+    /// Per impact (engines that keep energies): mechanical energy (kinetic + elastic − work
+    /// of the loads) after it minus before, over the kinetic energy before; from the rows
+    /// bracketing it (the last before, the first after the force is released).
+    pub energy_change: Vec<f64>,
+    /// The first impact's rebound height over the drop (a scene with one pair that starts
+    /// open, whose `ux_node` column measures its node along the surface normal).
+    pub rebound: Option<f64>,
+}
+
+/// The contact events of one run, for a scene where contact opens and closes (a pair that
+/// starts open, or a run that counted impacts); `None` otherwise.
+pub fn measure(
+    scene: &Scene,
+    history: &History,
+    measures: &BTreeMap<String, f64>,
+) -> Option<Impacts> {
+    if scene.contacts.is_empty() {
+        return None;
+    }
+    let opens = scene
+        .contacts
+        .iter()
+        .any(|c| c.initially == ContactState::Open);
+    let count = measures.get("impacts").map(|n| *n as u64);
+    if !opens && count.unwrap_or(0) == 0 {
+        return None;
+    }
+    let t = history.column("t")?;
+    let force = history.column("contact_force")?;
+    let mut times: Vec<f64> = (1..)
+        .map_while(|i| measures.get(&format!("impact_{i}_time")).copied())
+        .collect();
+    if count.is_none() {
+        times = (1..t.len())
+            .filter(|&i| force[i] > 0.0 && force[i - 1] <= 0.0)
+            .map(|i| t[i])
+            .collect();
+    }
+    let energy = match (
+        history.column(E_KINETIC),
+        history.column(E_ELASTIC),
+        history.column(W_EXTERNAL),
+    ) {
+        (Some(k), Some(e), Some(w)) => Some((k, e, w)),
+        _ => None,
+    };
+    let mut energy_change = Vec::new();
+    if let Some((kinetic, elastic, work)) = &energy {
+        for &at in &times {
+            let Some(before) = t.iter().rposition(|x| *x < at) else {
+                continue;
+            };
+            let Some(after) = (before + 1..t.len()).find(|&i| t[i] > at && force[i] <= 0.0) else {
+                continue;
+            };
+            let mechanical = |i: usize| kinetic[i] + elastic[i] - work[i];
+            if kinetic[before] > 0.0 {
+                energy_change.push((mechanical(after) - mechanical(before)) / kinetic[before]);
+            }
+        }
+    }
+    Some(Impacts {
+        rebound: rebound(scene, history, &times),
+        times,
+        count,
+        energy_change,
+    })
+}
+
+/// The first rebound's height over the drop, measured on `ux_node` (see [`Impacts::rebound`]).
+fn rebound(scene: &Scene, history: &History, times: &[f64]) -> Option<f64> {
+    let [pair] = scene.contacts.as_slice() else {
+        return None;
+    };
+    if pair.initially != ContactState::Open {
+        return None;
+    }
+    let column = scene.columns.iter().find(|c| c.name == "ux_node")?;
+    let Probe::Displacement { node, direction } = &column.probe else {
+        return None;
+    };
+    let (drop, normal) = surface_distance(&pair.surface, &scene.nodes[*node].position);
+    if *node != pair.node || !parallel(direction, &normal) {
+        return None;
+    }
+    let sign = direction.dot(&normal).signum();
+    let t = history.column("t")?;
+    let x = history.column("ux_node")?;
+    let first = *times.first()?;
+    let until = times.get(1).copied().unwrap_or(f64::INFINITY);
+    let apex = t
+        .iter()
+        .zip(&x)
+        .filter(|(t, _)| **t > first && **t < until)
+        .map(|(_, x)| sign * x)
+        .fold(f64::NEG_INFINITY, f64::max);
+    apex.is_finite().then(|| (drop + apex) / drop)
+}

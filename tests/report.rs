@@ -117,6 +117,18 @@ fn summary_and_report_agree() {
             )
             .unwrap()
         };
+        if c.runs
+            .iter()
+            .any(|r| r.engine == "analytic" && r.error.is_some())
+        {
+            // No closed form (contact that opens and closes): nothing is measured against it.
+            assert!(
+                c.runs.iter().all(|r| r.against_analytic.is_none()),
+                "{}",
+                c.id
+            );
+            continue;
+        }
         let closed_form = csv("analytic");
         for r in &c.runs {
             let Some(a) = &r.against_analytic else {
@@ -239,7 +251,13 @@ fn verdict_matrix_equals_the_summary_and_every_link_resolves() {
                 cells += 1;
                 continue;
             }
-            let figure = sci(run.against_baseline.as_ref().unwrap().worst_max);
+            let Some(judged) = &run.against_baseline else {
+                // Judged against nothing: the reference where the closed form does not apply.
+                assert_eq!(row[k], "–", "{} / {engine}", case.id);
+                cells += 1;
+                continue;
+            };
+            let figure = sci(judged.worst_max);
             let expected = match run.meets_tolerance {
                 Some(true) => format!("✓ {figure}"),
                 Some(false) => format!("✗ {figure}"),
@@ -370,6 +388,7 @@ fn the_contact_section_shows_the_summarys_rebounds() {
     {
         let line = report
             .lines()
+            .skip_while(|l| !l.starts_with("| case | e | e² |"))
             .find(|l| l.starts_with(&format!("| {} | ", c.id)))
             .unwrap_or_else(|| panic!("{}: no restitution row", c.id));
         let cells: Vec<&str> = line.split('|').map(str::trim).collect();

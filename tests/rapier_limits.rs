@@ -1,7 +1,9 @@
 //! Rapier where the problem gets hard: its implicit springs lose energy as backward Euler
-//! predicts, and f32 loses the pinned case's accuracy as the scene moves away from the origin.
+//! predicts, f32 loses the pinned case's accuracy as the scene moves away from the origin, and
+//! a fast node tunnels through a thin cuboid unless CCD is on.
 mod common;
 
+use crosscheck::case;
 use crosscheck::comparison::compare;
 use crosscheck::engines::rapier::{Precision, RapierEngine};
 use crosscheck::engines::reference::ReferenceEngine;
@@ -142,4 +144,127 @@ fn f32_loses_the_pinned_case_far_from_the_origin() {
     // contact turns such offsets into forces. The error cannot stay below 0.1 of the peak
     // (measured: 268, the run is lost).
     assert!(far >= 0.1, "f32 at 1e5: error {far:e}");
+}
+
+/// The elastic drop turned into a shot at a cuboid 2 mm thick: the node starts 0.1 above its
+/// top face moving down at `speed`, for 1 s (the gravity load stays: negligible here).
+fn shot(speed: f64) -> crosscheck::scene::Scene {
+    let path = case::stress_dir(&case::cases_dir()).join("contact_drop_e1.toml");
+    let text = std::fs::read_to_string(&path)
+        .unwrap()
+        .replace("half_extents = [0.05, 0.5]", "half_extents = [0.001, 0.5]")
+        .replace("centre = [-0.05, 0.0]", "centre = [-0.001, 0.0]")
+        .replace(
+            "at = [1.0, 0.0]\n\n# The block",
+            "at = [0.1, 0.0]\n\n# The block",
+        )
+        .replace("increment = 1.0e-5", "increment = 1.0e-4")
+        .replace(
+            "[[steps]]",
+            &format!(
+                "[[initial_velocities]]\nnode = \"N\"\nvelocity = [{:e}, 0.0]\n\n[[steps]]",
+                -speed
+            ),
+        );
+    case::parse(&text, &path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Where a shot node ends.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Ending {
+    /// On or above the top face (x = -0.1, within 1e-4): it bounced or stopped on it.
+    Held,
+    /// Inside the cuboid.
+    Inside,
+    /// Below the bottom face (x = -0.102): through.
+    Through,
+}
+
+fn ending(engine: &dyn Engine, speed: f64) -> Ending {
+    let out = engine
+        .run(&shot(speed), &RunSettings::default())
+        .unwrap_or_else(|e| panic!("{} at {speed}: {e}", engine.name()));
+    let x = *column(&out.history, "ux_node").last().unwrap();
+    if x >= -0.1001 {
+        Ending::Held
+    } else if x > -0.102 {
+        Ending::Inside
+    } else {
+        Ending::Through
+    }
+}
+
+/// Shot speeds and how each ends.
+type Shots<'a> = &'a [(f64, Ending)];
+
+/// Rapier's tunnelling through a cuboid 2 mm thick, with and without its continuous collision
+/// detection (CCD), frozen as measured with rapier 0.36 (f64; f32 the same), and the explicit
+/// engine on the same shots: held or refused, never through.
+///
+/// - Matched (h = 1e-4 s): held up to 20 m/s, through from 21 m/s: a node that moves more
+///   than the thickness in one step (v·h > 2e-3) is never seen inside it. Above that the
+///   ending depends on where the steps fall (inside at 50 m/s, held at 100, through from 300).
+/// - Matched with CCD: held at every speed tried, up to 3000 m/s.
+/// - Default (1/60 s): through from 2 m/s (v·h = 3.3e-2); at 1.5 m/s it ends inside.
+/// - Default with CCD: still through at 2 and 2.5 m/s (its soft contact cannot stop the node
+///   within the step CCD puts it at the surface), held from 10 m/s up.
+#[test]
+fn rapier_tunnels_where_a_step_outruns_the_thickness_and_explicit_never_does() {
+    use Ending::*;
+    let matched = RapierEngine::matched(Precision::F64);
+    let default = RapierEngine::default_configuration(Precision::F64);
+    let cases: [(&dyn Engine, Shots); 4] = [
+        (
+            &matched,
+            &[
+                (20.0, Held),
+                (21.0, Through),
+                (300.0, Through),
+                (3000.0, Through),
+            ],
+        ),
+        (
+            &RapierEngine::matched(Precision::F64).with_ccd(),
+            &[(20.0, Held), (21.0, Held), (300.0, Held), (3000.0, Held)],
+        ),
+        (
+            &default,
+            &[
+                (1.5, Inside),
+                (2.0, Through),
+                (30.0, Through),
+                (3000.0, Through),
+            ],
+        ),
+        (
+            &RapierEngine::default_configuration(Precision::F64).with_ccd(),
+            &[(2.0, Through), (2.5, Through), (21.0, Held), (3000.0, Held)],
+        ),
+    ];
+    for (engine, expected) in cases {
+        for (speed, end) in expected {
+            assert_eq!(
+                ending(engine, *speed),
+                *end,
+                "{} at {speed} m/s",
+                engine.name()
+            );
+        }
+    }
+    // The explicit engine (k_p = 1e7, h = 1e-4) holds the slow shots and refuses the fast
+    // ones, naming what would catch them.
+    let explicit = crosscheck::engines::explicit::ExplicitEngine::finite();
+    for speed in [1.0, 2.0, 21.0, 300.0, 3000.0] {
+        match explicit.run(&shot(speed), &RunSettings::default()) {
+            Ok(out) => {
+                let x = *column(&out.history, "ux_node").last().unwrap();
+                assert!(x >= -0.1001, "explicit at {speed}: ends at {x}");
+                assert!(speed < 3.0, "explicit at {speed}: held");
+            }
+            Err(e) => {
+                assert!(e.to_string().contains("went through the cuboid"), "{e}");
+                assert!(speed > 3.0, "explicit at {speed}: refused");
+            }
+        }
+    }
 }

@@ -314,7 +314,6 @@ pub fn integrate<S: Space, const FINITE: bool>(
     // Solid contacts are watched for a node going through its solid.
     let solids = model.has_solids();
     let (mut solid_before, mut solid_now) = (Vec::new(), Vec::new());
-    let mut entry = Vec::new();
     // Whether each pair pressed at the last increment (None before the first), and the
     // impacts: the increments where a pair that did not press starts to.
     let mut pressed: Vec<Option<bool>> = vec![None; model.contact_count()];
@@ -423,9 +422,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
             }
             if solids {
                 model.solid_positions(&cfg, &mut solid_now);
-                if watching
-                    && let Some((k, moved)) =
-                        model.through_solid(&solid_before, &solid_now, &mut entry)
+                if watching && let Some((k, moved)) = model.through_solid(&solid_before, &solid_now)
                 {
                     return Err(through_solid(scene, k, moved / h, h, n as f64 * h));
                 }

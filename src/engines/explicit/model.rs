@@ -852,40 +852,26 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     }
 
     /// The first solid contact whose node went through its solid between two sets of
-    /// [`Model::solid_positions`]: crossed it within one increment (outside before and after,
-    /// on opposite sides, the segment through it), or, inside it, came nearer the far side than the side it
-    /// entered by (its nearest face turned against the one it entered through: the penalty
-    /// now pushes it out of the far side). `entry` keeps each pair's entry normal. Returns the
-    /// pair and the distance moved relative to the solid in the increment.
+    /// [`Model::solid_positions`] one increment apart: its nearest side turned over (the
+    /// normal there reversed) while it was inside before or after, so it passed the solid's
+    /// middle and the penalty now pushes it out of the far side; or it crossed the solid
+    /// within the increment, outside before and after. A node sliding on a surface turns its
+    /// normal smoothly and is never taken for one. Returns the pair and the distance moved
+    /// relative to the solid in the increment.
     pub fn through_solid(
         &self,
         before: &[Option<SolidPosition<S>>],
         after: &[Option<SolidPosition<S>>],
-        entry: &mut Vec<Option<S::V>>,
     ) -> Option<(usize, f64)> {
-        entry.resize(self.contacts.len(), None);
         for (k, c) in self.contacts.iter().enumerate() {
             let (Some(a), Some(b), Some((_, shape))) = (&before[k], &after[k], &c.solid) else {
                 continue;
             };
-            let moved = b.local - a.local;
-            let distance = moved.dot(&moved).sqrt();
-            if a.gap >= 0.0 && b.gap >= 0.0 {
-                entry[k] = None;
-                // Through it: onto the far side (not a chord of a curved surface it slides on).
-                if b.normal.dot(&a.normal) < 0.0 && S::crosses(shape, &a.local, &b.local) {
-                    return Some((k, distance));
-                }
-                continue;
-            }
-            if b.gap < 0.0 {
-                let inward =
-                    *entry[k].get_or_insert(if a.gap >= 0.0 { a.normal } else { b.normal });
-                if b.normal.dot(&inward) < 0.0 {
-                    return Some((k, distance));
-                }
-            } else {
-                entry[k] = None;
+            let turned = b.normal.dot(&a.normal) < 0.0;
+            let outside = a.gap >= 0.0 && b.gap >= 0.0;
+            if turned && (!outside || S::crosses(shape, &a.local, &b.local)) {
+                let moved = b.local - a.local;
+                return Some((k, moved.dot(&moved).sqrt()));
             }
         }
         None

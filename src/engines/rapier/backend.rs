@@ -23,6 +23,9 @@ pub struct Run {
     pub dt: f64,
     /// Matched settings, or `None` for rapier's defaults.
     pub matched: Option<MatchedSettings>,
+    /// Continuous collision detection on the particles (rapier's CCD; off in both
+    /// configurations, on for the tunnelling study).
+    pub ccd: bool,
 }
 
 /// The state after a step (or at the start of a dynamic step).
@@ -264,6 +267,7 @@ macro_rules! backend {
                                 .lock_rotations()
                                 .additional_mass(b.mass as Real)
                                 .linvel(vector(&b.linvel))
+                                .ccd_enabled(run.ccd)
                                 .can_sleep(false),
                             BodyKind::Rigid => RigidBodyBuilder::dynamic()
                                 .pose(at)

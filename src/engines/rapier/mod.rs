@@ -158,6 +158,7 @@ pub struct RapierEngine {
     name: String,
     precision: Precision,
     configuration: Configuration,
+    ccd: bool,
 }
 
 impl RapierEngine {
@@ -185,7 +186,16 @@ impl RapierEngine {
             name,
             precision,
             configuration,
+            ccd: false,
         }
+    }
+
+    /// The same engine with rapier's continuous collision detection on every particle (the
+    /// tunnelling study), named with a `_ccd` suffix.
+    pub fn with_ccd(mut self) -> Self {
+        self.ccd = true;
+        self.name.push_str("_ccd");
+        self
     }
 
     /// The configuration.
@@ -208,6 +218,7 @@ impl RapierEngine {
         let run = backend::Run {
             dt,
             matched: solver,
+            ccd: self.ccd,
         };
         let mut recorder = record::Recorder::new(scene, &plan);
         let mut sink = |r: backend::Record| recorder.push(r);

@@ -42,6 +42,10 @@ pub const VALID_COLUMN: &str = "valid";
 /// compared only on the rows before the first impact.
 pub const IMPACTS_COLUMN: &str = "impacts";
 
+/// Contact events whose times an engine reports as measures (`impact_<i>_time` for i up to
+/// this; the measure `impacts` counts them all).
+pub const IMPACTS_REPORTED: usize = 5;
+
 /// The fewest output rows a history may have.
 pub const MIN_ROWS: usize = 200;
 

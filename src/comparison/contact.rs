@@ -11,14 +11,15 @@ use std::collections::BTreeMap;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Impacts {
     /// Impact times: the engine's own (`impact_<i>_time` measures: the reference's located
-    /// events, the explicit engine's increments) or, for an engine that reports none, the
-    /// rows where the first pair's contact force turns positive.
+    /// events, the explicit engine's increments, rapier's steps) or, for an engine that
+    /// reports none, the rows where the first pair's contact force turns positive.
     pub times: Vec<f64>,
     /// How many impacts the engine counted (where it reports them).
     pub count: Option<u64>,
     /// Per impact (engines that keep energies): mechanical energy (kinetic + elastic − work
     /// of the loads) after it minus before, over the kinetic energy before; from the rows
-    /// bracketing it (the last before, the first after the force is released).
+    /// bracketing it (the last before the increment that holds it; after, the first where the
+    /// force is released or, for a pair that comes to rest, the last before the next impact or the run's end).
     pub energy_change: Vec<f64>,
     /// The first impact's rebound height over the drop (a scene with one pair that starts
     /// open, whose `ux_node` column measures its node along the surface normal).
@@ -26,11 +27,14 @@ pub struct Impacts {
 }
 
 /// The contact events of one run, for a scene where contact opens and closes (a pair that
-/// starts open, or a run that counted impacts); `None` otherwise.
+/// starts open, or a run that counted impacts); `None` otherwise. `increment` is the run's
+/// (0 for the reference): an impact reported at time t happened within the increment before
+/// it, so the energy before it is read at t − increment or earlier.
 pub fn measure(
     scene: &Scene,
     history: &History,
     measures: &BTreeMap<String, f64>,
+    increment: f64,
 ) -> Option<Impacts> {
     if scene.contacts.is_empty() {
         return None;
@@ -64,11 +68,18 @@ pub fn measure(
     };
     let mut energy_change = Vec::new();
     if let Some((kinetic, elastic, work)) = &energy {
-        for &at in &times {
-            let Some(before) = t.iter().rposition(|x| *x < at) else {
+        for (n, &at) in times.iter().enumerate() {
+            let Some(before) = t.iter().rposition(|x| *x < at - increment) else {
                 continue;
             };
-            let Some(after) = (before + 1..t.len()).find(|&i| t[i] > at && force[i] <= 0.0) else {
+            // After: the first row where the pair has let go; a pair that comes to rest never
+            // does, and then it is the last row before the next impact (or the run's end).
+            let until = times.get(n + 1).copied().unwrap_or(f64::INFINITY);
+            let resting = t.iter().rposition(|x| *x < until).filter(|&i| i > before);
+            let Some(after) = (before + 1..t.len())
+                .find(|&i| t[i] > at && t[i] < until && force[i] <= 0.0)
+                .or(resting)
+            else {
                 continue;
             };
             let mechanical = |i: usize| kinetic[i] + elastic[i] - work[i];

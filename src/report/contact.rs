@@ -92,10 +92,13 @@ pub fn section(w: &mut String, s: &Summary) {
     let _ = writeln!(
         w,
         "First impact: its time (reference) and each engine's, as the difference in increments \
-         of that engine (rapier's default: its 1/60 s step; rows where an engine reports no \
-         impact times of its own); impacts counted; the energy change over the first impact \
-         (kinetic + elastic − work of the loads, after minus before, over the kinetic energy \
-         before: −(1 − e²) for restitution e, 0 for an elastic impact):\n"
+         of that engine (explicit: the first increment with a contact force; rapier: the middle \
+         of its first step with a contact impulse, 1/60 s long in the default configuration); \
+         impacts counted; the energy change over the first impact (kinetic + elastic − work of \
+         the loads, after minus before, over the kinetic energy before: −(1 − e²) for \
+         restitution e, 0 for an elastic impact; after is the first row where the contact has \
+         let go or, where it comes to rest, the last row before the next impact; the reference \
+         keeps no energies, its impacts follow the law exactly):\n"
     );
     let _ = writeln!(
         w,

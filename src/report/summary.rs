@@ -440,7 +440,7 @@ fn engine_summary(
                 observed_order: None,
                 order_fit: None,
                 floor: None,
-                impacts: contact::measure(scene, &s.history, &s.info.measures),
+                impacts: contact::measure(scene, &s.history, &s.info.measures, s.info.increment),
             }
         }
     }

@@ -153,11 +153,13 @@ pub(crate) fn choose_increment(
 
 /// Contact forces that make every gap's second derivative vanish (the rigid model's forces at
 /// this state), the accelerations they give, and B = ∂(gap accelerations)/∂(forces).
+/// `tau` (the increment) bounds the finite-difference interval of a solid's gap acceleration.
 fn consistent_forces<S: Space, const FINITE: bool>(
     model: &Model<S, FINITE>,
     cfg: &Config<S>,
     vel: &Rates<S>,
     held: &Constraints<S>,
+    tau: f64,
     counters: &mut Counters,
 ) -> Option<(DVector<f64>, Rates<S>, DMatrix<f64>)> {
     let n = model.contact_count();
@@ -170,7 +172,7 @@ fn consistent_forces<S: Space, const FINITE: bool>(
         let mut acc = model.zero_rates();
         model.accelerations(cfg, &f, vel, held, &mut acc, counters);
         (
-            DVector::from_fn(n, |k, _| model.gap_acceleration(cfg, vel, &acc, k)),
+            DVector::from_fn(n, |k, _| model.gap_acceleration(cfg, vel, &acc, k, tau)),
             acc,
         )
     };
@@ -205,14 +207,14 @@ fn consistent_start<S: Space, const FINITE: bool>(
 ) {
     // Two passes: moving the node changes the springs attached to it slightly.
     for _ in 0..2 {
-        let Some((f, _, _)) = consistent_forces(model, cfg, vel, held, counters) else {
+        let Some((f, _, _)) = consistent_forces(model, cfg, vel, held, tau, counters) else {
             return;
         };
         for (k, fk) in f.iter().enumerate() {
             model.set_penetration(cfg, k, fk / model.penalty);
         }
     }
-    let Some((f0, acc, b)) = consistent_forces(model, cfg, vel, held, counters) else {
+    let Some((f0, acc, b)) = consistent_forces(model, cfg, vel, held, tau, counters) else {
         return;
     };
     // Along the rigid trajectory, extrapolated ±τ. The rigid force depends on velocities
@@ -220,7 +222,7 @@ fn consistent_start<S: Space, const FINITE: bool>(
     // extrapolated to second order: the jerk comes from a first pass.
     let mut at = |s: f64, jerk: &Rates<S>| {
         let (c, v) = model.extrapolate(cfg, vel, &acc, jerk, s);
-        consistent_forces(model, &c, &v, held, counters)
+        consistent_forces(model, &c, &v, held, tau, counters)
     };
     let zero = model.zero_rates();
     let (Some((_, acc_ahead, _)), Some((_, acc_behind, _))) = (at(tau, &zero), at(-tau, &zero))
@@ -360,8 +362,9 @@ pub fn integrate<S: Space, const FINITE: bool>(
         }
         model.enforce(&mut vel, &held);
         if !started {
-            // The consistent start carries the rigid model's persistent contact forces: for
-            // pairs closed at t = 0 (a pair that starts open starts as it is).
+            // The consistent start carries the rigid model's persistent contact forces, which
+            // treat every pair as closed: only when every pair starts closed. A scene with a
+            // pair open at t = 0 starts as it is.
             if model.contact_count() > 0
                 && model.closed_only()
                 && settings.contact_start == ContactStart::Consistent

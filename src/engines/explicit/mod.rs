@@ -14,9 +14,6 @@ use space::{Planar, Spatial};
 use std::collections::BTreeMap;
 use std::time::Instant;
 
-/// Impacts whose times are reported as measures (`impact_<i>_time`; `impacts` counts all).
-const IMPACTS_REPORTED: usize = 5;
-
 /// Rotation kinematics of rigid bodies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Kinematics {
@@ -90,7 +87,12 @@ impl Engine for ExplicitEngine {
         }
         if !scene.contacts.is_empty() {
             measures.insert("impacts".to_string(), run.impacts.len() as f64);
-            for (i, t) in run.impacts.iter().take(IMPACTS_REPORTED).enumerate() {
+            for (i, t) in run
+                .impacts
+                .iter()
+                .take(crate::contract::IMPACTS_REPORTED)
+                .enumerate()
+            {
                 measures.insert(format!("impact_{}_time", i + 1), *t);
             }
         }

@@ -1569,13 +1569,16 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// accelerations (finite: the face point and normal rotate with the body). On a solid,
     /// whose curvature parry does not give, it is the central difference of the gap's rate
     /// along the motion extrapolated ±τ, τ small enough that the node moves 1e-6 of the
-    /// solid's half thickness (truncation ~1e-12, round-off ~1e-10 of the rate's scale).
+    /// solid's half thickness relative to the body and the body turns 1e-6 rad (truncation
+    /// ~1e-12, round-off ~1e-10 of the rate's scale), and at most `longest` (the increment:
+    /// a node at rest on a still solid has no scale of its own).
     pub fn gap_acceleration(
         &self,
         cfg: &Config<S>,
         vel: &Rates<S>,
         acc: &Rates<S>,
         k: usize,
+        longest: f64,
     ) -> f64 {
         let c = &self.contacts[k];
         let (i, b) = (c.particle, c.body);
@@ -1584,9 +1587,16 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 SharedSolid::Planar(s, _) => s.compute_local_aabb().half_extents().min_element(),
                 SharedSolid::Spatial(s, _) => s.compute_local_aabb().half_extents().min_element(),
             };
-            let speed = vel.p[i].dot(&vel.p[i]).sqrt().max(f64::MIN_POSITIVE);
-            let pace = acc.p[i].dot(&acc.p[i]).sqrt().max(f64::MIN_POSITIVE);
-            let tau = 1e-6 * (depth / speed).min((depth / pace).sqrt());
+            // The node's motion relative to the body point it touches: a body carrying the
+            // pair fast through space does not shrink τ.
+            let arm = self.contact_arm(cfg, k);
+            let (w, alpha) = (vel.w[b], acc.w[b]);
+            let v = vel.p[i] - vel.b[b] - S::cross(&w, &arm);
+            let a =
+                acc.p[i] - acc.b[b] - S::cross(&alpha, &arm) - S::cross(&w, &S::cross(&w, &arm));
+            let (speed, pace, spin) = (v.dot(&v).sqrt(), a.dot(&a).sqrt(), w.dot(&w).sqrt());
+            let tau =
+                (1e-6 * (depth / speed).min((depth / pace).sqrt()).min(1.0 / spin)).min(longest);
             let zero = self.zero_rates();
             let rate = |s: f64| {
                 let (c, v) = self.extrapolate(cfg, vel, acc, &zero, s);

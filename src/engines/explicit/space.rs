@@ -130,9 +130,7 @@ pub enum SharedSolid<S: Space> {
     Spatial(parry3d_f64::shape::SharedShape, PhantomData<S>),
 }
 
-/// Signed distance and outward normal from a projection: `delta` = query − projected point.
-/// A query exactly on the boundary has no direction of its own: the normal is then the
-/// central difference of the signed distance, `probe` builds it.
+/// The signed distance (negative inside) from a projection's distance and side.
 fn signed(distance: f64, inside: bool) -> f64 {
     if inside { -distance } else { distance }
 }

@@ -169,7 +169,9 @@ macro_rules! backend {
                 JointAxesMask, JointAxis, MassProperties, MotorModel, RigidBodyBuilder,
                 RigidBodyHandle, SpringCoefficients, SpringJointBuilder,
             };
-            use rp::geometry::{ColliderBuilder, ColliderHandle};
+            use rp::geometry::{
+                ColliderBuilder, ColliderHandle, Group, InteractionGroups, InteractionTestMode,
+            };
             use rp::math::Real;
             use rp::pipeline::PhysicsWorld;
             use $krate as rp;
@@ -282,11 +284,18 @@ macro_rules! backend {
                     })
                     .collect();
 
-                // Each collider takes its pair's restitution (rapier averages the two).
+                // Each collider takes its pair's restitution (rapier averages the two), and its
+                // pair's collision group: a pair's ball touches only its own slab or solid (two
+                // pairs on one node would otherwise each push the node off both surfaces; pairs
+                // 32 apart share a group).
                 let mut restitution = vec![0.0; plan.colliders.len()];
-                for c in &plan.contacts {
+                let mut groups = vec![Group::NONE; plan.colliders.len()];
+                for (k, c) in plan.contacts.iter().enumerate() {
                     restitution[c.ball] = c.restitution;
                     restitution[c.slab] = c.restitution;
+                    let group = Group::from_bits_truncate(1 << (k % 32));
+                    groups[c.ball] = group;
+                    groups[c.slab] = group;
                 }
                 let colliders: Vec<ColliderHandle> = plan
                     .colliders
@@ -303,7 +312,12 @@ macro_rules! backend {
                         .position(pose(&c.frame))
                         .density(0.0)
                         .friction(0.0)
-                        .restitution(restitution[i] as Real);
+                        .restitution(restitution[i] as Real)
+                        .collision_groups(InteractionGroups::new(
+                            groups[i],
+                            groups[i],
+                            InteractionTestMode::And,
+                        ));
                         world.colliders.insert_with_parent(
                             builder,
                             handles[c.body],

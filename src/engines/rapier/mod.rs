@@ -312,6 +312,18 @@ impl Engine for RapierEngine {
                 .insert("pilot_increments".to_string(), pilots);
             output.info.wall_seconds = start.elapsed().as_secs_f64();
         }
+        if !scene.contacts.is_empty() {
+            let m = &mut output.info.measures;
+            m.insert("impacts".to_string(), diagnostics.impacts.len() as f64);
+            for (i, t) in diagnostics
+                .impacts
+                .iter()
+                .take(crate::contract::IMPACTS_REPORTED)
+                .enumerate()
+            {
+                m.insert(format!("impact_{}_time", i + 1), *t);
+            }
+        }
         for (k, contact) in scene.contacts.iter().enumerate() {
             for (name, values) in [
                 ("mean_penetration", &diagnostics.mean_penetration),

@@ -36,6 +36,10 @@ pub struct Diagnostics {
     pub max_penetration: Vec<f64>,
     /// Largest separation (gap > 0).
     pub max_separation: Vec<f64>,
+    /// Impact times, every pair's in the order they came: the middle of each step where a
+    /// pair that had no contact impulse in the step before gets one (rapier's impulse acts
+    /// somewhere within that step; the contact-force column places it at the middle too).
+    pub impacts: Vec<f64>,
 }
 
 struct Kinematics<'a> {
@@ -183,6 +187,9 @@ pub struct Recorder<'a> {
     penetration_sum: Vec<f64>,
     max_penetration: Vec<f64>,
     max_separation: Vec<f64>,
+    /// Per pair, whether the last step had a contact impulse (`None` before the first step).
+    pressed: Vec<Option<bool>>,
+    impacts: Vec<f64>,
     counted: usize,
 }
 
@@ -221,6 +228,8 @@ impl<'a> Recorder<'a> {
             penetration_sum: vec![0.0; nc],
             max_penetration: vec![0.0; nc],
             max_separation: vec![0.0; nc],
+            pressed: vec![None; nc],
+            impacts: Vec::new(),
             counted: 0,
         }
     }
@@ -244,8 +253,15 @@ impl<'a> Recorder<'a> {
                 self.max_penetration[c] = self.max_penetration[c].max(-gap);
                 self.max_separation[c] = self.max_separation[c].max(gap);
             }
-            self.middles
-                .push_back((0.5 * (p.time + record.time), f.clone()));
+            let middle = 0.5 * (p.time + record.time);
+            for (was, force) in self.pressed.iter_mut().zip(f) {
+                let now = *force > 0.0;
+                if now && *was == Some(false) {
+                    self.impacts.push(middle);
+                }
+                *was = Some(now);
+            }
+            self.middles.push_back((middle, f.clone()));
         }
         // Rows the new record has passed: the previous record is the last at or before them.
         while self.next < self.times.len() && record.time > self.times[self.next] + self.tol {
@@ -404,6 +420,7 @@ impl<'a> Recorder<'a> {
                 .collect(),
             max_penetration: self.max_penetration,
             max_separation: self.max_separation,
+            impacts: self.impacts,
         };
         Ok((
             History {

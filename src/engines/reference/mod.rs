@@ -1,44 +1,47 @@
 //! `reference`: the converged solution of each case's own finite-rotation model, the one the
 //! finite-rotation engines approximate as the increment goes to 0 and the penalty stiffness to
-//! infinity: finite rotation, rigid and persistent contact (the contact node slaved to the
-//! rotating face), every other element as the scene says.
+//! infinity: finite rotation, rigid contact (a closed pair's node slaved to the turning
+//! surface), every other element as the scene says.
 //!
-//! The equations ([`mechanism`]) are written from Newton–Euler's laws with the contact as a
-//! constraint solved with its multiplier at every evaluation, independently of the explicit
-//! engine's force assembly, and integrated by Dormand–Prince 8(5,3) with error control
+//! The equations ([`mechanism`]) are written from Newton–Euler's laws with each closed contact
+//! as a constraint solved with its multiplier at every evaluation, independently of the
+//! explicit engine's force assembly, and integrated by Dormand–Prince 8(5,3) with error control
 //! (`ode_solvers::Dop853`) at a relative tolerance of [`TOLERANCE`], restarted at every output
 //! time so no row is interpolated. The whole solution is computed twice, the second time at
 //! half the tolerance and with steps of at most half an output interval (so it takes another
-//! path even where one step per row meets both tolerances); the largest change of any column over its peak is reported as the
-//! measure `tolerance_halving_change` (summary.json), with `constraint_drift` (the largest
-//! departure of a contact gap from its initial value, in length units).
+//! path even where one step per row meets both tolerances); the largest change of any column
+//! over its peak is reported as the measure `tolerance_halving_change` (summary.json), with
+//! `constraint_drift` (the largest departure of a closed contact's gap from zero, in length
+//! units).
 //!
-//! Like `analytic`, it reports the contact force, its smallest margin (`contact_margin`, the
-//! smallest compressive force over the largest) and its validity window: rows after the first
-//! tensile contact force are marked invalid (`valid` = 0) and `valid_until` is that time.
+//! Contact is event-driven and exact through every switch: an open pair whose gap reaches zero
+//! while closing strikes (Newton's restitution law, the impulse through the mass matrix), a
+//! closed pair whose force reaches zero opens. Events are watched after every accepted
+//! integration step and located by bisection; they are reported as measures (`impact_<i>_time`,
+//! `impact_<i>_speed`, `impact_<i>_rebound`, `opening_<i>_time`, `impacts`, `openings`), with
+//! the contact force's smallest margin over its largest (`contact_margin`) and an `impacts`
+//! column. Every row is valid.
 //!
 //! Static steps set the prescribed DOFs and solve the equilibrium of the free ones by Newton's
 //! method (a finite-difference Jacobian; the converged point does not depend on it). Not
 //! solved (refused with a reason): a contact node that is a body point, a held DOF on a body
 //! point other than the reference node, a static step with both free DOFs and contact, a free
-//! DOF without mass.
+//! DOF without mass. A matrix that turns singular during the run (two contacts that fix the
+//! same motion, say) fails the run with its time.
 
 pub mod mechanism;
 
 use super::{Engine, EngineError, History, RunInfo, RunOutput, RunSettings};
-use crate::contract::{IMPACTS_COLUMN, VALID_COLUMN};
+use crate::contract::{IMPACTS_COLUMN, IMPACTS_REPORTED, VALID_COLUMN};
 use crate::scene::{Probe, Scene, StepKind};
 use mechanism::{Mechanism, Placement, twist};
 use nalgebra::{DMatrix, DVector, Vector3};
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::collections::BTreeMap;
 use std::time::Instant;
 
 /// Relative tolerance of the integration (the absolute one is this × 10^-3).
 pub const TOLERANCE: f64 = 1e-12;
-
-/// Contact events whose times are reported as measures (`impact_<i>_time`, …).
-const EVENTS_REPORTED: usize = 5;
 
 /// Most integration steps between two output rows (each run is bounded in time).
 const MAX_STEPS_PER_ROW: u32 = 1_000_000;
@@ -96,7 +99,7 @@ impl Engine for ReferenceEngine {
                         ..
                     } => {
                         impacts += 1;
-                        if impacts <= EVENTS_REPORTED {
+                        if impacts <= IMPACTS_REPORTED {
                             measures.insert(format!("impact_{impacts}_time"), time);
                             measures.insert(format!("impact_{impacts}_speed"), speed);
                             measures.insert(format!("impact_{impacts}_rebound"), rebound);
@@ -104,7 +107,7 @@ impl Engine for ReferenceEngine {
                     }
                     ContactEvent::Opening { time, .. } => {
                         openings += 1;
-                        if openings <= EVENTS_REPORTED {
+                        if openings <= IMPACTS_REPORTED {
                             measures.insert(format!("opening_{openings}_time"), time);
                         }
                     }
@@ -164,12 +167,14 @@ fn largest_change(a: &History, b: &History) -> f64 {
 }
 
 /// The equations for the ODE solver over one dynamic step (fixed free basis) with a fixed
-/// set of closed contacts.
+/// set of closed contacts; after every accepted step it looks for a contact event and stops
+/// the integration there if one has happened.
 struct Motion<'a> {
     mechanism: &'a Mechanism,
     basis: &'a DMatrix<f64>,
     active: &'a [bool],
     error: &'a RefCell<Option<EngineError>>,
+    fired: &'a Cell<bool>,
 }
 
 impl ode_solvers::System<f64, ode_solvers::DVector<f64>> for Motion<'_> {
@@ -194,11 +199,54 @@ impl ode_solvers::System<f64, ode_solvers::DVector<f64>> for Motion<'_> {
     fn solout(
         &mut self,
         _t: f64,
-        _y: &ode_solvers::DVector<f64>,
+        y: &ode_solvers::DVector<f64>,
         _dy: &ode_solvers::DVector<f64>,
     ) -> bool {
-        self.error.borrow().is_some()
+        if self.error.borrow().is_some() {
+            return true;
+        }
+        match fired(self.mechanism, self.basis, self.active, y) {
+            Ok(true) => {
+                self.fired.set(true);
+                true
+            }
+            Ok(false) => false,
+            Err(e) => {
+                self.error.borrow_mut().get_or_insert(e);
+                true
+            }
+        }
     }
+}
+
+/// Whether a contact event has happened by state `y`: an open pair's gap below zero while it
+/// closes (ġ < 0: a pair that has just rebounded sits a few ulps inside while it leaves), or a
+/// closed pair's force below zero.
+fn fired(
+    mechanism: &Mechanism,
+    basis: &DMatrix<f64>,
+    active: &[bool],
+    y: &ode_solvers::DVector<f64>,
+) -> Result<bool, EngineError> {
+    let m = mechanism;
+    if m.contact_count() == 0 {
+        return Ok(false);
+    }
+    let np = m.position_len();
+    let at = m.unpack(y.as_slice());
+    let w = DVector::from_column_slice(&y.as_slice()[np..]);
+    let u = basis * &w;
+    let (gaps, _, _) = m.constraints(&at, &u, active);
+    let striking =
+        (0..active.len()).any(|k| !active[k] && gaps[k] < 0.0 && m.gap_rate(&at, &u, k) < 0.0);
+    if striking {
+        return Ok(true);
+    }
+    if active.iter().any(|a| *a) {
+        let e = m.evaluate(&at, basis, &w, active)?;
+        return Ok(e.contact.iter().zip(active).any(|(f, a)| *a && *f < 0.0));
+    }
+    Ok(false)
 }
 
 /// Checks for contact events per output interval: a contact that closes and opens again
@@ -245,19 +293,23 @@ struct Leg<'a> {
 }
 
 impl Leg<'_> {
+    /// Integrates from `(t, y)` towards `to` and returns where it stopped: at `to`, or at the
+    /// end of the first accepted step by which a contact event has happened (then `true`).
     fn run(
         &mut self,
         active: &[bool],
         t: f64,
         y: &ode_solvers::DVector<f64>,
         to: f64,
-    ) -> Result<ode_solvers::DVector<f64>, EngineError> {
+    ) -> Result<(f64, ode_solvers::DVector<f64>, bool), EngineError> {
         let failure = RefCell::new(None);
+        let fired = Cell::new(false);
         let motion = Motion {
             mechanism: self.mechanism,
             basis: self.basis,
             active,
             error: &failure,
+            fired: &fired,
         };
         let mut stepper = ode_solvers::Dop853::from_param(
             motion,
@@ -286,33 +338,14 @@ impl Leg<'_> {
         let stats = stats?;
         self.steps += u64::from(stats.accepted_steps);
         self.evaluations += u64::from(stats.num_eval);
-        Ok(stepper.y_out().last().expect("the end state").clone())
-    }
-
-    /// Whether any contact event has happened by state `y`: an open pair's gap below zero, or
-    /// a closed pair's force below zero.
-    fn fired(&self, active: &[bool], y: &ode_solvers::DVector<f64>) -> Result<bool, EngineError> {
-        let m = self.mechanism;
-        if m.contact_count() == 0 {
-            return Ok(false);
-        }
-        let np = m.position_len();
-        let at = m.unpack(y.as_slice());
-        let w = DVector::from_column_slice(&y.as_slice()[np..]);
-        let (gaps, _, _) = m.constraints(&at, &(self.basis * &w), active);
-        if gaps.iter().zip(active).any(|(g, a)| !a && *g < 0.0) {
-            return Ok(true);
-        }
-        if active.iter().any(|a| *a) {
-            let e = m.evaluate(&at, self.basis, &w, active)?;
-            return Ok(e.contact.iter().zip(active).any(|(f, a)| *a && *f < 0.0));
-        }
-        Ok(false)
+        let reached = *stepper.x_out().last().expect("the end time");
+        let state = stepper.y_out().last().expect("the end state").clone();
+        Ok((reached, state, fired.get()))
     }
 }
 
-/// Open every closed pair that pulls (negative force) or separates (ġ > 0) at `y`, and let it
-/// go without an impulse.
+/// Open every closed pair that pulls (negative force) at `y`, and let it go without an
+/// impulse.
 fn release(
     mechanism: &Mechanism,
     basis: &DMatrix<f64>,
@@ -332,6 +365,16 @@ fn release(
         }
     }
     Ok(())
+}
+
+/// An error met after the integration started is the run's failure at time `t`, not a scene
+/// the reference does not solve: the matrix that turns singular mid-run (two contacts that fix
+/// the same motion, say) was regular at the start.
+fn during(t: f64) -> impl Fn(EngineError) -> EngineError {
+    move |e| match e {
+        EngineError::Unsupported(what) => EngineError::Failed(format!("{what} (at t = {t:e})")),
+        other => other,
+    }
 }
 
 /// Newton's method on the equilibrium of the free DOFs of a static step.
@@ -494,21 +537,22 @@ fn solve(
                 } else {
                     target
                 };
-                let reached = leg.run(&active, t, &y, to)?;
-                if !leg.fired(&active, &reached)? {
+                let (stopped, reached, event) = leg.run(&active, t, &y, to).map_err(during(t))?;
+                if !event {
                     (t, y) = (to, reached);
                     continue;
                 }
                 // Bisect for the first event: none by `lo`, one by `hi`.
-                let (mut lo, mut hi, mut at_hi) = (t, to, reached);
+                let (mut lo, mut hi, mut at_hi) = (t, stopped, reached);
                 for _ in 0..200 {
                     let mid = 0.5 * (lo + hi);
                     if mid <= lo || mid >= hi {
                         break;
                     }
-                    let state = leg.run(&active, t, &y, mid)?;
-                    if leg.fired(&active, &state)? {
-                        (hi, at_hi) = (mid, state);
+                    let (stopped, state, event) =
+                        leg.run(&active, t, &y, mid).map_err(during(t))?;
+                    if event {
+                        (hi, at_hi) = (stopped, state);
                     } else {
                         lo = mid;
                     }
@@ -524,16 +568,22 @@ fn solve(
                         continue;
                     }
                     let speed = -mechanism.gap_rate(&placed, &(&basis * &wv), k);
+                    if speed <= 0.0 {
+                        // Inside by round-off while leaving: the rebound of an earlier impact.
+                        continue;
+                    }
                     fastest = fastest.max(speed);
                     let e = mechanism.restitution(k);
                     let rests = e == 0.0 || speed <= RESTING_SPEED * fastest;
-                    wv = mechanism.impact(
-                        &placed,
-                        &basis,
-                        &wv,
-                        &active,
-                        Some((k, if rests { 0.0 } else { e })),
-                    )?;
+                    wv = mechanism
+                        .impact(
+                            &placed,
+                            &basis,
+                            &wv,
+                            &active,
+                            Some((k, if rests { 0.0 } else { e })),
+                        )
+                        .map_err(during(t))?;
                     events.push(ContactEvent::Impact {
                         contact: k,
                         time: t,
@@ -545,7 +595,7 @@ fn solve(
                     }
                 }
                 y.as_mut_slice()[np..].copy_from_slice(wv.as_slice());
-                release(mechanism, &basis, &mut active, &y, t, &mut events)?;
+                release(mechanism, &basis, &mut active, &y, t, &mut events).map_err(during(t))?;
                 if t >= target - tol {
                     t = target;
                 }
@@ -553,7 +603,9 @@ fn solve(
             at = mechanism.unpack(y.as_slice());
             w = DVector::from_column_slice(&y.as_slice()[np..]);
             let full = &basis * &w;
-            let evaluation = mechanism.evaluate(&at, &basis, &w, &active)?;
+            let evaluation = mechanism
+                .evaluate(&at, &basis, &w, &active)
+                .map_err(during(target))?;
             let (gaps, _, _) = mechanism.constraints(&at, &full, &active);
             drift = gaps
                 .iter()

@@ -283,7 +283,19 @@ const CORPUS: &[(&str, usize, &str, &str)] = &[
         "contact_shape_unknown",
         78,
         "contacts[0].shape",
-        "`torus`: use plane, ball, cuboid or capsule",
+        "`torus`: use plane, ball, cuboid, capsule or convex",
+    ),
+    (
+        "contact_convex_not_corner",
+        93,
+        "contacts[0].vertices[3]",
+        "corner 3 (-0.5, -0.25, 0) is not a corner of the convex hull of the others",
+    ),
+    (
+        "contact_convex_flat",
+        89,
+        "contacts[0].vertices",
+        "the corners are collinear: the polygon has no interior",
     ),
     (
         "contact_node_on_body",

@@ -162,10 +162,11 @@ impl<'a> Builder<'a> {
             "ball" => &["centre", "radius"],
             "cuboid" => &["centre", "half_extents"],
             "capsule" => &["centre", "radius", "half_height"],
+            "convex" => &["centre", "vertices"],
             other => {
                 return err(
                     format!("{field}.shape"),
-                    format!("`{other}`: use plane, ball, cuboid or capsule"),
+                    format!("`{other}`: use plane, ball, cuboid, capsule or convex"),
                 );
             }
         };
@@ -176,6 +177,7 @@ impl<'a> Builder<'a> {
             ("radius", c.radius.is_some()),
             ("half_extents", c.half_extents.is_some()),
             ("half_height", c.half_height.is_some()),
+            ("vertices", c.vertices.is_some()),
         ];
         for (key, present) in given {
             if present && !allowed.contains(&key) {
@@ -232,6 +234,34 @@ impl<'a> Builder<'a> {
                 }
                 Surface::Solid {
                     solid: Solid::Cuboid { half_extents: h },
+                    centre: centre()?,
+                }
+            }
+            "convex" => {
+                let corners = c
+                    .vertices
+                    .as_deref()
+                    .unwrap_or_default()
+                    .iter()
+                    .enumerate()
+                    .map(|(i, v)| self.vector(&format!("{field}.vertices[{i}]"), v))
+                    .collect::<Result<Vec<_>, _>>()?;
+                let polytope = match Polytope::new(&corners, self.dim == Dimension::Two) {
+                    Ok(p) => p,
+                    Err(e) => {
+                        let at = match e {
+                            polytope::PolytopeError::NotCorner { index, .. } => {
+                                format!("{field}.vertices[{index}]")
+                            }
+                            _ => format!("{field}.vertices"),
+                        };
+                        return err(at, e.to_string());
+                    }
+                };
+                Surface::Solid {
+                    solid: Solid::Convex {
+                        polytope: std::sync::Arc::new(polytope),
+                    },
                     centre: centre()?,
                 }
             }

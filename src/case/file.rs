@@ -195,7 +195,8 @@ pub struct ElementTable {
 }
 
 /// `[[contacts]]`: a node against a surface of a rigid body: a planar face (the source
-/// problems) or the boundary of a solid (parry's ball, cuboid or capsule).
+/// problems) or the boundary of a solid (parry's ball, cuboid, capsule or convex polygon /
+/// polyhedron).
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ContactPairTable {
@@ -205,7 +206,7 @@ pub struct ContactPairTable {
     pub node: String,
     /// The body whose surface it touches.
     pub body: String,
-    /// `plane` (default), `ball`, `cuboid` or `capsule`.
+    /// `plane` (default), `ball`, `cuboid`, `capsule` or `convex`.
     pub shape: Option<String>,
     /// Plane: a point of the face at t = 0 (global coordinates).
     pub face_point: Option<Vec<f64>>,
@@ -220,6 +221,9 @@ pub struct ContactPairTable {
     pub half_extents: Option<Vec<f64>>,
     /// Capsule: half the length of its segment, which lies along y.
     pub half_height: Option<f64>,
+    /// Convex: its corners relative to `centre` (3 to 32; each a corner of their convex
+    /// hull): a polygon in 2D, a polyhedron in 3D.
+    pub vertices: Option<Vec<Vec<f64>>>,
     /// `closed` (default: the node starts on the surface) or `open` (it starts clear of it).
     pub initially: Option<String>,
     /// Coefficient of restitution of an impact, in [0, 1] (default 1: elastic). Penalty

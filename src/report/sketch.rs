@@ -848,9 +848,10 @@ struct Present {
 /// Points on a contact surface's outline in the x–y plane through its anchor (a plane: its
 /// point only).
 fn outline(surface: &Surface) -> Vec<Vector3<f64>> {
-    let Surface::Solid { solid, centre } = *surface else {
+    let Surface::Solid { solid, centre } = surface else {
         return vec![surface.anchor()];
     };
+    let centre = *centre;
     let arc = |at: Vector3<f64>, radius: f64, from: f64, to: f64| {
         (0..=16).map(move |i| {
             let a = from + (to - from) * f64::from(i) / 16.0;
@@ -858,7 +859,8 @@ fn outline(surface: &Surface) -> Vec<Vector3<f64>> {
         })
     };
     let pi = std::f64::consts::PI;
-    match solid {
+    match *solid {
+        Solid::Convex { ref polytope } => polytope.outline().iter().map(|c| centre + c).collect(),
         Solid::Ball { radius } => arc(centre, radius, 0.0, 2.0 * pi).take(16).collect(),
         Solid::Cuboid { half_extents: h } => [(1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)]
             .iter()

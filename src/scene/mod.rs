@@ -4,7 +4,10 @@
 //! knows nothing of files, TOML or spans. Positions and directions are stored as 3-vectors; in a 2D scene every z component
 //! is zero and only the in-plane DOFs (`ux`, `uy`, `rz`) exist.
 
+pub mod polytope;
+
 use nalgebra::{Matrix3, Vector3};
+pub use polytope::Polytope;
 use std::fmt;
 
 /// A scene that is not valid: which field, and what is wrong with it.
@@ -203,7 +206,7 @@ pub struct Element {
 
 /// A solid shape carried by a body, as parry builds it (`parry2d-f64` / `parry3d-f64`); its
 /// axes are the world axes at t = 0 and turn with the body.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Solid {
     /// A ball (a disc in 2D) of this radius.
     Ball {
@@ -223,6 +226,11 @@ pub enum Solid {
         /// Radius.
         radius: f64,
     },
+    /// A convex polygon (2D) or polyhedron (3D): the convex hull of its corners.
+    Convex {
+        /// Its corners (relative to the centre), faces and edges.
+        polytope: std::sync::Arc<Polytope>,
+    },
 }
 
 impl Solid {
@@ -232,6 +240,7 @@ impl Solid {
             Solid::Ball { .. } => "ball",
             Solid::Cuboid { .. } => "cuboid",
             Solid::Capsule { .. } => "capsule",
+            Solid::Convex { .. } => "convex",
         }
     }
 
@@ -244,12 +253,13 @@ impl Solid {
                 .copied()
                 .filter(|h| *h > 0.0)
                 .fold(f64::INFINITY, f64::min),
+            Solid::Convex { polytope } => polytope.inradius,
         }
     }
 }
 
 /// The surface a contact node touches on a body.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Surface {
     /// An unbounded plane: the face of the source problems.
     Plane {
@@ -323,9 +333,9 @@ impl ContactPair {
 /// unit outward normal at the nearest surface point, by closed-form geometry (the
 /// validation's and the closed forms' own; the engines use parry's queries).
 pub fn surface_distance(surface: &Surface, p: &Vector3<f64>) -> (f64, Vector3<f64>) {
-    match *surface {
-        Surface::Plane { point, normal } => (normal.dot(&(p - point)), normal),
-        Surface::Solid { solid, centre } => solid_distance(&solid, &(p - centre)),
+    match surface {
+        Surface::Plane { point, normal } => (normal.dot(&(p - point)), *normal),
+        Surface::Solid { solid, centre } => solid_distance(solid, &(p - centre)),
     }
 }
 
@@ -339,6 +349,10 @@ pub fn solid_distance(solid: &Solid, s: &Vector3<f64>) -> (f64, Vector3<f64>) {
         (r - radius, n)
     };
     match *solid {
+        Solid::Convex { ref polytope } => {
+            let (d, n, _) = polytope.distance(s);
+            (d, n)
+        }
         Solid::Ball { radius } => round(Vector3::zeros(), radius),
         Solid::Capsule {
             half_height,

@@ -256,7 +256,7 @@ fn consistent_start<S: Space, const FINITE: bool>(
 fn through_solid(scene: &Scene, k: usize, speed: f64, h: f64, t: f64) -> EngineError {
     let pair = &scene.contacts[k];
     let node = &scene.nodes[pair.node];
-    let crate::scene::Surface::Solid { solid, .. } = pair.surface else {
+    let crate::scene::Surface::Solid { solid, .. } = &pair.surface else {
         unreachable!("only solids are watched")
     };
     let (shape, depth) = (solid.name(), solid.half_thickness());

@@ -594,14 +594,12 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 };
                 let origin = bodies[c.body].x0;
                 let arm0 = x0(c.node) - origin;
-                let (face, normal, solid) = match c.surface {
-                    Surface::Plane { point, normal } => {
-                        (S::v(&point) - origin, S::v(&normal), None)
-                    }
+                let (face, normal, solid) = match &c.surface {
+                    Surface::Plane { point, normal } => (S::v(point) - origin, S::v(normal), None),
                     Surface::Solid { solid, centre } => (
-                        S::v(&centre) - origin,
+                        S::v(centre) - origin,
                         S::V::zero(),
-                        Some((S::v(&centre) - origin, S::solid(&solid))),
+                        Some((S::v(centre) - origin, S::solid(solid))),
                     ),
                 };
                 let (gap0, _) = surface_distance(&c.surface, &scene.nodes[c.node].position);

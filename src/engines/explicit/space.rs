@@ -193,6 +193,15 @@ impl Space for Planar {
                     half_height,
                     radius,
                 } => SharedShape::capsule_y(half_height, radius),
+                Solid::Convex { ref polytope } => {
+                    let corners: Vec<_> = polytope
+                        .corners
+                        .iter()
+                        .map(|c| parry2d_f64::math::Vector::new(c.x, c.y))
+                        .collect();
+                    SharedShape::convex_hull(&corners)
+                        .expect("validated: the corners span a convex polygon")
+                }
             },
             PhantomData,
         )
@@ -325,6 +334,15 @@ impl Space for Spatial {
                     half_height,
                     radius,
                 } => SharedShape::capsule_y(half_height, radius),
+                Solid::Convex { ref polytope } => {
+                    let corners: Vec<_> = polytope
+                        .corners
+                        .iter()
+                        .map(|c| parry3d_f64::math::Vector::new(c.x, c.y, c.z))
+                        .collect();
+                    SharedShape::convex_hull(&corners)
+                        .expect("validated: the corners span a convex polyhedron")
+                }
             },
             PhantomData,
         )

@@ -302,11 +302,19 @@ macro_rules! backend {
                     .iter()
                     .enumerate()
                     .map(|(i, c)| {
-                        let builder = match c.shape {
-                            Shape::Ball(r) => ColliderBuilder::ball(r as Real),
-                            Shape::Cuboid(half) => cuboid(&half),
+                        let builder = match &c.shape {
+                            Shape::Ball(r) => ColliderBuilder::ball(*r as Real),
+                            Shape::Cuboid(half) => cuboid(half),
                             Shape::Capsule(half_height, r) => {
-                                ColliderBuilder::capsule_y(half_height as Real, r as Real)
+                                ColliderBuilder::capsule_y(*half_height as Real, *r as Real)
+                            }
+                            Shape::ConvexHull(corners) => {
+                                let points: Vec<_> = corners.iter().map(vector).collect();
+                                ColliderBuilder::convex_hull(&points).ok_or_else(|| {
+                                    EngineError::Unsupported(
+                                        "rapier: no convex hull of the eroded polytope".into(),
+                                    )
+                                })?
                             }
                         }
                         .position(pose(&c.frame))
@@ -318,13 +326,13 @@ macro_rules! backend {
                             groups[i],
                             InteractionTestMode::And,
                         ));
-                        world.colliders.insert_with_parent(
+                        Ok(world.colliders.insert_with_parent(
                             builder,
                             handles[c.body],
                             &mut world.bodies,
-                        )
+                        ))
                     })
-                    .collect();
+                    .collect::<Result<_, EngineError>>()?;
 
                 for j in &plan.permanent {
                     let data = joint(j)?;

@@ -190,7 +190,7 @@ pub struct StepSpec {
 }
 
 /// A collider shape.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub enum Shape {
     /// Ball of a radius.
     Ball(f64),
@@ -198,10 +198,12 @@ pub enum Shape {
     Cuboid(Vector3<f64>),
     /// Capsule along its frame's y axis: half height of the segment, radius.
     Capsule(f64, f64),
+    /// The convex hull of these points (2D: z unused).
+    ConvexHull(Vec<Vector3<f64>>),
 }
 
 /// A collider.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct ColliderSpec {
     /// Body.
     pub body: usize,
@@ -212,7 +214,7 @@ pub struct ColliderSpec {
 }
 
 /// A contact pair's colliders and geometry.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct ContactSpec {
     /// Index of the ball (on the node's body) in [`Plan::colliders`].
     pub ball: usize,
@@ -829,7 +831,7 @@ pub fn plan(scene: &Scene) -> Result<Plan, EngineError> {
             .map(|(_, n)| (n.position - pair.anchor()).norm())
             .fold(0.0f64, f64::max);
         let size = 2.0 * spread.max(f64::MIN_POSITIVE.sqrt());
-        let (collider, surface, radius) = match pair.surface {
+        let (collider, surface, radius) = match pair.surface.clone() {
             Surface::Plane { point, normal } => {
                 let radius = 1e-3 * size;
                 let face_point = point - origin;
@@ -862,6 +864,16 @@ pub fn plan(scene: &Scene) -> Result<Plan, EngineError> {
                         half_height,
                         radius: a,
                     } => Shape::Capsule(half_height, a - radius),
+                    Solid::Convex { ref polytope } => match polytope.eroded(radius) {
+                        Some(corners) => Shape::ConvexHull(corners),
+                        None => {
+                            return unsupported(format!(
+                                "contact `{}`: the polytope eroded by the node's ball radius \
+                                 {radius:e} leaves nothing",
+                                pair.name
+                            ));
+                        }
+                    },
                 };
                 (
                     ColliderSpec {

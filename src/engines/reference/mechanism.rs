@@ -181,13 +181,13 @@ impl Mechanism {
                 ));
             };
             let origin = scene.nodes[scene.bodies[c.body].reference].position;
-            let surface = match c.surface {
+            let surface = match &c.surface {
                 Surface::Plane { point, normal } => Surface::Plane {
                     point: point - origin,
-                    normal,
+                    normal: *normal,
                 },
                 Surface::Solid { solid, centre } => Surface::Solid {
-                    solid,
+                    solid: solid.clone(),
                     centre: centre - origin,
                 },
             };
@@ -776,11 +776,11 @@ impl Mechanism {
 }
 
 /// Hessian of a surface's signed distance at `s` (body frame, relative to the reference
-/// node): zero on a plane and a cuboid's faces; (P − n nᵀ)/ρ at distance ρ from a ball's
-/// centre, a capsule's axis or a cuboid's edge or corner, P projecting out the directions
-/// along which the nearest feature extends.
+/// node): zero on a plane and on a cuboid's or polytope's faces; (P − n nᵀ)/ρ at distance ρ
+/// from a ball's centre, a capsule's axis or a cuboid's or polytope's edge or corner, P
+/// projecting out the directions along which the nearest feature extends.
 fn curvature(surface: &Surface, s: &Vector3<f64>) -> Matrix3<f64> {
-    let Surface::Solid { solid, centre } = *surface else {
+    let Surface::Solid { solid, centre } = surface else {
         return Matrix3::zeros();
     };
     let s = s - centre;
@@ -792,7 +792,14 @@ fn curvature(surface: &Surface, s: &Vector3<f64>) -> Matrix3<f64> {
         let n = d / rho;
         (Matrix3::identity() - extends - n * n.transpose()) / rho
     };
-    match solid {
+    match *solid {
+        Solid::Convex { ref polytope } => {
+            let (gap, normal, feature) = polytope.distance(&s);
+            if gap <= 0.0 {
+                return Matrix3::zeros();
+            }
+            round(normal * gap, polytope.extends(feature))
+        }
         Solid::Ball { .. } => round(s, Matrix3::zeros()),
         Solid::Capsule { half_height, .. } => {
             let along = if s.y.abs() < half_height {

@@ -35,12 +35,12 @@ fn list_prints_one_line_per_case() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "status {:?}\n{stderr}", out.status);
     let lines: Vec<&str> = stdout.lines().collect();
-    // The 13 seed cases of `cases/` and the 21 of the stress family in `cases/stress/` (11
-    // `stress_*`, 10 `contact_*`).
-    assert_eq!(lines.len(), 34, "{stdout}");
+    // The 13 seed cases of `cases/` and the 22 of the stress family in `cases/stress/` (11
+    // `stress_*`, 11 `contact_*`).
+    assert_eq!(lines.len(), 35, "{stdout}");
     assert_eq!(
         lines.iter().filter(|l| l.starts_with("contact_")).count(),
-        10,
+        11,
         "{stderr}"
     );
     assert_eq!(
@@ -78,7 +78,7 @@ fn cases_are_found_in_the_working_directory_or_with_cases() {
     let cases = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases");
     let out = crosscheck(&["list", "--cases", cases.to_str().unwrap()], dir.path());
     assert!(out.status.success());
-    assert_eq!(String::from_utf8_lossy(&out.stdout).lines().count(), 34);
+    assert_eq!(String::from_utf8_lossy(&out.stdout).lines().count(), 35);
     let out = crosscheck(&["run", "--out", "o"], dir.path());
     assert_eq!(out.status.code(), Some(2));
     assert!(!dir.path().join("o").exists());

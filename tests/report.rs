@@ -101,9 +101,9 @@ fn sweep_orders_and_floors_are_in_the_summary_and_the_report() {
 #[test]
 fn summary_and_report_agree() {
     let (out, summary, report) = run_into_temporary_directory();
-    // The 13 seed cases and the 21 of the stress family (10 of them contact that opens and
+    // The 13 seed cases and the 22 of the stress family (11 of them contact that opens and
     // closes).
-    assert_eq!(summary.cases.len(), 34);
+    assert_eq!(summary.cases.len(), 35);
 
     let mut checked = 0;
     for c in &summary.cases {
@@ -267,7 +267,7 @@ fn verdict_matrix_equals_the_summary_and_every_link_resolves() {
             cells += 1;
         }
     }
-    assert_eq!(cells, 34 * 7, "every case × engine but the closed form");
+    assert_eq!(cells, 35 * 7, "every case × engine but the closed form");
     let mut links = 0;
     for piece in report.split("](").skip(1) {
         let target = piece.split(')').next().unwrap();
@@ -348,7 +348,7 @@ fn the_stability_map_is_in_the_report_and_matches_its_csvs() {
             .skip(1)
             .map(|l| l.split(',').collect())
             .collect();
-        assert_eq!(rows.len(), 31 * crosscheck::run::stability::RATIOS.len());
+        assert_eq!(rows.len(), 32 * crosscheck::run::stability::RATIOS.len());
         let count = |ratio: &str, outcome: &str| {
             rows.iter()
                 .filter(|r| r[1] == ratio && r[3] == outcome)
@@ -359,7 +359,7 @@ fn the_stability_map_is_in_the_report_and_matches_its_csvs() {
             .find(|l| l.starts_with(&format!("| `{engine}` |")))
             .unwrap_or_else(|| panic!("{engine}: no table row"));
         let cells: Vec<&str> = line.split('|').map(str::trim).collect();
-        assert_eq!(cells[2], "31");
+        assert_eq!(cells[2], "32");
         assert_eq!(cells[3], count("2.5e-1", "accurate").to_string(), "{line}");
         assert_eq!(cells[4], count("9.8e-1", "accurate").to_string(), "{line}");
         assert_eq!(cells[6], count("1.02e0", "unstable").to_string(), "{line}");

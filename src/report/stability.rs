@@ -98,6 +98,7 @@ fn colour(o: Outcome) -> RGBColor {
         Outcome::Inaccurate => RGBColor(255, 202, 40),
         Outcome::Unstable => RGBColor(229, 57, 53),
         Outcome::Failed => RGBColor(158, 158, 158),
+        Outcome::NotApplicable => RGBColor(236, 239, 241),
     }
 }
 
@@ -175,6 +176,7 @@ pub fn render(engine: &str, points: &[&Point]) -> Option<String> {
             Outcome::Inaccurate,
             Outcome::Unstable,
             Outcome::Failed,
+            Outcome::NotApplicable,
         ] {
             root.draw(&Rectangle::new(
                 [(x, y), (x + 16, y + 14)],
@@ -186,6 +188,7 @@ pub fn render(engine: &str, points: &[&Point]) -> Option<String> {
                 Outcome::Inaccurate => "inaccurate (bounded)".to_string(),
                 Outcome::Unstable => format!("unstable (energy > {ENERGY_GROWTH_LIMIT}×)"),
                 Outcome::Failed => "failed".to_string(),
+                Outcome::NotApplicable => "not applicable".to_string(),
             };
             root.draw(&Text::new(label.clone(), (x + 22, y + 1), font.clone()))
                 .ok()?;
@@ -235,7 +238,8 @@ pub fn overview(w: &mut String, maps: &BTreeMap<String, Vec<Point>>) {
          its own model's exact solution is within the case's tolerance for it (a rapier engine \
          without one takes the case's `rapier_f64` tolerance, any other the tightest the case \
          declares), *inaccurate* when bounded but outside it. Cases without a stable increment \
-         (the free spins) are not mapped. Data: `stability/<engine>.csv`.\n",
+         (the free spins) are not mapped; a case an engine does not model is *not applicable* \
+         (not counted as failed). Data: `stability/<engine>.csv`.\n",
         RATIOS
             .iter()
             .map(|r| r.to_string())
@@ -308,6 +312,12 @@ fn words(engine: &str, points: &[Point]) -> String {
         .count();
     let explicit = engine.starts_with("explicit");
     let mut s = String::new();
+    let mut refused: Vec<&str> = points
+        .iter()
+        .filter(|p| p.outcome == Outcome::NotApplicable)
+        .map(|p| p.case.as_str())
+        .collect();
+    refused.dedup();
     if explicit {
         let _ = write!(
             s,
@@ -344,6 +354,13 @@ fn words(engine: &str, points: &[Point]) -> String {
             s += " It never went unstable: its springs are implicit, so past the explicit limit it \
                   loses accuracy (energy, amplitude) instead of blowing up.";
         }
+    }
+    if !refused.is_empty() {
+        let _ = write!(
+            s,
+            " Not applicable (the engine does not model it, and says why): {}.",
+            refused.join(", ")
+        );
     }
     s
 }

@@ -43,6 +43,8 @@ pub enum Outcome {
     Unstable,
     /// Refused or failed for another reason.
     Failed,
+    /// The engine does not model the case (it says why), at any increment.
+    NotApplicable,
 }
 
 impl Outcome {
@@ -53,6 +55,7 @@ impl Outcome {
             Outcome::Inaccurate => "inaccurate",
             Outcome::Unstable => "unstable",
             Outcome::Failed => "failed",
+            Outcome::NotApplicable => "not applicable",
         }
     }
     /// From the CSV name.
@@ -62,6 +65,7 @@ impl Outcome {
             Outcome::Inaccurate,
             Outcome::Unstable,
             Outcome::Failed,
+            Outcome::NotApplicable,
         ]
         .into_iter()
         .find(|o| o.name() == s)
@@ -218,7 +222,9 @@ fn map_point(
             point.increment = engine
                 .increments(scene, &settings)
                 .map(|n| scene.duration() / n);
-            point.outcome = if message.contains("unstable") || message.contains("non-finite") {
+            point.outcome = if matches!(e, engines::EngineError::Unsupported(_)) {
+                Outcome::NotApplicable
+            } else if message.contains("unstable") || message.contains("non-finite") {
                 Outcome::Unstable
             } else {
                 Outcome::Failed

@@ -44,6 +44,42 @@ impl ExplicitEngine {
     }
 }
 
+/// The small-rotation model fixes a contact reaction's moment arm at its t = 0 value, which
+/// is where the node touches only if it starts on the surface. A pair that starts open on a
+/// body free to turn would get the moment of a force applied where the node was at t = 0:
+/// refused (the finite-rotation engine takes the arm where the node is).
+fn small_rotation_applies(scene: &Scene) -> Result<(), EngineError> {
+    let rotations: &[usize] = match scene.dimension {
+        crate::scene::Dimension::Two => &[2],
+        crate::scene::Dimension::Three => &[0, 1, 2],
+    };
+    for pair in &scene.contacts {
+        if pair.initially != crate::scene::ContactState::Open {
+            continue;
+        }
+        let reference = scene.bodies[pair.body].reference;
+        let turns = scene
+            .steps
+            .iter()
+            .filter(|s| matches!(s.kind, crate::scene::StepKind::Dynamic { .. }))
+            .any(|s| {
+                rotations.iter().any(|&axis| {
+                    !s.conditions
+                        .iter()
+                        .any(|c| c.node == reference && c.dof == crate::scene::Dof::Rotation(axis))
+                })
+            });
+        if turns {
+            return Err(EngineError::Unsupported(format!(
+                "explicit_small: contact `{}` starts open on a body free to turn, and the \
+                 small-rotation model fixes its reaction's moment arm where the node is at t = 0",
+                pair.name
+            )));
+        }
+    }
+    Ok(())
+}
+
 impl Engine for ExplicitEngine {
     fn name(&self) -> &str {
         match self.kinematics {
@@ -57,6 +93,9 @@ impl Engine for ExplicitEngine {
     }
     fn run(&self, scene: &Scene, settings: &RunSettings) -> Result<RunOutput, EngineError> {
         let start = Instant::now();
+        if self.kinematics == Kinematics::Small {
+            small_rotation_applies(scene)?;
+        }
         // Accuracy on request: pilot runs choose the increment and the penalty stiffness.
         let mut measures = BTreeMap::new();
         let mut pilot_increments = None;

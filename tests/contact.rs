@@ -5,7 +5,7 @@
 use crosscheck::case;
 use crosscheck::engines::explicit::space::{Planar, Space, Spatial};
 use crosscheck::engines::{self, History, RunOutput, RunSettings};
-use crosscheck::scene::{IncrementRule, PenaltyRule, Scene, Solid, solid_distance};
+use crosscheck::scene::{Dimension, IncrementRule, PenaltyRule, Scene, Solid, solid_distance};
 use nalgebra::{Vector2, Vector3};
 
 fn stress(id: &str) -> Scene {
@@ -340,6 +340,81 @@ fn rapier_reports_its_impacts_from_its_steps() {
 }
 
 #[test]
+fn polytopes_refuse_corners_a_hull_library_could_read_two_ways() {
+    use crosscheck::scene::polytope::{MIN_TURN, Polytope, PolytopeError};
+    let polygon = |c: &[[f64; 2]]| {
+        Polytope::new(
+            &c.iter()
+                .map(|p| Vector3::new(p[0], p[1], 0.0))
+                .collect::<Vec<_>>(),
+            true,
+        )
+    };
+    // The wedge of contact_bounce_wedge: its inradius is twice its area over its perimeter.
+    let (a, b, c) = ([-0.5, 0.866], [0.5, -0.866], [-1.0, -0.866]);
+    let wedge = polygon(&[a, b, c]).unwrap();
+    let side = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]);
+    let area = 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])).abs();
+    let perimeter = side(a, b) + side(b, c) + side(c, a);
+    // Closed form against closed form: round-off.
+    assert!((wedge.inradius - 2.0 * area / perimeter).abs() < 1e-12);
+    // A corner given twice, and one a side bends at by 2e-5 rad (1e-5 m off a side's middle),
+    // are refused with the corner's index.
+    let off = [1e-5 * 0.866, 1e-5 * 0.5];
+    for (corners, want) in [
+        (vec![a, b, c, a], "repeats"),
+        (vec![a, b, c, off], "straight"),
+    ] {
+        match polygon(&corners) {
+            Err(e @ PolytopeError::Repeated { index: 3, .. }) => assert_eq!(want, "repeats", "{e}"),
+            Err(
+                e @ PolytopeError::Straight {
+                    index: 3, angle, ..
+                },
+            ) => {
+                assert_eq!(want, "straight", "{e}");
+                // Two sides of length 1 each bent by atan(1e-5): 2e-5 rad.
+                assert!((angle - 2e-5).abs() < 1e-8, "{angle}");
+            }
+            other => panic!("{want}: {other:?}"),
+        }
+    }
+    // Every corner accepted is one parry keeps: bent by twice the least turn, parry's hull of
+    // the quadrilateral has its four corners (2D); a cube with a low pyramid on a face (its
+    // faces turn by √2·2e-3 at the apex) its nine (3D).
+    let bent = [MIN_TURN * 0.866, MIN_TURN * 0.5];
+    let kept = polygon(&[a, b, c, bent]).unwrap();
+    let hull = parry2d_f64::shape::SharedShape::convex_hull(
+        &kept
+            .corners
+            .iter()
+            .map(|p| parry2d_f64::math::Vector::new(p.x, p.y))
+            .collect::<Vec<_>>(),
+    )
+    .unwrap();
+    assert_eq!(hull.as_convex_polygon().unwrap().points().len(), 4);
+    let mut corners: Vec<Vector3<f64>> = (0..8)
+        .map(|i| {
+            let s = |k: usize| if i & (1 << k) == 0 { -0.5 } else { 0.5 };
+            Vector3::new(s(0), s(1), s(2))
+        })
+        .collect();
+    // A ninth corner MIN_TURN over the middle of the +z face: the pyramid's faces tilt by
+    // atan(2 MIN_TURN).
+    corners.push(Vector3::new(0.0, 0.0, 0.5 + MIN_TURN));
+    let kept = Polytope::new(&corners, false).unwrap();
+    let hull = parry3d_f64::shape::SharedShape::convex_hull(
+        &kept
+            .corners
+            .iter()
+            .map(|p| parry3d_f64::math::Vector::new(p.x, p.y, p.z))
+            .collect::<Vec<_>>(),
+    )
+    .unwrap();
+    assert_eq!(hull.as_convex_polyhedron().unwrap().points().len(), 9);
+}
+
+#[test]
 fn parry_convex_shapes_equal_the_closed_form_polytope() {
     use crosscheck::scene::Polytope;
     use std::sync::Arc;
@@ -469,10 +544,13 @@ fn a_node_bounces_off_a_convex_face_by_the_reflection_law() {
             let t = column(&out.history, "t");
             let last = t.len() - 1;
             let expected = after - Vector3::x() * (g * (t[last] - t1)) + n * lag;
-            for (k, name) in ["vx_node", "vy_node", "vz_node"].iter().enumerate() {
-                let Some(c) = out.history.column(name) else {
-                    continue;
-                };
+            let axes = if scene.dimension == Dimension::Two {
+                &["vx_node", "vy_node"][..]
+            } else {
+                &["vx_node", "vy_node", "vz_node"][..]
+            };
+            for (k, name) in axes.iter().enumerate() {
+                let c = column(&out.history, name);
                 assert!(
                     (c[last] - expected[k]).abs() < tol * v1,
                     "{id} / {engine} {name}: {} vs {}",
@@ -527,4 +605,75 @@ fn two_balls_collide_obliquely_as_newton_says() {
         // B is struck through its centre: it never turns.
         assert!(last("rz").abs() < 1e-12, "{engine}");
     }
+}
+
+#[test]
+fn simultaneous_impacts_on_one_body_keep_momentum_and_energy() {
+    // Two nodes (mass 1 each, at ±1 m/s) strike a free ball (mass 0.3, at rest) from either
+    // side at the same instant (the scene is mirror-symmetric to the bit). One pair's impulse
+    // throws the light ball at the other node, whose impulse throws it back faster than the
+    // first node leaves: the pairs are struck again in turn (three passes) until both separate. Each impulse is elastic along the one line of
+    // centres, so whatever the order, momentum (zero) and energy (1 J) are kept and every
+    // pair leaves: A no faster right than the ball, C no slower.
+    let text = std::fs::read_to_string(
+        case::stress_dir(&case::cases_dir()).join("contact_balls_oblique.toml"),
+    )
+    .unwrap();
+    let mut text = text
+        .replace(
+            "id = \"contact_balls_oblique\"",
+            "id = \"contact_simultaneous\"",
+        )
+        .replace("at = [0.0, 0.15]", "at = [-1.0, 0.0]")
+        .replace("at = [1.0, 0.0]", "at = [0.0, 0.0]")
+        .replace("centre = [1.0, 0.0]", "centre = [0.0, 0.0]")
+        .replace("mass = 3.0", "mass = 0.3")
+        .replace("inertia = 0.048", "inertia = 0.0048");
+    text.push_str(
+        r#"
+[[nodes]]
+id = "C"
+at = [1.0, 0.0]
+
+[[masses]]
+node = "C"
+mass = 1.0
+
+[[contacts]]
+id = "balls_c"
+node = "C"
+body = "ball"
+shape = "ball"
+centre = [0.0, 0.0]
+radius = 0.3
+initially = "open"
+restitution = 1.0
+
+[[initial_velocities]]
+node = "C"
+velocity = [-1.0, 0.0]
+
+[[output.columns]]
+name = "vx_c"
+velocity = "C"
+direction = [1.0, 0.0]
+"#,
+    );
+    let scene = case::parse(&text, std::path::Path::new("contact_simultaneous.toml"))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let out = run(&scene, "reference", &RunSettings::default());
+    let last = |name: &str| *column(&out.history, name).last().unwrap();
+    let (a, b, c) = (last("vx_node"), last("vx"), last("vx_c"));
+    // Impulses through exact 3×3 algebra: momentum and energy to round-off.
+    assert!(
+        (a + 0.3 * b + c).abs() < 1e-12,
+        "momentum {}",
+        a + 0.3 * b + c
+    );
+    let energy = 0.5 * (a * a + 0.3 * b * b + c * c);
+    assert!((energy - 1.0).abs() < 1e-10, "energy {energy}");
+    assert!(a <= b && b <= c, "separating: {a} {b} {c}");
+    // Both pairs struck once (one impact each, whatever the number of passes) at t = 0.7.
+    assert_eq!(out.info.measures["impacts"], 2.0);
+    assert!((out.info.measures["impact_1_time"] - 0.7).abs() < 1e-9);
 }

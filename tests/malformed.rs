@@ -292,6 +292,18 @@ const CORPUS: &[(&str, usize, &str, &str)] = &[
         "corner 3 (-0.5, -0.25, 0) is not a corner of the convex hull of the others",
     ),
     (
+        "contact_convex_repeated",
+        93,
+        "contacts[0].vertices[3]",
+        "corner 3 repeats corner 0",
+    ),
+    (
+        "contact_convex_straight",
+        93,
+        "contacts[0].vertices[3]",
+        "is almost straight: two faces that meet there turn by 2.0e-5 rad, less than 1e-3",
+    ),
+    (
         "contact_convex_flat",
         89,
         "contacts[0].vertices",

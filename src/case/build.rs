@@ -250,7 +250,9 @@ impl<'a> Builder<'a> {
                     Ok(p) => p,
                     Err(e) => {
                         let at = match e {
-                            polytope::PolytopeError::NotCorner { index, .. } => {
+                            polytope::PolytopeError::NotCorner { index, .. }
+                            | polytope::PolytopeError::Straight { index, .. }
+                            | polytope::PolytopeError::Repeated { index, .. } => {
                                 format!("{field}.vertices[{index}]")
                             }
                             _ => format!("{field}.vertices"),

@@ -221,8 +221,8 @@ pub struct ContactPairTable {
     pub half_extents: Option<Vec<f64>>,
     /// Capsule: half the length of its segment, which lies along y.
     pub half_height: Option<f64>,
-    /// Convex: its corners relative to `centre` (3 to 32; each a corner of their convex
-    /// hull): a polygon in 2D, a polyhedron in 3D.
+    /// Convex: its corners relative to `centre` (a polygon in 2D: 3 to 32; a polyhedron in
+    /// 3D: 4 to 32; each a corner of their convex hull, none repeated, none nearly straight).
     pub vertices: Option<Vec<Vec<f64>>>,
     /// `closed` (default: the node starts on the surface) or `open` (it starts clear of it).
     pub initially: Option<String>,

@@ -41,7 +41,7 @@ pub enum Outcome {
     Inaccurate,
     /// Energy grew past the limit, or the engine stopped the run as unstable.
     Unstable,
-    /// Refused or failed for another reason.
+    /// Failed for another reason (an error mid-run, a panic, an unknown engine).
     Failed,
     /// The engine does not model the case (it says why), at any increment.
     NotApplicable,

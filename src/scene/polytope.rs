@@ -9,6 +9,16 @@ use nalgebra::{Matrix2, Matrix3, Matrix4, Vector2, Vector3, Vector4};
 /// The most corners a polytope may have (face finding is O(n⁴) over them, once per case).
 pub const MAX_CORNERS: usize = 32;
 
+/// The least angle, in radians, between two faces that meet at a corner. A corner where the
+/// boundary turns by less is nearly straight: a hull library may keep or drop it by round-off
+/// (parry merges faces whose normals differ by about 1e-4 rad), and then the engines would
+/// not share one shape. A regular polygon of [`MAX_CORNERS`] sides turns by 0.196 rad.
+pub const MIN_TURN: f64 = 1e-3;
+
+/// Corners nearer each other than this fraction of the polytope's size are one corner given
+/// twice.
+const SAME_CORNER: f64 = 1e-6;
+
 /// A face: the points s with `normal · s = offset`, the solid on the side `normal · s < offset`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Face {
@@ -45,6 +55,32 @@ pub enum PolytopeError {
     /// The corners span no area (2D) or volume (3D).
     #[error("the corners are {0}: the {1} has no interior")]
     Flat(&'static str, &'static str),
+    /// Two corners at one place.
+    #[error("corner {index} repeats corner {other}: they are {distance:e} m apart")]
+    Repeated {
+        /// Index in the list of the later one.
+        index: usize,
+        /// Index of the earlier one.
+        other: usize,
+        /// Their distance.
+        distance: f64,
+    },
+    /// A corner where the boundary hardly turns: two faces meeting there are almost one.
+    #[error(
+        "corner {index} ({x}, {y}, {z}) is almost straight: two faces that meet there turn by {angle:.1e} rad, less than {MIN_TURN:.0e}"
+    )]
+    Straight {
+        /// Index in the list.
+        index: usize,
+        /// Coordinates.
+        x: f64,
+        /// Coordinates.
+        y: f64,
+        /// Coordinates.
+        z: f64,
+        /// The smallest angle between two faces that meet there.
+        angle: f64,
+    },
     /// A point that is not a corner of the hull (inside it, or on a face or an edge).
     #[error(
         "corner {index} ({x}, {y}, {z}) is not a corner of the convex hull of the others: it lies inside it, on a face or on an edge"
@@ -104,12 +140,33 @@ impl Polytope {
                 }
             })
             .collect();
-        let size = corners.iter().fold(0.0_f64, |m, c| m.max(c.norm()));
-        let eps = 1e-9 * size.max(f64::MIN_POSITIVE);
+        // The diameter: every tolerance below is relative to it.
+        let size = corners
+            .iter()
+            .flat_map(|a| corners.iter().map(move |b| (a - b).norm()))
+            .fold(0.0_f64, f64::max)
+            .max(f64::MIN_POSITIVE);
+        for (index, c) in corners.iter().enumerate() {
+            if let Some((other, distance)) = corners[..index]
+                .iter()
+                .map(|b| (c - b).norm())
+                .enumerate()
+                .find(|(_, d)| *d <= SAME_CORNER * size)
+            {
+                return Err(PolytopeError::Repeated {
+                    index,
+                    other,
+                    distance,
+                });
+            }
+        }
+        let eps = 1e-9 * size;
+        // A face's candidate normal is a length (2D: a side) or an area (3D: a cross product).
+        let least_normal = if planar { eps } else { eps * size };
         let mut faces: Vec<Face> = Vec::new();
         let mut consider = |normal: Vector3<f64>, at: &Vector3<f64>| {
             let length = normal.norm();
-            if length <= 1e-9 * size * size {
+            if length <= least_normal {
                 return;
             }
             let mut n = normal / length;
@@ -155,13 +212,34 @@ impl Polytope {
             ));
         }
         for (index, c) in corners.iter().enumerate() {
-            let incident = faces.iter().filter(|f| on(f, c)).count();
-            if incident < if planar { 2 } else { 3 } {
+            let incident: Vec<&Face> = faces.iter().filter(|f| on(f, c)).collect();
+            if incident.len() < if planar { 2 } else { 3 } {
                 return Err(PolytopeError::NotCorner {
                     index,
                     x: c.x,
                     y: c.y,
                     z: c.z,
+                });
+            }
+            let angle = incident
+                .iter()
+                .enumerate()
+                .flat_map(|(i, f)| {
+                    incident[i + 1..].iter().map(move |g| {
+                        f.normal
+                            .cross(&g.normal)
+                            .norm()
+                            .atan2(f.normal.dot(&g.normal))
+                    })
+                })
+                .fold(f64::INFINITY, f64::min);
+            if angle < MIN_TURN {
+                return Err(PolytopeError::Straight {
+                    index,
+                    x: c.x,
+                    y: c.y,
+                    z: c.z,
+                    angle,
                 });
             }
         }
@@ -289,7 +367,7 @@ impl Polytope {
             })
             .collect();
         let size = self.corners.iter().fold(0.0_f64, |m, c| m.max(c.norm()));
-        let eps = 1e-9 * size;
+        let eps = 1e-9 * size.max(radius);
         let inside = |p: &Vector3<f64>| moved.iter().all(|f| f.normal.dot(p) - f.offset <= eps);
         let mut points: Vec<Vector3<f64>> = Vec::new();
         let mut keep = |p: Vector3<f64>| {
@@ -371,10 +449,14 @@ impl Polytope {
 fn inradius(faces: &[Face], planar: bool) -> f64 {
     let m = faces.len();
     let mut best = 0.0_f64;
+    // Round-off relative to the faces' distances from the origin (the polytope's size).
+    let scale = faces
+        .iter()
+        .fold(f64::MIN_POSITIVE, |m, f| m.max(f.offset.abs()));
     let fits = |c: &Vector3<f64>, r: f64| {
         faces
             .iter()
-            .all(|f| f.normal.dot(c) + r <= f.offset + 1e-12 * (1.0 + f.offset.abs()))
+            .all(|f| f.normal.dot(c) + r <= f.offset + 1e-12 * scale)
     };
     for i in 0..m {
         for j in i + 1..m {

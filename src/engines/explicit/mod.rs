@@ -47,7 +47,9 @@ impl ExplicitEngine {
 /// The small-rotation model fixes a contact reaction's moment arm at its t = 0 value, which
 /// is where the node touches only if it starts on the surface. A pair that starts open on a
 /// body free to turn would get the moment of a force applied where the node was at t = 0:
-/// refused (the finite-rotation engine takes the arm where the node is).
+/// refused (the finite-rotation engine takes the arm where the node is). A pair that starts
+/// closed and opens later keeps its t = 0 arm, which is where the node touches while closed, so
+/// that stays (its error is the model's, measured against the closed form).
 fn small_rotation_applies(scene: &Scene) -> Result<(), EngineError> {
     let rotations: &[usize] = match scene.dimension {
         crate::scene::Dimension::Two => &[2],
@@ -64,9 +66,12 @@ fn small_rotation_applies(scene: &Scene) -> Result<(), EngineError> {
             .filter(|s| matches!(s.kind, crate::scene::StepKind::Dynamic { .. }))
             .any(|s| {
                 rotations.iter().any(|&axis| {
-                    !s.conditions
-                        .iter()
-                        .any(|c| c.node == reference && c.dof == crate::scene::Dof::Rotation(axis))
+                    // Held where it is; a prescribed turn moves the arm as much as a free one.
+                    !s.conditions.iter().any(|c| {
+                        c.node == reference
+                            && c.dof == crate::scene::Dof::Rotation(axis)
+                            && c.value.is_none_or(|v| v == 0.0)
+                    })
                 })
             });
         if turns {

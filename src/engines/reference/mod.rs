@@ -173,6 +173,7 @@ struct Motion<'a> {
     mechanism: &'a Mechanism,
     basis: &'a DMatrix<f64>,
     active: &'a [bool],
+    inside: &'a [bool],
     error: &'a RefCell<Option<EngineError>>,
     fired: &'a Cell<bool>,
 }
@@ -205,7 +206,7 @@ impl ode_solvers::System<f64, ode_solvers::DVector<f64>> for Motion<'_> {
         if self.error.borrow().is_some() {
             return true;
         }
-        match fired(self.mechanism, self.basis, self.active, y) {
+        match fired(self.mechanism, self.basis, self.active, self.inside, y) {
             Ok(true) => {
                 self.fired.set(true);
                 true
@@ -219,13 +220,16 @@ impl ode_solvers::System<f64, ode_solvers::DVector<f64>> for Motion<'_> {
     }
 }
 
-/// Whether a contact event has happened by state `y`: an open pair's gap below zero while it
-/// closes (ġ < 0: a pair that has just rebounded sits a few ulps inside while it leaves), or a
-/// closed pair's force below zero.
+/// Whether a contact event has happened by state `y`: an open pair's gap below zero, or a
+/// closed pair's force below zero. A pair that was `inside` at the leg's start (it has just
+/// rebounded, or just opened, and sits a few ulps inside while it leaves) strikes only while it
+/// closes (ġ < 0); any other pair strikes once its gap is below zero, so that a grazing impact
+/// caught only after the gap turned again is still found.
 fn fired(
     mechanism: &Mechanism,
     basis: &DMatrix<f64>,
     active: &[bool],
+    inside: &[bool],
     y: &ode_solvers::DVector<f64>,
 ) -> Result<bool, EngineError> {
     let m = mechanism;
@@ -237,8 +241,8 @@ fn fired(
     let w = DVector::from_column_slice(&y.as_slice()[np..]);
     let u = basis * &w;
     let (gaps, _, _) = m.constraints(&at, &u, active);
-    let striking =
-        (0..active.len()).any(|k| !active[k] && gaps[k] < 0.0 && m.gap_rate(&at, &u, k) < 0.0);
+    let striking = (0..active.len())
+        .any(|k| !active[k] && gaps[k] < 0.0 && (!inside[k] || m.gap_rate(&at, &u, k) < 0.0));
     if striking {
         return Ok(true);
     }
@@ -249,9 +253,13 @@ fn fired(
     Ok(false)
 }
 
-/// Checks for contact events per output interval: a contact that closes and opens again
-/// within one check would be missed, so the interval is split.
+/// Legs per output interval. Events are looked for after every accepted integration step, and
+/// no step is longer than its leg, so an excursion through a surface shorter than a quarter of
+/// an interval can still be missed only if it begins and ends inside one step.
 const EVENT_CHECKS_PER_ROW: usize = 4;
+
+/// Most passes of impulses over the pairs that strike at one instant.
+const MAX_IMPACT_PASSES: usize = 1000;
 
 /// Below this fraction of the largest approach speed met so far, an impact is taken as
 /// plastic: a bouncing node's impacts accumulate (their times form a geometric series), and
@@ -293,6 +301,20 @@ struct Leg<'a> {
 }
 
 impl Leg<'_> {
+    /// The open pairs whose gap is below zero at `y`.
+    fn inside(&self, active: &[bool], y: &ode_solvers::DVector<f64>) -> Vec<bool> {
+        let m = self.mechanism;
+        if m.contact_count() == 0 {
+            return Vec::new();
+        }
+        let at = m.unpack(y.as_slice());
+        let u = self.basis * DVector::from_column_slice(&y.as_slice()[m.position_len()..]);
+        let (gaps, _, _) = m.constraints(&at, &u, active);
+        (0..active.len())
+            .map(|k| !active[k] && gaps[k] < 0.0)
+            .collect()
+    }
+
     /// Integrates from `(t, y)` towards `to` and returns where it stopped: at `to`, or at the
     /// end of the first accepted step by which a contact event has happened (then `true`).
     fn run(
@@ -304,10 +326,12 @@ impl Leg<'_> {
     ) -> Result<(f64, ode_solvers::DVector<f64>, bool), EngineError> {
         let failure = RefCell::new(None);
         let fired = Cell::new(false);
+        let inside = self.inside(active, y);
         let motion = Motion {
             mechanism: self.mechanism,
             basis: self.basis,
             active,
+            inside: &inside,
             error: &failure,
             fired: &fired,
         };
@@ -484,11 +508,14 @@ fn solve(
     let mut dynamic_index = 0;
     let np = mechanism.position_len();
     for step in &scene.steps {
-        let basis = mechanism.free_basis(step)?;
+        // What fails at the first step is a scene the reference does not solve; what fails at
+        // a later one is this run's failure at that step's start.
+        let started = |e| if t0 > 0.0 { during(t0)(e) } else { e };
+        let basis = mechanism.free_basis(step).map_err(started)?;
         mechanism.prescribe(step, &mut at);
         let duration = match step.kind {
             StepKind::Static => {
-                equilibrium(mechanism, &basis, &mut at, length)?;
+                equilibrium(mechanism, &basis, &mut at, length).map_err(started)?;
                 continue;
             }
             StepKind::Dynamic { duration } => duration,
@@ -510,11 +537,13 @@ fn solve(
                 }
             }
         }
-        let mut w = mechanism.admissible(&at, &basis, &u, &active)?;
+        let mut w = mechanism
+            .admissible(&at, &basis, &u, &active)
+            .map_err(started)?;
         let mut y = ode_solvers::DVector::zeros(np + w.len());
         mechanism.pack(&at, &mut y.as_mut_slice()[..np]);
         y.as_mut_slice()[np..].copy_from_slice(w.as_slice());
-        release(mechanism, &basis, &mut active, &y, t0, &mut events)?;
+        release(mechanism, &basis, &mut active, &y, t0, &mut events).map_err(started)?;
         let mut leg = Leg {
             mechanism,
             basis: &basis,
@@ -552,6 +581,11 @@ fn solve(
                     let (stopped, state, event) =
                         leg.run(&active, t, &y, mid).map_err(during(t))?;
                     if event {
+                        if stopped < lo {
+                            // The shorter integration took other steps and met the event
+                            // before `lo`: the bracket restarts from the leg's start.
+                            lo = t;
+                        }
                         (hi, at_hi) = (stopped, state);
                     } else {
                         lo = mid;
@@ -563,36 +597,69 @@ fn solve(
                 let mut wv = DVector::from_column_slice(&y.as_slice()[np..]);
                 let full = &basis * &wv;
                 let (gaps, _, _) = mechanism.constraints(&placed, &full, &active);
-                for k in 0..active.len() {
-                    if active[k] || gaps[k] >= 0.0 {
-                        continue;
+                // Simultaneous impacts: one pair's impulse can make another close again, so
+                // the impulses are repeated until no open pair inside closes (each impact
+                // takes energy out or rests the pair, so this settles).
+                let mut struck: Vec<Option<usize>> = vec![None; active.len()];
+                let mut settled = false;
+                for _ in 0..MAX_IMPACT_PASSES {
+                    let mut any = false;
+                    for k in 0..active.len() {
+                        if active[k] || gaps[k] >= 0.0 {
+                            continue;
+                        }
+                        let speed = -mechanism.gap_rate(&placed, &(&basis * &wv), k);
+                        if speed <= 0.0 {
+                            // Inside by round-off while leaving: the rebound of an earlier
+                            // impact, or a graze that has already turned.
+                            continue;
+                        }
+                        any = true;
+                        fastest = fastest.max(speed);
+                        let e = mechanism.restitution(k);
+                        let rests = e == 0.0 || speed <= RESTING_SPEED * fastest;
+                        wv = mechanism
+                            .impact(
+                                &placed,
+                                &basis,
+                                &wv,
+                                &active,
+                                Some((k, if rests { 0.0 } else { e })),
+                            )
+                            .map_err(during(t))?;
+                        let rebound = mechanism.gap_rate(&placed, &(&basis * &wv), k);
+                        match struck[k] {
+                            // A later pass strikes the pair again: one impact, its rebound
+                            // the last.
+                            Some(i) => {
+                                if let ContactEvent::Impact { rebound: r, .. } = &mut events[i] {
+                                    *r = rebound;
+                                }
+                            }
+                            None => {
+                                struck[k] = Some(events.len());
+                                events.push(ContactEvent::Impact {
+                                    contact: k,
+                                    time: t,
+                                    speed,
+                                    rebound,
+                                });
+                            }
+                        }
+                        if rests {
+                            active[k] = true;
+                        }
                     }
-                    let speed = -mechanism.gap_rate(&placed, &(&basis * &wv), k);
-                    if speed <= 0.0 {
-                        // Inside by round-off while leaving: the rebound of an earlier impact.
-                        continue;
+                    if !any {
+                        settled = true;
+                        break;
                     }
-                    fastest = fastest.max(speed);
-                    let e = mechanism.restitution(k);
-                    let rests = e == 0.0 || speed <= RESTING_SPEED * fastest;
-                    wv = mechanism
-                        .impact(
-                            &placed,
-                            &basis,
-                            &wv,
-                            &active,
-                            Some((k, if rests { 0.0 } else { e })),
-                        )
-                        .map_err(during(t))?;
-                    events.push(ContactEvent::Impact {
-                        contact: k,
-                        time: t,
-                        speed,
-                        rebound: mechanism.gap_rate(&placed, &(&basis * &wv), k),
-                    });
-                    if rests {
-                        active[k] = true;
-                    }
+                }
+                if !settled {
+                    return Err(EngineError::Failed(format!(
+                        "reference: simultaneous impacts at t = {t:e} did not settle in \
+                         {MAX_IMPACT_PASSES} passes"
+                    )));
                 }
                 y.as_mut_slice()[np..].copy_from_slice(wv.as_slice());
                 release(mechanism, &basis, &mut active, &y, t, &mut events).map_err(during(t))?;

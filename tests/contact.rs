@@ -20,6 +20,21 @@ fn run(scene: &Scene, engine: &str, settings: &RunSettings) -> RunOutput {
         .unwrap_or_else(|e| panic!("{} / {engine}: {e}", scene.id))
 }
 
+/// Points where parry's geometry is checked against the closed form: outside (faces, edges,
+/// corners, caps) and inside (nearest face), off the medial axes where the nearest feature is
+/// not unique.
+fn probe_points() -> Vec<Vector3<f64>> {
+    vec![
+        Vector3::new(1.3, 0.05, 0.02),
+        Vector3::new(-0.9, 0.6, 0.1),
+        Vector3::new(0.8, -0.5, 0.45),
+        Vector3::new(0.1, 1.1, -0.05),
+        Vector3::new(0.3, 0.02, 0.01),
+        Vector3::new(-0.05, -0.12, 0.07),
+        Vector3::new(0.0, -0.9, 0.2),
+    ]
+}
+
 fn column(h: &History, name: &str) -> Vec<f64> {
     h.column(name).unwrap_or_else(|| panic!("no column {name}"))
 }
@@ -48,17 +63,7 @@ fn parry_gap_and_normal_equal_closed_form_geometry() {
             radius: 0.25,
         },
     ];
-    // Points outside (faces, edges, corners, caps) and inside (nearest face), off the medial
-    // axes where the nearest feature is not unique.
-    let points = [
-        Vector3::new(1.3, 0.05, 0.02),
-        Vector3::new(-0.9, 0.6, 0.1),
-        Vector3::new(0.8, -0.5, 0.45),
-        Vector3::new(0.1, 1.1, -0.05),
-        Vector3::new(0.3, 0.02, 0.01),
-        Vector3::new(-0.05, -0.12, 0.07),
-        Vector3::new(0.0, -0.9, 0.2),
-    ];
+    let points = probe_points();
     let mut checked = 0;
     for solid in &solids {
         let spatial = Spatial::solid(solid);
@@ -471,16 +476,10 @@ fn parry_convex_shapes_equal_the_closed_form_polytope() {
             true,
         ),
     ];
-    let points = [
-        Vector3::new(1.3, 0.05, 0.02),
-        Vector3::new(-0.9, 0.6, 0.1),
-        Vector3::new(0.8, -0.5, 0.45),
-        Vector3::new(0.1, 1.1, -0.05),
-        Vector3::new(0.3, 0.02, 0.01),
-        Vector3::new(-0.05, -0.12, 0.07),
-        Vector3::new(0.0, -0.9, 0.2),
-        Vector3::new(0.6, 0.3, 0.4),
-    ];
+    let points: Vec<Vector3<f64>> = probe_points()
+        .into_iter()
+        .chain([Vector3::new(0.6, 0.3, 0.4)])
+        .collect();
     let mut checked = 0;
     for p in &points {
         // Round-off of a projection on shapes of unit size: 1e-12.

@@ -489,10 +489,16 @@ const CORPUS: &[(&str, usize, &str, &str)] = &[
         "is missing, but column 4 of a springs case must be `v_mid`",
     ),
     (
+        "column_gap_unknown_contact",
+        60,
+        "output.columns[5].gap",
+        "names contact `drip`, which the case does not define",
+    ),
+    (
         "column_two_probes",
         23,
         "output.columns[0]",
-        "give exactly one of displacement, velocity, rotation, contact_force, zero",
+        "give exactly one of displacement, velocity, rotation, contact_force, gap, zero",
     ),
     (
         "column_without_direction",

@@ -407,4 +407,34 @@ fn the_contact_section_shows_the_summarys_rebounds() {
         rows += 1;
     }
     assert_eq!(rows, 5);
+    // The impact table's deepest penetration on the elastic drop: the reference never goes in
+    // (round-off); explicit's undamped penalty oscillation reaches A = mg/k_p +
+    // √((mg/k_p)² + (v/ω_p)²), which rows Δ = 5e-4 s apart see to within cos(ω_p Δ/2) of it.
+    let drop = summary
+        .cases
+        .iter()
+        .find(|c| c.id == "contact_drop_e1")
+        .unwrap();
+    let deepest = |engine: &str| {
+        drop.runs
+            .iter()
+            .find(|r| r.engine == engine)
+            .and_then(|r| r.impacts.as_ref()?.penetration)
+            .unwrap()
+    };
+    assert!(deepest("reference") < 1e-12);
+    let (g, kp) = (9.81_f64, 1e7_f64);
+    let (offset, wp) = (g / kp, kp.sqrt());
+    let a = offset + (offset * offset + 2.0 * g / kp).sqrt();
+    let explicit = deepest("explicit");
+    assert!(
+        explicit <= a * 1.001 && explicit >= a * (wp * 2.5e-4).cos(),
+        "{explicit:e} vs {a:e}"
+    );
+    let line = report
+        .lines()
+        .skip_while(|l| !l.starts_with("| case | engine | impacts |"))
+        .find(|l| l.starts_with("| contact_drop_e1 | explicit | "))
+        .unwrap();
+    assert!(line.ends_with(&format!("| {:.2e} |", explicit)), "{line}");
 }

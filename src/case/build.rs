@@ -1038,6 +1038,7 @@ pub fn scene(case: &CaseFile, stem: Option<&str>) -> Result<Scene, SceneError> {
             c.velocity.is_some(),
             c.rotation.is_some(),
             c.contact_force.is_some(),
+            c.gap.is_some(),
             c.zero.is_some(),
         ]
         .iter()
@@ -1046,7 +1047,7 @@ pub fn scene(case: &CaseFile, stem: Option<&str>) -> Result<Scene, SceneError> {
         if set != 1 {
             return err(
                 &field,
-                "give exactly one of displacement, velocity, rotation, contact_force, zero",
+                "give exactly one of displacement, velocity, rotation, contact_force, gap, zero",
             );
         }
         let direction = |c: &ColumnTable| -> Result<Vector3<f64>, SceneError> {
@@ -1083,14 +1084,23 @@ pub fn scene(case: &CaseFile, stem: Option<&str>) -> Result<Scene, SceneError> {
                 body: b.body(&format!("{field}.rotation"), name)?,
                 axis,
             }
-        } else if let Some(name) = &c.contact_force {
+        } else if let Some((key, name)) = c
+            .contact_force
+            .as_ref()
+            .map(|n| ("contact_force", n))
+            .or(c.gap.as_ref().map(|n| ("gap", n)))
+        {
             let Some(k) = contacts.iter().position(|p| &p.name == name) else {
                 return err(
-                    format!("{field}.contact_force"),
+                    format!("{field}.{key}"),
                     format!("names contact `{name}`, which the case does not define"),
                 );
             };
-            Probe::ContactForce { contact: k }
+            if key == "gap" {
+                Probe::Gap { contact: k }
+            } else {
+                Probe::ContactForce { contact: k }
+            }
         } else {
             Probe::Zero {
                 reason: c.zero.clone().unwrap_or_default(),

@@ -112,6 +112,9 @@ pub struct ColumnTable {
     pub rotation: Option<String>,
     /// Normal force of this contact pair, compressive positive.
     pub contact_force: Option<String>,
+    /// Gap of this contact pair: signed distance from its node to its surface (negative:
+    /// penetration).
+    pub gap: Option<String>,
     /// A column that is identically zero, with the reason (e.g. no middle mass).
     pub zero: Option<String>,
     /// Direction for displacement/velocity (global).

@@ -24,6 +24,10 @@ pub struct Impacts {
     /// The first impact's rebound height over the drop (a scene with one pair that starts
     /// open, whose `ux_node` column measures its node along the surface normal).
     pub rebound: Option<f64>,
+    /// The deepest penetration at the rows (the largest −gap over the scene's `gap` columns,
+    /// 0 if the node never went in); `None` without a `gap` column.
+    #[serde(default)]
+    pub penetration: Option<f64>,
 }
 
 /// The contact events of one run, for a scene where contact opens and closes (a pair that
@@ -88,8 +92,17 @@ pub fn measure(
             }
         }
     }
+    let gaps: Vec<Vec<f64>> = scene
+        .columns
+        .iter()
+        .filter(|c| matches!(c.probe, Probe::Gap { .. }))
+        .filter_map(|c| history.column(&c.name))
+        .collect();
+    let penetration =
+        (!gaps.is_empty()).then(|| gaps.iter().flatten().fold(0.0_f64, |m, g| m.max(-g)));
     Some(Impacts {
         rebound: rebound(scene, history, &times),
+        penetration,
         times,
         count,
         energy_change,

@@ -1,10 +1,11 @@
 //! The report's contact section: contact that opens and closes, each engine against the
 //! event-driven `reference`: the restitution table (first rebound over the drop against e²),
-//! when each engine strikes, and what each impact does to the energy. Rendered from the
-//! summary's `impacts` entries ([`crate::comparison::contact`]).
+//! when each engine strikes, what each impact does to the energy, and how deep the node goes
+//! in. Rendered from the summary's `impacts` entries ([`crate::comparison::contact`]).
 
 use super::markdown::sci;
 use super::summary::{CaseSummary, Summary};
+use crate::contract::IMPACTS_REPORTED;
 use std::fmt::Write;
 
 /// The exact solution the impacts are measured against.
@@ -98,13 +99,17 @@ pub fn section(w: &mut String, s: &Summary) {
          the loads, after minus before, over the kinetic energy before: −(1 − e²) for \
          restitution e, 0 for an elastic impact; after is the first row where the contact has \
          let go or, where it comes to rest, the last row before the next impact; the reference \
-         keeps no energies, its impacts follow the law exactly):\n"
+         keeps no energies, its impacts follow the law exactly), and the same over each of the \
+         first impacts (up to the five an engine reports): the one farthest from zero, and \
+         over how many impacts; and the deepest penetration \
+         at the rows (the largest −gap of the case's `gap` columns: penalty contact lets the \
+         node in by about v/ω_p at an impact of speed v, the reference never):\n"
     );
     let _ = writeln!(
         w,
-        "| case | engine | impacts | first impact [s] | Δ first [increments] | energy change, first impact |"
+        "| case | engine | impacts | first impact [s] | Δ first [increments] | energy change, first impact | farthest from 0, each impact (over) | deepest penetration [m] |"
     );
-    let _ = writeln!(w, "|---|---|---:|---:|---:|---:|");
+    let _ = writeln!(w, "|---|---|---:|---:|---:|---:|---:|---:|");
     for c in &cases {
         let exact = c
             .runs
@@ -121,9 +126,23 @@ pub fn section(w: &mut String, s: &Summary) {
                 _ => "–".into(),
             };
             let energy = i.energy_change.first().copied().map_or("–".into(), sci);
+            let farthest = i
+                .energy_change
+                .iter()
+                .take(IMPACTS_REPORTED)
+                .copied()
+                .reduce(|a, b| if b.abs() > a.abs() { b } else { a })
+                .map_or("–".into(), |x| {
+                    format!(
+                        "{} ({})",
+                        sci(x),
+                        i.energy_change.len().min(IMPACTS_REPORTED)
+                    )
+                });
+            let penetration = i.penetration.map_or("–".into(), sci);
             let _ = writeln!(
                 w,
-                "| {} | {} | {} | {} | {shift} | {energy} |",
+                "| {} | {} | {} | {} | {shift} | {energy} | {farthest} | {penetration} |",
                 c.id,
                 r.engine,
                 i.count.map_or(i.times.len().to_string(), |n| n.to_string()),

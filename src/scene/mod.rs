@@ -468,6 +468,12 @@ pub enum Probe {
         /// Index in [`Scene::contacts`].
         contact: usize,
     },
+    /// Gap of a contact pair: the signed distance from its node to its surface (negative:
+    /// penetration), as the engine's own state places them.
+    Gap {
+        /// Index in [`Scene::contacts`].
+        contact: usize,
+    },
     /// Identically zero (the reason is kept for the reader).
     Zero {
         /// Why.

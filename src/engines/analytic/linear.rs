@@ -286,7 +286,7 @@ pub fn solve(scene: &Scene) -> Result<History, EngineError> {
     if let Some(c) = scene
         .columns
         .iter()
-        .find(|c| matches!(c.probe, Probe::ContactForce { .. }))
+        .find(|c| matches!(c.probe, Probe::ContactForce { .. } | Probe::Gap { .. }))
     {
         return unsupported(format!(
             "column `{}`: the linear solver does not do contact",
@@ -477,7 +477,7 @@ pub fn solve(scene: &Scene) -> Result<History, EngineError> {
             }
             Probe::Velocity { node, direction } => Some((layout.point(*node), *direction, true)),
             Probe::Rotation { body, axis } => Some((layout.rotation(*body), *axis, false)),
-            Probe::Zero { .. } | Probe::ContactForce { .. } => None,
+            Probe::Zero { .. } | Probe::ContactForce { .. } | Probe::Gap { .. } => None,
         })
         .collect();
     let rows = times

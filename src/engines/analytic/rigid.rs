@@ -261,6 +261,8 @@ pub fn solve(scene: &Scene) -> Result<RigidSolution, EngineError> {
                 Probe::Velocity { node, direction } => planar(direction).dot(&(point(*node)? * qd)),
                 Probe::Rotation { axis, .. } => q.z * axis.z,
                 Probe::ContactForce { .. } => lambda,
+                // The closed form keeps the contact closed: the node on its face.
+                Probe::Gap { .. } => 0.0,
                 Probe::Zero { .. } => 0.0,
             });
         }

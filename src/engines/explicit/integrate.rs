@@ -601,6 +601,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
                             unwrapped
                         }
                         Probe::ContactForce { contact } => forces.contact[*contact],
+                        Probe::Gap { contact } => model.gap(&cfg, *contact).0,
                         Probe::Zero { .. } => 0.0,
                     });
                 }

@@ -311,6 +311,7 @@ impl<'a> Recorder<'a> {
                     unwrapped
                 }
                 Probe::ContactForce { .. } => f64::NAN, // filled by `resolve`
+                Probe::Gap { contact } => k.gap(state, *contact),
                 Probe::Zero { .. } => 0.0,
             });
         }

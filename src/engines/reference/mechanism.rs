@@ -571,6 +571,14 @@ impl Mechanism {
         self.contacts[k].restitution
     }
 
+    /// Pair `k`'s signed distance from its node to its surface (negative: penetrating).
+    pub fn distance(&self, at: &Placement, k: usize) -> f64 {
+        let c = &self.contacts[k];
+        let local =
+            at.orientations[c.body].inverse() * (at.particles[c.particle] - at.origins[c.body]);
+        surface_distance(&c.surface, &local).0
+    }
+
     /// Each contact's gap above the level it closes at (negative: penetrating), the velocity
     /// rows G (on u) and Ġu of the closed (`active`) contacts.
     ///

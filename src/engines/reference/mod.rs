@@ -697,6 +697,7 @@ fn solve(
                         unwrapped
                     }
                     Probe::ContactForce { contact } => evaluation.contact[*contact],
+                    Probe::Gap { contact } => mechanism.distance(&at, *contact),
                     Probe::Zero { .. } => 0.0,
                 });
             }

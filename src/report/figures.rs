@@ -1,5 +1,5 @@
-//! SVG figures (plotters): per case, each live contract column over time for the closed form
-//! and the engines, so a reader sees what the error tables measure.
+//! SVG figures (plotters): per case, each live contract column (and each contact gap) over time
+//! for the closed form and the engines, so a reader sees what the error tables measure.
 
 use crate::comparison;
 use crate::contract::{self, History};
@@ -69,13 +69,18 @@ pub fn figure_path(out: &Path, case: &str) -> PathBuf {
     out.join("figures").join(format!("{case}.svg"))
 }
 
-/// Render a case's figure: one panel per column in `columns` whose values are not all zero,
-/// every available engine's history as a line. `histories` pairs engine names with histories.
-pub fn render(case: &str, columns: &[&str], histories: &[(&str, History)]) -> Option<String> {
-    let live: Vec<&str> = columns
+/// Render a case's figure: one panel per column in `columns` (name and unit) whose values are
+/// not all zero, every available engine's history as a line. `histories` pairs engine names
+/// with histories.
+pub fn render(
+    case: &str,
+    columns: &[(&str, &str)],
+    histories: &[(&str, History)],
+) -> Option<String> {
+    let live: Vec<(&str, &str)> = columns
         .iter()
         .copied()
-        .filter(|c| {
+        .filter(|(c, _)| {
             histories
                 .iter()
                 .any(|(_, h)| h.column(c).is_some_and(|v| v.iter().any(|x| *x != 0.0)))
@@ -93,7 +98,7 @@ pub fn render(case: &str, columns: &[&str], histories: &[(&str, History)]) -> Op
         let (title, body) = root.split_vertically(40);
         title.titled(case, ("sans-serif", 22)).ok()?;
         let panels = body.split_evenly((live.len(), 1));
-        for (whole, column) in panels.iter().zip(&live) {
+        for (whole, &(column, unit)) in panels.iter().zip(&live) {
             let (panel, legend) = whole.split_horizontally(900);
             let series: Vec<Series> = DRAWN
                 .iter()
@@ -115,18 +120,24 @@ pub fn render(case: &str, columns: &[&str], histories: &[(&str, History)]) -> Op
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
                     (a.min(t), b.max(t))
                 });
-            // Scale to the closed form (or the first engine) so one wild run does not flatten
-            // the others; wild values are clipped at the panel edge.
-            let reference = series
+            // Scale to the closed form (else the converged reference, else the first engine) so
+            // one wild run does not flatten the others; wild values are clipped at the panel
+            // edge. A constant scale (the reference's contact force where its impacts are
+            // impulses) would clip every engine: then all of them set the range.
+            let range = |points: &mut dyn Iterator<Item = f64>| {
+                points.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), y| {
+                    (a.min(y), b.max(y))
+                })
+            };
+            let scale = series
                 .iter()
                 .find(|s| s.0 == "analytic")
+                .or(series.iter().find(|s| s.0 == "reference"))
                 .or(series.first())?;
-            let (lo, hi) = reference
-                .2
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
-                    (a.min(p.1), b.max(p.1))
-                });
+            let (mut lo, mut hi) = range(&mut scale.2.iter().map(|p| p.1));
+            if hi <= lo {
+                (lo, hi) = range(&mut series.iter().flat_map(|s| s.2.iter().map(|p| p.1)));
+            }
             let (lo, hi) = padded(lo, hi)?;
             if !(t0.is_finite() && t1.is_finite() && t1 > t0) {
                 return None;
@@ -141,7 +152,7 @@ pub fn render(case: &str, columns: &[&str], histories: &[(&str, History)]) -> Op
             chart
                 .configure_mesh()
                 .x_desc("t [s]")
-                .y_desc(format!("{column} [{}]", unit(column)))
+                .y_desc(format!("{column} [{unit}]"))
                 .x_label_formatter(&|x| tick(*x, x_span))
                 .y_label_formatter(&|y| tick(*y, y_span))
                 .light_line_style(WHITE)
@@ -507,6 +518,6 @@ mod tests {
             columns: vec!["t".into(), "u_end".into()],
             rows: (0..5).map(|i| vec![f64::from(i), f64::NAN]).collect(),
         };
-        assert!(render("c", &["u_end"], &[("explicit", h)]).is_none());
+        assert!(render("c", &[("u_end", "m")], &[("explicit", h)]).is_none());
     }
 }

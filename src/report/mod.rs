@@ -110,7 +110,19 @@ pub fn write(
         let Some(scene) = plan.cases.iter().find(|s| s.id == case.id) else {
             continue; // a case this run did not include keeps its previous figure
         };
-        if let Some(svg) = figures::render(&case.id, contract::columns(scene.family), &histories) {
+        // The contract's columns, then the case's contact gaps.
+        let panels: Vec<(&str, &str)> = contract::columns(scene.family)
+            .iter()
+            .map(|c| (*c, figures::unit(c)))
+            .chain(
+                scene
+                    .columns
+                    .iter()
+                    .filter(|c| matches!(c.probe, crate::scene::Probe::Gap { .. }))
+                    .map(|c| (c.name.as_str(), "m")),
+            )
+            .collect();
+        if let Some(svg) = figures::render(&case.id, &panels, &histories) {
             checkpoint("figures")?;
             data::write_atomic(&figures::figure_path(out, &case.id), svg.as_bytes())?;
         }

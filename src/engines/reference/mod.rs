@@ -236,11 +236,7 @@ fn fired(
     if m.contact_count() == 0 {
         return Ok(false);
     }
-    let np = m.position_len();
-    let at = m.unpack(y.as_slice());
-    let w = DVector::from_column_slice(&y.as_slice()[np..]);
-    let u = basis * &w;
-    let (gaps, _, _) = m.constraints(&at, &u, active);
+    let (at, w, u, gaps) = gaps_at(m, basis, active, y);
     let striking = (0..active.len())
         .any(|k| !active[k] && gaps[k] < 0.0 && (!inside[k] || m.gap_rate(&at, &u, k) < 0.0));
     if striking {
@@ -251,6 +247,20 @@ fn fired(
         return Ok(e.contact.iter().zip(active).any(|(f, a)| *a && *f < 0.0));
     }
     Ok(false)
+}
+
+/// The placement, free velocities, full velocity and every pair's gap at state `y`.
+fn gaps_at(
+    m: &Mechanism,
+    basis: &DMatrix<f64>,
+    active: &[bool],
+    y: &ode_solvers::DVector<f64>,
+) -> (Placement, DVector<f64>, DVector<f64>, Vec<f64>) {
+    let at = m.unpack(y.as_slice());
+    let w = DVector::from_column_slice(&y.as_slice()[m.position_len()..]);
+    let u = basis * &w;
+    let (gaps, _, _) = m.constraints(&at, &u, active);
+    (at, w, u, gaps)
 }
 
 /// Legs per output interval. Events are looked for after every accepted integration step, and
@@ -303,13 +313,10 @@ struct Leg<'a> {
 impl Leg<'_> {
     /// The open pairs whose gap is below zero at `y`.
     fn inside(&self, active: &[bool], y: &ode_solvers::DVector<f64>) -> Vec<bool> {
-        let m = self.mechanism;
-        if m.contact_count() == 0 {
+        if self.mechanism.contact_count() == 0 {
             return Vec::new();
         }
-        let at = m.unpack(y.as_slice());
-        let u = self.basis * DVector::from_column_slice(&y.as_slice()[m.position_len()..]);
-        let (gaps, _, _) = m.constraints(&at, &u, active);
+        let (_, _, _, gaps) = gaps_at(self.mechanism, self.basis, active, y);
         (0..active.len())
             .map(|k| !active[k] && gaps[k] < 0.0)
             .collect()
@@ -593,13 +600,11 @@ fn solve(
                 }
                 t = hi;
                 y = at_hi;
-                let placed = mechanism.unpack(y.as_slice());
-                let mut wv = DVector::from_column_slice(&y.as_slice()[np..]);
-                let full = &basis * &wv;
-                let (gaps, _, _) = mechanism.constraints(&placed, &full, &active);
+                let (placed, mut wv, _, gaps) = gaps_at(mechanism, &basis, &active, &y);
                 // Simultaneous impacts: one pair's impulse can make another close again, so
-                // the impulses are repeated until no open pair inside closes (each impact
-                // takes energy out or rests the pair, so this settles).
+                // the impulses are repeated until no open pair inside closes (sequential
+                // impulses, each at most elastic; a pair closing slower than RESTING_SPEED of
+                // the fastest rests).
                 let mut struck: Vec<Option<usize>> = vec![None; active.len()];
                 let mut settled = false;
                 for _ in 0..MAX_IMPACT_PASSES {

@@ -95,13 +95,13 @@ fn change(a: f64, b: f64) -> f64 {
 
 /// The explicit engines: central differences show order 2 in h and penalty contact order 1 in
 /// 1/k_p, and one more extrapolation level (h/8, 64 k_p) moves the time-step and penalty parts
-/// by less than 10 % of their norm, on every column and seed case. One exception, measured and
-/// bounded: the contact force's penalty part moves by 17–18 % on the pinned cases (observed
-/// order 0.63, not 1: the penalty mode, started at the right force but not at the right force
-/// rate, rings with an amplitude ~ k_p^(-1/2) at a frequency ~ k_p^(1/2), which a row-wise
-/// power series in 1/k_p cannot remove); 25 % bounds it. What remains (`solver`) is the
-/// extrapolations' own error: ≤ 1e-8 of the peak on the kinematic columns (measured ≤ 1.4e-9),
-/// ≤ 3e-5 on the contact force (measured 2.1e-5 pinned, 1.9e-6 sliding).
+/// by less than 10 % of their norm, on every column and seed case, the contact force included
+/// (the start leads the gap rate by the increment's own lag, so the penalty mode is not set
+/// ringing with an amplitude ~ k_p^(-1/2) along the ladder, which no power series in 1/k_p
+/// removes: before that lead the pinned contact force's penalty part moved by 17.7 %, order
+/// 0.63). What remains (`solver`) is the extrapolations' own error: ≤ 1e-8 of the peak on the
+/// kinematic columns (measured ≤ 1.4e-9), ≤ 1e-7 on the contact force (measured ≤ 1.3e-8;
+/// it was 2.1e-5 pinned before the lead).
 #[test]
 fn explicit_budgets_are_converged_one_level_further() {
     let (_, _, budgets) = budgets();
@@ -122,20 +122,20 @@ fn explicit_budgets_are_converged_one_level_further() {
                 assert!((p - 2.0).abs() < 0.25, "{what}: order in h {p}");
             }
             assert!(change(c.time_step, x.time_step) < 0.1, "{what}: time step");
-            let contact = c.column == "contact_force";
-            let bound = if contact { 0.25 } else { 0.1 };
             assert!(
-                change(c.penalty, x.penalty) < bound,
+                change(c.penalty, x.penalty) < 0.1,
                 "{what}: penalty {:e} → {:e}",
                 c.penalty,
                 x.penalty
             );
-            if let Some(Order::Observed(q)) = c.penalty_order
-                && !contact
-            {
+            if let Some(Order::Observed(q)) = c.penalty_order {
                 assert!((q - 1.0).abs() < 0.05, "{what}: order in 1/k_p {q}");
             }
-            let floor = if contact { 3e-5 } else { 1e-8 };
+            let floor = if c.column == "contact_force" {
+                1e-7
+            } else {
+                1e-8
+            };
             assert!(c.solver <= floor, "{what}: solver {:e}", c.solver);
         }
     }

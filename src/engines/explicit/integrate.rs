@@ -195,8 +195,8 @@ fn consistent_forces<S: Space, const FINITE: bool>(
 /// With the penalty, λ = −k_p d, and the gap obeys d̈ = A + B λ; the rigid model's force
 /// λ_r = −B⁻¹A. Expanding the penalty solution about it gives λ = λ_r − (k_p B)⁻¹ λ̈_r + …, so
 /// the start sets the penetration to carry λ_r(0) − (k_p B)⁻¹ λ̈_r(0) and the gap rate to
-/// −λ̇_r(0)/k_p. λ̇_r and λ̈_r are central differences of the rigid force along the trajectory
-/// extrapolated ±τ (τ = the increment).
+/// −λ̇_r(0)/k_p, led by the increment's own lag (below). λ̇_r and λ̈_r are central differences
+/// of the rigid force along the trajectory extrapolated ±τ (τ = the increment).
 fn consistent_start<S: Space, const FINITE: bool>(
     model: &Model<S, FINITE>,
     cfg: &mut Config<S>,
@@ -243,7 +243,14 @@ fn consistent_start<S: Space, const FINITE: bool>(
     for k in 0..model.contact_count() {
         if f0[k] > 0.0 {
             model.set_penetration(cfg, k, (f0[k] - correction[k]) / model.penalty);
-            model.set_gap_rate(cfg, vel, k, -rate[k] / model.penalty);
+            // The leapfrog's smooth solution through (q₀, v₀) moves at q̇(0) = v₀ − (h²/6)·q⃛
+            // (its first increment is q₀ + h v₀ + (h²/2) a₀, without the cubic term), so its
+            // gap rate is ∂g·v₀ − (h²/6)·∂g·q⃛. Where the gap is linear in the coordinates
+            // ∂g·q⃛ is the rigid gap's third derivative, ≈ 0; under finite rotation it is not
+            // (the gap's curvature terms), and without this lead the penalty mode rings with
+            // a force amplitude ≈ ω_p m h²·∂g·q⃛/6, which grows like √k_p at a fixed h.
+            let lead = tau * tau / 6.0 * model.gap_rate(cfg, &jerk, k);
+            model.set_gap_rate(cfg, vel, k, -rate[k] / model.penalty + lead);
         }
     }
     model.enforce(vel, held);

@@ -6,21 +6,12 @@
 //! small-rotation idealisation (`explicit_small`); it is resolved at compile time.
 
 use super::space::SharedSolid;
-use super::space::{BodyInertia, Lin, Space, solve_body};
+use super::space::{BodyInertia, Lin, Space, compensated_add, solve_body};
 use crate::scene::{
     Attachment, BoundaryCondition, Connection, ContactPair, ContactState, Dof, Scene, Step,
     StepKind, Surface, surface_distance,
 };
 use std::marker::PhantomData;
-
-/// Kahan summation step: `x += dx`, carrying the rounding error in `carry`.
-#[inline]
-fn compensated_add<T: Lin>(x: &mut T, carry: &mut T, dx: T) {
-    let y = dx - *carry;
-    let t = *x + y;
-    *carry = (t - *x) - y;
-    *x = t;
-}
 
 /// Where an element end or a load acts.
 #[derive(Debug, Clone, Copy)]
@@ -48,6 +39,9 @@ pub struct Config<S: Space> {
     pub bu: Vec<S::V>,
     /// Body orientations (finite rotation).
     pub br: Vec<S::R>,
+    /// The rounding carry of each orientation's components (compensated summation of the
+    /// increments' turns).
+    pub br_carry: Vec<S::Carry>,
     /// Body rotation vectors (small rotation).
     pub bth: Vec<S::W>,
     /// Mass properties of each body in world axes at this configuration, kept in step with
@@ -682,6 +676,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             u: vec![S::V::zero(); self.particles.len()],
             bu: vec![S::V::zero(); self.bodies.len()],
             br: vec![S::identity(); self.bodies.len()],
+            br_carry: vec![S::Carry::default(); self.bodies.len()],
             bth: vec![S::W::zero(); self.bodies.len()],
             inertia: self.bodies.iter().map(|b| b.inertia).collect(),
         }
@@ -715,7 +710,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             Point::Particle(i) => cfg.u[*i],
             Point::Body { body, rho } => {
                 if FINITE {
-                    cfg.bu[*body] + (S::rotate(&cfg.br[*body], rho) - *rho)
+                    cfg.bu[*body] + S::turned(&cfg.br[*body], rho)
                 } else {
                     cfg.bu[*body] + S::cross(&cfg.bth[*body], rho)
                 }
@@ -875,11 +870,14 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         None
     }
 
-    /// From the contact pair's face point to its node (finite rotation).
+    /// From the contact pair's face point to its node (finite rotation), summed from small
+    /// parts (the offset at t = 0, the displacements, the face point's turn) so that a
+    /// penalty stiffness does not multiply the cancellation of body-sized positions.
     #[inline]
     fn face_to_node(&self, cfg: &Config<S>, k: usize) -> S::V {
         let c = &self.contacts[k];
-        c.arm0 + (cfg.u[c.particle] - cfg.bu[c.body]) - S::rotate(&cfg.br[c.body], &c.face)
+        (c.arm0 - c.face) + (cfg.u[c.particle] - cfg.bu[c.body])
+            - S::turned(&cfg.br[c.body], &c.face)
     }
 
     /// Position-dependent forces: springs, contact, loads. Fills `out` (cleared first).
@@ -1211,7 +1209,8 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             }
             counters.rotation_updates += 1;
             if FINITE {
-                cfg.br[b] = S::advance(&cfg.br[b], &(vel.w[b] * h));
+                cfg.br[b] =
+                    S::advance_compensated(&cfg.br[b], &mut cfg.br_carry[b], &(vel.w[b] * h));
                 cfg.inertia[b] = self.oriented(b, &cfg.br[b]);
             } else {
                 compensated_add(&mut cfg.bth[b], &mut carry.w[b], vel.w[b] * h);
@@ -1525,6 +1524,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                     }
                 })
                 .collect(),
+            br_carry: vec![S::Carry::default(); cfg.br.len()],
             bth: (0..cfg.bth.len()).map(|b| cfg.bth[b] + turn(b)).collect(),
             inertia: cfg.inertia.clone(),
         };

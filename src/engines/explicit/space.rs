@@ -51,6 +51,16 @@ macro_rules! lin_vector {
 lin_vector!(Vector2<f64>);
 lin_vector!(Vector3<f64>);
 
+/// Kahan summation step: `x += dx`, carrying the rounding error in `carry` (the sum is
+/// `x − carry`).
+#[inline]
+pub fn compensated_add<T: Lin>(x: &mut T, carry: &mut T, dx: T) {
+    let y = dx - *carry;
+    let t = *x + y;
+    *carry = (t - *x) - y;
+    *x = t;
+}
+
 /// Mass properties of a body in world axes, about its reference node.
 #[derive(Debug, Clone, Copy)]
 pub struct BodyInertia<S: Space> {
@@ -91,13 +101,28 @@ pub trait Space: Copy + Debug + Send + Sync + 'static {
     fn identity() -> Self::R;
     /// Rotate a body-frame vector into the world.
     fn rotate(r: &Self::R, x: &Self::V) -> Self::V;
+    /// `r x − x`, the displacement of a body-frame offset `x` by the rotation, computed from
+    /// the rotation's small parts (the sine, the quaternion's vector) so that it keeps their
+    /// relative precision: `rotate(r, x) − x` cancels to an absolute error of ε|x| per
+    /// evaluation, which a penalty stiffness multiplies into force noise that rings the
+    /// contact mode.
+    fn turned(r: &Self::R, x: &Self::V) -> Self::V;
     /// Rotate an inertia tensor into the world.
     fn rotate_inertia(r: &Self::R, i: &Self::Inertia) -> Self::Inertia;
     /// Apply an inertia tensor to an angular vector.
     fn inertia_apply(i: &Self::Inertia, w: &Self::W) -> Self::W;
+    /// The rounding carry of an orientation's components under compensated summation.
+    type Carry: Copy + Debug + Default + Send + Sync;
     /// Exact incremental rotation: orientation after rotating by the rotation vector `dtheta`
-    /// (world axes) from `r`.
-    fn advance(r: &Self::R, dtheta: &Self::W) -> Self::R;
+    /// (world axes) from `r`, added to `r`'s components as a small increment with Kahan
+    /// compensation in `carry` (and pulled back to unit norm in the same increment). Summed
+    /// plainly, each increment's rounding would walk the angle by ε per increment, and a
+    /// penalty stiffness turns that walk into contact force noise.
+    fn advance_compensated(r: &Self::R, carry: &mut Self::Carry, dtheta: &Self::W) -> Self::R;
+    /// [`Space::advance_compensated`] without a carry to keep (a one-off turn).
+    fn advance(r: &Self::R, dtheta: &Self::W) -> Self::R {
+        Self::advance_compensated(r, &mut Self::Carry::default(), dtheta)
+    }
     /// Rotation angle of `r` about a unit world axis (twist angle, in (−π, π]).
     fn twist(r: &Self::R, axis: &Self::W) -> f64;
     /// ω × x.
@@ -145,18 +170,6 @@ fn projection_inside(gap: f64) -> bool {
 /// Taylor series (exact to round-off there) instead of the library functions.
 const SMALL_ANGLE: f64 = 1e-2;
 
-/// `(sin x, cos x)`, from the Taylor series for |x| < [`SMALL_ANGLE`] (the first neglected
-/// terms, x^11/11! and x^10/10!, are below 1e-25 there).
-#[inline]
-fn sin_cos(x: f64) -> (f64, f64) {
-    if x.abs() < SMALL_ANGLE {
-        let y = x * x;
-        (x * sinc_series(y), cos_series(y))
-    } else {
-        x.sin_cos()
-    }
-}
-
 /// sin(a)/a as a polynomial in y = a² (Taylor, through a⁸).
 #[inline]
 fn sinc_series(y: f64) -> f64 {
@@ -164,11 +177,26 @@ fn sinc_series(y: f64) -> f64 {
     C[0] + y * (C[1] + y * (C[2] + y * (C[3] + y * C[4])))
 }
 
-/// cos(a) as a polynomial in y = a² (Taylor, through a⁸).
+/// cos(a) − 1 as a polynomial in y = a² (Taylor, through a⁸), without the cancellation of
+/// forming cos(a) first.
 #[inline]
-fn cos_series(y: f64) -> f64 {
-    const C: [f64; 5] = [1.0, -0.5, 1.0 / 24.0, -1.0 / 720.0, 1.0 / 40_320.0];
-    C[0] + y * (C[1] + y * (C[2] + y * (C[3] + y * C[4])))
+fn cos_minus_one_series(y: f64) -> f64 {
+    const C: [f64; 4] = [-0.5, 1.0 / 24.0, -1.0 / 720.0, 1.0 / 40_320.0];
+    y * (C[0] + y * (C[1] + y * (C[2] + y * C[3])))
+}
+
+/// `(sin x, cos x − 1)`, from the Taylor series for |x| < [`SMALL_ANGLE`] (the first
+/// neglected terms, x^11/11! and x^10/10!, are below 1e-25 there) and from −2 sin²(x/2)
+/// beyond.
+#[inline]
+fn sin_cos_minus_one(x: f64) -> (f64, f64) {
+    if x.abs() < SMALL_ANGLE {
+        let y = x * x;
+        (x * sinc_series(y), cos_minus_one_series(y))
+    } else {
+        let half = (0.5 * x).sin();
+        (x.sin(), -2.0 * half * half)
+    }
 }
 
 /// 2D: x, y and rotation about z.
@@ -243,6 +271,7 @@ impl Space for Planar {
     type V = Vector2<f64>;
     type W = f64;
     type R = UnitComplex<f64>;
+    type Carry = [f64; 2];
     type Inertia = f64;
     const DIM: usize = 2;
     const ROT: usize = 1;
@@ -268,18 +297,30 @@ impl Space for Planar {
     fn rotate(r: &Self::R, x: &Self::V) -> Self::V {
         r * x
     }
+    fn turned(r: &Self::R, x: &Self::V) -> Self::V {
+        let (c, s) = (r.cos_angle(), r.sin_angle());
+        // cos − 1 = −sin²/(1 + cos) on a unit circle: the sine's relative precision instead
+        // of the cosine's absolute one, wherever the denominator keeps it (cos > 0).
+        let versine = if c > 0.0 { -s * s / (1.0 + c) } else { c - 1.0 };
+        Vector2::new(versine * x.x - s * x.y, s * x.x + versine * x.y)
+    }
     fn rotate_inertia(_: &Self::R, i: &Self::Inertia) -> Self::Inertia {
         *i
     }
     fn inertia_apply(i: &Self::Inertia, w: &Self::W) -> Self::W {
         i * w
     }
-    fn advance(r: &Self::R, dtheta: &Self::W) -> Self::R {
-        let (s, c) = sin_cos(*dtheta);
-        let z = (UnitComplex::from_cos_sin_unchecked(c, s) * r).into_inner();
-        // Keep the unit norm against round-off drift: one Newton step for 1/|z| from 1 (|z|²
-        // is 1 within a few ulps, so the step leaves an error of their square).
-        UnitComplex::new_unchecked(z * (1.5 - 0.5 * z.norm_sqr()))
+    fn advance_compensated(r: &Self::R, carry: &mut [f64; 2], dtheta: &f64) -> Self::R {
+        let (s, c) = (r.sin_angle(), r.cos_angle());
+        let (ds, dc) = sin_cos_minus_one(*dtheta);
+        // The carried value (c, s) − carry misses unit norm by `excess` (a few ulps); the
+        // factor 1 − excess/2 restores it (a Newton step for 1/|z|) within the increment.
+        let excess = (c * c + s * s - 1.0) - 2.0 * (c * carry[0] + s * carry[1]);
+        let radial = dc - 0.5 * excess;
+        let (mut c1, mut s1) = (c, s);
+        compensated_add(&mut c1, &mut carry[0], c * radial - s * ds);
+        compensated_add(&mut s1, &mut carry[1], s * radial + c * ds);
+        UnitComplex::from_cos_sin_unchecked(c1, s1)
     }
     fn twist(r: &Self::R, axis: &Self::W) -> f64 {
         r.angle() * axis
@@ -384,6 +425,7 @@ impl Space for Spatial {
     type V = Vector3<f64>;
     type W = Vector3<f64>;
     type R = UnitQuaternion<f64>;
+    type Carry = [f64; 4];
     type Inertia = Matrix3<f64>;
     const DIM: usize = 3;
     const ROT: usize = 3;
@@ -409,6 +451,13 @@ impl Space for Spatial {
     fn rotate(r: &Self::R, x: &Self::V) -> Self::V {
         r * x
     }
+    fn turned(r: &Self::R, x: &Self::V) -> Self::V {
+        // r x = x + 2w (v × x) + 2 v × (v × x) for a unit quaternion (w, v).
+        let q = r.quaternion();
+        let v = q.imag();
+        let t = v.cross(x) * 2.0;
+        t * q.w + v.cross(&t)
+    }
     fn rotate_inertia(r: &Self::R, i: &Self::Inertia) -> Self::Inertia {
         let m = r.to_rotation_matrix();
         m.matrix() * i * m.matrix().transpose()
@@ -416,23 +465,31 @@ impl Space for Spatial {
     fn inertia_apply(i: &Self::Inertia, w: &Self::W) -> Self::W {
         i * w
     }
-    fn advance(r: &Self::R, dtheta: &Self::W) -> Self::R {
-        // exp(dθ/2) = (cos(|dθ|/2), sin(|dθ|/2)/|dθ| · dθ).
+    fn advance_compensated(r: &Self::R, carry: &mut [f64; 4], dtheta: &Vector3<f64>) -> Self::R {
+        // exp(dθ/2) − 1 = (cos(|dθ|/2) − 1, sin(|dθ|/2)/|dθ| · dθ).
         let angle2 = dtheta.norm_squared();
         let (w, s) = if angle2 < SMALL_ANGLE * SMALL_ANGLE {
             // Taylor series at a = |dθ|/2 < 5e-3; the first neglected terms, a^10/10! and
             // a^10/11!, are below 1e-29.
             let y = 0.25 * angle2; // a²
-            (cos_series(y), 0.5 * sinc_series(y))
+            (cos_minus_one_series(y), 0.5 * sinc_series(y))
         } else {
             let angle = angle2.sqrt();
             let (s, c) = (0.5 * angle).sin_cos();
-            (c, s / angle)
+            (c - 1.0, s / angle)
         };
-        let step = nalgebra::Quaternion::from_parts(w, dtheta * s);
-        let q = (UnitQuaternion::new_unchecked(step) * r).into_inner();
-        // Keep the unit norm against round-off drift: one Newton step for 1/|q| from 1.
-        UnitQuaternion::new_unchecked(q * (1.5 - 0.5 * q.norm_squared()))
+        let q = r.quaternion().coords;
+        // As in 2D: the carried value q − carry misses unit norm by `excess`; the factor
+        // 1 − excess/2 restores it within the increment.
+        let low = nalgebra::Vector4::from(*carry);
+        let excess = (q.norm_squared() - 1.0) - 2.0 * q.dot(&low);
+        let step = nalgebra::Quaternion::from_parts(w - 0.5 * excess, dtheta * s);
+        let dq = (step * r.quaternion()).coords;
+        let mut out = q;
+        for i in 0..4 {
+            compensated_add(&mut out[i], &mut carry[i], dq[i]);
+        }
+        UnitQuaternion::new_unchecked(nalgebra::Quaternion::from(out))
     }
     fn twist(r: &Self::R, axis: &Self::W) -> f64 {
         let q = r.quaternion();

@@ -121,6 +121,37 @@ fn the_diagnosis_names_the_stiff_mode_of_the_pair() {
     );
 }
 
+/// Below the stable increment no mode grows, but a penalty impact resolved in about one
+/// increment can send the node back faster than it struck: the node of `contact_drop_e1`
+/// (m = 1, k_p = 1e7, ω_p = 3162.3 rad/s) at 0.9× of 2/ω_p has ω_p·h = 1.8, and one increment
+/// inside at depth d ≤ h·v returns it at ω_p²h·d − v, up to ((ω_p·h)² − 1)·v = 2.24 v. The run
+/// is stopped by the energy criterion, and the message says it was the impact (at the drop's
+/// t = √(2/9.81) = 0.4515 s, to within two increments), not a growing mode.
+#[test]
+fn an_impact_below_the_limit_is_named_as_the_cause() {
+    let scene = stress("contact_drop_e1");
+    let err = ExplicitEngine::finite()
+        .run(&scene, &at_ratio(0.9))
+        .expect_err("the impact returns more than twice the energy")
+        .to_string();
+    println!("{err}");
+    assert!(err.contains("no mode is past its limit"), "{err}");
+    assert!(err.contains("ω·h = 1.800"), "{err}");
+    assert!(err.contains("(ω·h)² − 1 = 2.24"), "{err}");
+    let at: f64 = err
+        .split("penalty impact at t = ")
+        .nth(1)
+        .and_then(|r| r.split(',').next())
+        .and_then(|x| x.parse().ok())
+        .unwrap_or_else(|| panic!("no impact time in: {err}"));
+    let h = 0.9 * 2.0 / (1.0e7f64).sqrt();
+    let strike = (2.0f64 / 9.81).sqrt();
+    assert!(
+        (at - strike).abs() <= 2.0 * h,
+        "impact at {at} against {strike}"
+    );
+}
+
 #[test]
 fn at_0_98_the_stress_cases_stay_bounded_and_meet_their_tolerance() {
     for scene in stress_scenes().into_iter().filter(has_stable_increment) {

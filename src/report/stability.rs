@@ -306,9 +306,20 @@ fn words(engine: &str, points: &[Point]) -> String {
             all.len()
         )
     };
-    let stable_below: usize = points
+    let below: Vec<&Point> = points
         .iter()
         .filter(|p| p.ratio < 1.0 && p.outcome == Outcome::Unstable)
+        .collect();
+    let stable_below = below.len();
+    let mut below_cases: Vec<&str> = below.iter().map(|p| p.case.as_str()).collect();
+    below_cases.dedup();
+    let at_impacts = below
+        .iter()
+        .filter(|p| {
+            p.message
+                .as_deref()
+                .is_some_and(|m| m.contains("penalty impact"))
+        })
         .count();
     let explicit = engine.starts_with("explicit");
     let mut s = String::new();
@@ -321,9 +332,21 @@ fn words(engine: &str, points: &[Point]) -> String {
     if explicit {
         let _ = write!(
             s,
-            "Below its stable increment it ran {} unstable runs; at 0.98× {} cases were accurate; at \
+            "Below its stable increment it ran {} unstable runs{}; at 0.98× {} cases were accurate; at \
              1.02× {} were unstable (stopped with the growing mode named), at 1.1× {}.",
             stable_below,
+            if below.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    " ({}), {} of them stopped after a penalty impact: no mode grows below the \
+                     limit, but a contact mode with ω·h above √2 resolves an impact in about one \
+                     increment and can send the node back faster than it struck (up to \
+                     ((ω·h)² − 1) times), which the energy criterion counts as unstable",
+                    below_cases.join(", "),
+                    at_impacts
+                )
+            },
             share(0.98, Outcome::Accurate),
             share(1.02, Outcome::Unstable),
             share(1.1, Outcome::Unstable),

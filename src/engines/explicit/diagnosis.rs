@@ -46,6 +46,27 @@ impl GrowingMode {
     }
 }
 
+impl GrowingMode {
+    /// One line for a run stopped below this mode's limit after a penalty impact at `at`: no
+    /// mode grows there; the energy came in at the impact. A contact mode of ω·h resolves an
+    /// impact in about π/(ω·h) increments; a node inside for one increment at depth d ≤ h·v
+    /// leaves at ω²h·d − v, up to ((ω·h)² − 1)·v, so above ω·h = √2 an impact can return more
+    /// energy than it received (up to ((ω·h)² − 1)² times).
+    pub fn describe_impact(&self, h: f64, at: f64) -> String {
+        let wh = self.omega * h;
+        format!(
+            "no mode is past its limit (the one carrying the motion, ω = {:.4e} rad/s in {}, has ω·h = {wh:.3}, h = {:.3} × its limit): the energy came in at the penalty impact at t = {at:e}, which this mode resolves in about π/(ω·h) = {:.1} increments; a node inside for one increment rebounds at up to (ω·h)² − 1 = {:.2} × its striking speed, so above ω·h = √2 an impact can return more energy than it received",
+            self.omega,
+            self.dofs
+                .first()
+                .map_or("no DOF".to_string(), |(l, _)| l.clone()),
+            h / self.limit,
+            std::f64::consts::PI / wh,
+            wh * wh - 1.0
+        )
+    }
+}
+
 /// The mode responsible for an unstable run at increment `h`: of the modes of the scene
 /// linearised at `cfg` (contacts closed) that increment `h` puts past their stability limit
 /// under `treatment`, the one that carries the largest share of the kinetic energy of `rates`

@@ -629,7 +629,11 @@ pub fn integrate<S: Space, const FINITE: bool>(
                             h,
                             settings.damping,
                         )
-                        .map(|m| format!("; {}", m.describe(h)))
+                        .map(|m| match impacts.last() {
+                            // Below the mode's limit nothing grows: an impact put the energy in.
+                            Some(&at) if h < m.limit => format!("; {}", m.describe_impact(h, at)),
+                            _ => format!("; {}", m.describe(h)),
+                        })
                         .unwrap_or_default()
                     } else {
                         String::new()

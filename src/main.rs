@@ -170,6 +170,10 @@ struct RunArgs {
     /// Also run the stability map (as `crosscheck stability`, into the same report).
     #[arg(long)]
     stability: bool,
+    /// Also ask the explicit engines for each tolerance 1e-3 … 1e-6 (accuracy on request) and
+    /// report requested against achieved, with the cost.
+    #[arg(long)]
+    on_request: bool,
     /// Runs per sweep point (with --sweep).
     #[arg(long, value_name = "N", default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..=100))]
     repeat: u64,
@@ -219,6 +223,7 @@ impl RunArgs {
             max_memory: budget::Limits::default().max_memory_bytes,
             sweep: true,
             stability: true,
+            on_request: true,
             repeat: 3,
         }
     }
@@ -628,24 +633,29 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
         return interrupted();
     }
     let names: Vec<&str> = plan.engines.iter().map(|e| e.name()).collect();
+    // The sweep and accuracy on request cover the seed cases; the stress family is for the
+    // stability map.
+    let seeds = case::discover(dir).unwrap_or_default();
+    let seed_plan = Plan {
+        cases: plan
+            .cases
+            .iter()
+            .filter(|s| {
+                seeds
+                    .iter()
+                    .any(|p| p.file_stem().is_some_and(|f| *f == *s.id))
+            })
+            .cloned()
+            .collect(),
+        engines: Vec::new(),
+        settings: plan.settings,
+    };
     let sweeps = if args.sweep {
         let grid = sweep::Grid {
             repeat: args.repeat as usize,
             ..sweep::Grid::default()
         };
-        // The sweep covers the seed cases; the stress family is for the stability map.
-        let seeds = case::discover(dir).unwrap_or_default();
-        let seed = |s: &crosscheck::scene::Scene| {
-            seeds
-                .iter()
-                .any(|p| p.file_stem().is_some_and(|f| *f == *s.id))
-        };
-        let swept_plan = Plan {
-            cases: plan.cases.iter().filter(|s| seed(s)).cloned().collect(),
-            engines: Vec::new(),
-            settings: plan.settings,
-        };
-        work_precision::measure(&swept_plan, &outcome, &names, &grid, !args.quiet)
+        work_precision::measure(&seed_plan, &outcome, &names, &grid, !args.quiet)
     } else {
         Vec::new()
     };
@@ -662,6 +672,15 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
     if interrupt::requested() {
         return interrupted();
     }
+    let requests = if args.on_request {
+        comparison::on_request::measure(&seed_plan, &outcome, &names, !args.quiet)
+    } else {
+        Vec::new()
+    };
+    let requested = started.elapsed().as_secs_f64();
+    if interrupt::requested() {
+        return interrupted();
+    }
     let mut parts = vec![
         ("load and check", loaded),
         ("jobs", ran - loaded),
@@ -673,10 +692,14 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
     if args.stability {
         parts.push(("stability map", mapped - swept));
     }
+    if args.on_request {
+        parts.push(("accuracy on request", requested - mapped));
+    }
     let study = report::Study {
         budgets: &budgets,
         sweeps: &sweeps,
         stability: &maps,
+        requests: &requests,
         parts,
     };
     let summary = match report::write(staging.path(), &plan, &outcome, &study, staging.target()) {
@@ -708,13 +731,14 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
         checks.len()
     ));
     out.print(&format!(
-        "time: load and check {:.2} s, jobs {:.2} s, budget {:.2} s, sweep {:.2} s, stability map {:.2} s, report {:.2} s, swap {:.2} s; total {:.2} s\n",
+        "time: load and check {:.2} s, jobs {:.2} s, budget {:.2} s, sweep {:.2} s, stability map {:.2} s, accuracy on request {:.2} s, report {:.2} s, swap {:.2} s; total {:.2} s\n",
         loaded,
         ran - loaded,
         budgeted - ran,
         swept - budgeted,
         mapped - swept,
-        written - mapped,
+        requested - mapped,
+        written - requested,
         swapped - written,
         swapped
     ));

@@ -20,6 +20,7 @@ fn run_into_temporary_directory() -> &'static (tempfile::TempDir, Summary, Strin
                 "--quiet",
                 "--sweep",
                 "--stability",
+                "--on-request",
                 "--repeat",
                 "1",
                 "--out",
@@ -371,6 +372,37 @@ fn the_stability_map_is_in_the_report_and_matches_its_csvs() {
                 assert_eq!(r[3] == "unstable", ratio > 1.0, "{engine}: {r:?}");
             }
         }
+    }
+}
+
+/// Accuracy on request: the CSV has its header and a row per seed case, engine and tolerance;
+/// every request lands in the band [ε/10, ε] against its own model's exact solution, and the
+/// report's row for its case shows that error and its ratio to ε.
+#[test]
+fn accuracy_on_request_is_in_the_report_and_in_band() {
+    use crosscheck::report::on_request::{COLUMNS, read};
+    use crosscheck::run::on_request::{ENGINES, TOLERANCES};
+    let (out, _, report) = run_into_temporary_directory();
+    assert!(report.contains("## Accuracy on request"));
+    let text = std::fs::read_to_string(out.path().join("on_request.csv")).unwrap();
+    assert_eq!(text.lines().next(), Some(COLUMNS.join(",").as_str()));
+    let requests = read(out.path());
+    assert_eq!(requests.len(), 13 * ENGINES.len() * TOLERANCES.len());
+    for r in &requests {
+        let a = r.achieved.unwrap_or_else(|| {
+            panic!(
+                "{} / {} at {:e}: {:?}",
+                r.case, r.engine, r.requested, r.message
+            )
+        });
+        assert!(a <= r.requested && a >= r.requested / 10.0, "{r:?}");
+        let cell = format!("{a:.2e} ({:.2})", a / r.requested);
+        assert!(
+            report
+                .lines()
+                .any(|l| l.starts_with(&format!("| {} |", r.case)) && l.contains(&cell)),
+            "{r:?}: no row shows {cell}"
+        );
     }
 }
 

@@ -20,6 +20,7 @@
 pub mod contact;
 pub mod discrepancy;
 pub mod equivalence;
+pub mod on_request;
 pub mod stability;
 pub mod work_precision;
 

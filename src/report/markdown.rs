@@ -39,6 +39,7 @@ pub fn render(
     provenance: &Provenance,
     sweeps: &SweepRows,
     maps: &std::collections::BTreeMap<String, Vec<crate::run::stability::Point>>,
+    requests: &[crate::run::on_request::Request],
     parts: &[(&str, f64)],
 ) -> String {
     let mut o = String::new();
@@ -46,6 +47,7 @@ pub fn render(
     let _ = writeln!(w, "# crosscheck report\n");
     at_a_glance(w, s, provenance, parts);
     work_precision::overview(w, s, sweeps);
+    crate::report::on_request::overview(w, requests);
     crate::report::stability::overview(w, maps);
     let _ = writeln!(
         w,

@@ -20,6 +20,7 @@ pub mod contact;
 pub mod data;
 pub mod figures;
 pub mod markdown;
+pub mod on_request;
 pub mod provenance;
 pub mod scaling;
 pub mod sketch;
@@ -39,11 +40,12 @@ use std::path::{Path, PathBuf};
 use summary::Summary;
 
 /// The report's own entries in its directory; nothing else there is the report's.
-pub const ENTRIES: [&str; 7] = [
+pub const ENTRIES: [&str; 8] = [
     "data",
     "figures",
     "sweep",
     "stability",
+    "on_request.csv",
     "summary.json",
     "timings.json",
     "REPORT.md",
@@ -58,6 +60,8 @@ pub struct Study<'a> {
     pub sweeps: &'a [CaseSweep],
     /// The stability map's runs (empty when it did not run).
     pub stability: &'a [crate::run::stability::Point],
+    /// Accuracy on request's runs (empty when it did not run).
+    pub requests: &'a [crate::run::on_request::Request],
     /// How long each part of the run took (name, wall seconds), in order.
     pub parts: Vec<(&'static str, f64)>,
 }
@@ -82,6 +86,7 @@ pub fn write(
     write_budgets(out, study.budgets)?;
     work_precision::write(out, study.sweeps, &plan.cases)?;
     stability::write(out, study.stability)?;
+    on_request::write(out, study.requests)?;
     checkpoint("summary")?;
     let mut summary = Summary::build(plan, outcome, out);
     summary.attach_budgets(study.budgets);
@@ -170,6 +175,7 @@ pub fn write(
             &provenance::Provenance::gather(&plan.settings),
             &work_precision::read_all(out, summary.cases.iter().map(|c| c.id.as_str())),
             &stability::read_all(out),
+            &on_request::read(out),
             &study.parts,
         )
         .as_bytes(),

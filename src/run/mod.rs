@@ -26,6 +26,7 @@
 pub mod budget;
 pub mod load;
 pub mod matching;
+pub mod on_request;
 pub mod refinement;
 pub mod scaling;
 pub mod stability;

@@ -381,7 +381,7 @@ impl RapierEngine {
         let increments = scene.duration() / h;
         if increments > MAX_INCREMENTS_ON_REQUEST {
             return Err(EngineError::Unsupported(format!(
-                "tolerance {eps:e} is out of reach for {}: its first-order error, {e1:.2e} at                  h = {h1:.2e} s, asks for h = {h:.2e} s, {increments:.1e} increments (at most                  {MAX_INCREMENTS_ON_REQUEST:e}); below its floor (contact softness, f32                  round-off) no increment reaches it",
+                "tolerance {eps:e} is out of reach for {}: its first-order error, {e1:.2e} at h = {h1:.2e} s, asks for h = {h:.2e} s, {increments:.1e} increments (at most {MAX_INCREMENTS_ON_REQUEST:e}); below its floor (contact softness, f32 round-off) no increment reaches it",
                 self.name
             )));
         }

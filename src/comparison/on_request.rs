@@ -1,0 +1,38 @@
+//! Accuracy on request measured: each run of [`crate::run::on_request`] judged against the
+//! exact solution of its engine's own model (`reference` or `analytic`, as in the tolerance
+//! table).
+
+use crate::comparison::{baseline, compare};
+use crate::contract::History;
+use crate::run::on_request::{self, Request};
+use crate::run::{Outcome, Plan};
+use crate::scene::Scene;
+
+/// Ask the `engines` (those of [`on_request::ENGINES`]) for every tolerance of
+/// [`on_request::TOLERANCES`] on every case of `plan`, measuring errors against the exact
+/// solutions in `outcome`.
+pub fn measure(plan: &Plan, outcome: &Outcome, engines: &[&str], progress: bool) -> Vec<Request> {
+    let error_of = |scene: &Scene, engine: &str, h: &History| {
+        let own = outcome.history(&scene.id, baseline(engine)?)?;
+        Some(compare(scene, own, h).worst_max)
+    };
+    let chosen: Vec<&str> = on_request::ENGINES
+        .into_iter()
+        .filter(|e| engines.contains(e))
+        .collect();
+    let scenes: Vec<&Scene> = plan.cases.iter().collect();
+    let bar = crate::run::progress_bar(
+        scenes.len() * chosen.len() * on_request::TOLERANCES.len(),
+        progress,
+    );
+    bar.set_message("accuracy on request");
+    let requests = on_request::run(
+        &scenes,
+        &chosen,
+        &on_request::TOLERANCES,
+        &error_of,
+        &|| bar.inc(1),
+    );
+    bar.finish_and_clear();
+    requests
+}

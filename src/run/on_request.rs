@@ -1,7 +1,8 @@
 //! Accuracy on request as a study: each case, each engine that chooses its own settings for a
 //! tolerance, at each tolerance of [`TOLERANCES`] (what `crosscheck run --tolerance EPS` does
-//! for one), timed on the running thread. [`crate::comparison::on_request`] judges each run
-//! against its own model's exact solution; the report shows requested against achieved.
+//! for one), timed on the running thread. The comparison (`comparison/on_request.rs`) judges
+//! each run against its own model's exact solution; the report shows requested against
+//! achieved.
 
 use super::matching;
 use super::sweep::thread_cpu_seconds;

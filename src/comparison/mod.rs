@@ -37,6 +37,18 @@ pub const CLOSED_FORM: &str = "analytic";
 /// simulate finite rotation.
 pub const FINITE_ROTATION_REFERENCE: &str = "reference";
 
+/// The worst largest error (over each column's peak) of `engine`'s history `h` on `scene`
+/// against the exact solution of its own model among `outcome`'s histories (`None` where that
+/// solution did not run): how the stability map and accuracy on request judge a run.
+pub fn against_own_model(
+    outcome: &crate::run::Outcome,
+    scene: &Scene,
+    engine: &str,
+    h: &History,
+) -> Option<f64> {
+    Some(compare(scene, outcome.history(&scene.id, baseline(engine)?)?, h).worst_max)
+}
+
 /// The exact solution an engine is judged against: that of its own model. `explicit_small`
 /// (the small-rotation idealisation) and `reference` (whose gap to it is model form) against
 /// the closed form; every finite-rotation engine (`explicit`, `rapier_*`) against `reference`;

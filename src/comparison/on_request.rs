@@ -2,7 +2,7 @@
 //! exact solution of its engine's own model (`reference` or `analytic`, as in the tolerance
 //! table).
 
-use crate::comparison::{baseline, compare};
+use crate::comparison::against_own_model;
 use crate::contract::History;
 use crate::run::on_request::{self, Request};
 use crate::run::{Outcome, Plan};
@@ -12,10 +12,8 @@ use crate::scene::Scene;
 /// [`on_request::TOLERANCES`] on every case of `plan`, measuring errors against the exact
 /// solutions in `outcome`.
 pub fn measure(plan: &Plan, outcome: &Outcome, engines: &[&str], progress: bool) -> Vec<Request> {
-    let error_of = |scene: &Scene, engine: &str, h: &History| {
-        let own = outcome.history(&scene.id, baseline(engine)?)?;
-        Some(compare(scene, own, h).worst_max)
-    };
+    let error_of =
+        |scene: &Scene, engine: &str, h: &History| against_own_model(outcome, scene, engine, h);
     let chosen: Vec<&str> = on_request::ENGINES
         .into_iter()
         .filter(|e| engines.contains(e))

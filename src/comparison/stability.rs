@@ -1,7 +1,7 @@
 //! The stability map measured: each run of [`crate::run::stability`] judged against the exact
 //! solution of its engine's own model (`reference` or `analytic`, as in the tolerance table).
 
-use crate::comparison::{baseline, compare};
+use crate::comparison::against_own_model;
 use crate::contract::History;
 use crate::run::stability::{self, Point};
 use crate::run::{Outcome, Plan};
@@ -10,10 +10,8 @@ use crate::scene::Scene;
 /// Map every case of `plan` for the `engines` asked for (those of [`stability::ENGINES`]),
 /// measuring errors against the exact solutions in `outcome`.
 pub fn measure(plan: &Plan, outcome: &Outcome, engines: &[&str], progress: bool) -> Vec<Point> {
-    let error_of = |scene: &Scene, engine: &str, h: &History| {
-        let own = outcome.history(&scene.id, baseline(engine)?)?;
-        Some(compare(scene, own, h).worst_max)
-    };
+    let error_of =
+        |scene: &Scene, engine: &str, h: &History| against_own_model(outcome, scene, engine, h);
     let chosen: Vec<&str> = stability::ENGINES
         .into_iter()
         .filter(|e| engines.contains(e))

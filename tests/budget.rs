@@ -141,25 +141,30 @@ fn explicit_budgets_are_converged_one_level_further() {
     }
 }
 
-/// rapier_f64 (matched): first order in h on every column (measured 0.95–1.08; the contact force
+/// rapier_f64 (matched): first order in h on every column (measured 0.96–1.08; the contact force
 /// is compared from the first increment on, its t = 0 value being the first increment's impulse,
-/// which is not a power series in h), and its time-step part moves by less than 25 % one level
-/// further wherever it is at least 1 % of its error against its own model (measured up to
-/// 23 %, on the sliding cases: the coarsened ladder 4h, 2h, h is not quite in rapier's asymptotic
-/// range there, and this is measured, not assumed; 0.4–6 % on the pinned ones).
+/// which is not a power series in h), and its time-step part moves by less than 10 % one level
+/// further wherever it is at least 1 % of its error against its own model (measured ≤ 2.9 %;
+/// it was 23 % on the sliding lumped cases with a 3 kHz soft contact, whose own dynamics kept
+/// rapier out of its asymptotic range: see `MatchedSettings::chosen`). Left out, as the test
+/// says: columns whose closed form is zero (a pinned body's ux, where rapier's pin drifts by
+/// its joint's softness: absolute metres, second order) and time-step parts under 1 % of the
+/// error (the grounded springs' middle node: round-off).
 #[test]
 fn rapier_time_step_part_is_first_order_and_stable_one_level_further() {
     let (_, _, budgets) = budgets();
+    let mut checked = 0;
     for b in budgets.iter().filter(|b| b.engine == "rapier_f64") {
         let (basic, extra) = ok(b);
         for (c, x) in basic.columns.iter().zip(&extra.columns) {
             let what = format!("{} / {}", b.case, c.column);
+            let own = c.time_step.max(c.penalty).max(c.solver);
             println!(
-                "{what}: change time step {:.3} (order {:?})",
+                "{what}: time step {:.2e} of {own:.2e}, change {:.3} (order {:?})",
+                c.time_step,
                 change(c.time_step, x.time_step),
                 c.time_order
             );
-            let own = c.time_step.max(c.penalty).max(c.solver);
             if c.time_step < 0.01 * own || !c.relative {
                 continue;
             }
@@ -167,11 +172,16 @@ fn rapier_time_step_part_is_first_order_and_stable_one_level_further() {
                 assert!((p - 1.0).abs() < 0.1, "{what}: order in h {p}");
             }
             assert!(
-                change(c.time_step, x.time_step) < 0.25,
+                change(c.time_step, x.time_step) < 0.1,
                 "{what}: time step {:e} → {:e}",
                 c.time_step,
                 x.time_step
             );
+            checked += 1;
         }
     }
+    // 8 rigid cases × 4 columns but the 4 pinned ux (3.3e-9 m, absolute); the 5 spring cases'
+    // 4 columns but the grounded ones' middle node (at rest on A; on B and C a time-step part
+    // of 3.8e-14 against an error of 2.9e-11 on u_mid, and 0 on v_mid).
+    assert_eq!(checked, 28 + 14, "columns checked: {checked}");
 }

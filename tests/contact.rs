@@ -212,7 +212,7 @@ fn explicit_keeps_the_energy_of_elastic_impacts_and_rebounds_by_e_squared() {
 
 #[test]
 fn rapier_rebounds_are_frozen() {
-    // Measured with rapier 0.36: the matched configuration (a 3 kHz, critically damped soft
+    // Measured with rapier 0.36: the matched configuration (a 10 kHz, critically damped soft
     // contact and a new contact's restitution applied once) rebounds by almost nothing
     // whatever e; the default configuration (1/60 s) by 0.04 to 0.36 of the drop. Frozen
     // with a margin of 0.02.

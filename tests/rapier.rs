@@ -43,7 +43,7 @@ fn cached(id: &str, engine: &dyn Engine) -> History {
 }
 
 fn matched_with(precision: Precision, f: impl FnOnce(&mut MatchedSettings)) -> RapierEngine {
-    let mut m = MatchedSettings::CHOSEN;
+    let mut m = MatchedSettings::chosen(precision);
     f(&mut m);
     RapierEngine::with(precision, Configuration::Matched(m))
 }
@@ -382,8 +382,8 @@ fn colliders_only_for_contact() {
 /// (6) The PGS-sweep study of the matched configuration (f64). rapier's `num_solver_iterations`
 /// are substeps (a finer time step: first order, they never stop changing the answer, see
 /// test 4); the sweeps per substep are what converges. Measured, worst over the 13 cases of the
-/// change over the analytic peak: 1 → 2 sweeps 2.6e-4 (pinned surface), 2 → 4 7.3e-6,
-/// 4 → 8 6e-9. Two sweeps is the smallest count where doubling changes < 1e-4.
+/// change over the analytic peak (10 kHz contact): 1 → 2 sweeps 6.6e-4 (pinned surface),
+/// 2 → 4 5.2e-5, 4 → 8 3.4e-7. Two sweeps is the smallest count where doubling changes < 1e-4.
 /// (In f32 every doubling changes the pinned contact force by 3e-3 to 1e-2 of its peak:
 /// round-off noise of a stiff contact, not convergence.)
 #[test]
@@ -435,17 +435,18 @@ fn runs_are_reproducible() {
 }
 
 /// The contact stays closed (the benchmark's contact is persistent) with little penetration.
-/// Measured mean penetration (f64): 4.5e-6 pinned lumped, 5.3e-6 pinned surface, 1.05e-4
-/// sliding lumped, 1.37e-4 sliding surface (contact softness 3 kHz, ζ = 1); rapier's default
-/// softness (30 Hz, ζ = 10) at the same increment gives 2e-4 to 6e-3.
+/// Measured mean penetration (f64): 4.2e-7 pinned lumped, 4.9e-7 pinned surface, 9.6e-6
+/// sliding lumped, 1.24e-5 sliding surface (contact softness 10 kHz, ζ = 1; at 3 kHz it was
+/// 4.5e-6 to 1.37e-4); rapier's default softness (30 Hz, ζ = 10) at the same increment gives
+/// 2e-4 to 6e-3.
 #[test]
 fn contact_penetration() {
     let e = RapierEngine::matched(Precision::F64);
     for (v, limit) in [
-        ("pin_lumped", 1e-5),
-        ("pin_surface", 1e-5),
-        ("slide_lumped", 2e-4),
-        ("slide_surface", 2e-4),
+        ("pin_lumped", 1e-6),
+        ("pin_surface", 1e-6),
+        ("slide_lumped", 2e-5),
+        ("slide_surface", 2e-5),
     ] {
         let (_, d) = e
             .run_with_diagnostics(&scene(&format!("rigid2d_{v}")), &RunSettings::default())

@@ -62,19 +62,14 @@ fn the_explicit_engines_converge_at_second_order_on_every_seed_case() {
 }
 
 /// Rapier's joint motors are backward Euler (first order) and its contact is solved once per
-/// substep: first order in the increment. Measured and frozen per family (±0.1).
+/// substep: first order in the increment. Measured 0.951–0.988 on every seed case, frozen at
+/// 0.97 ± 0.05; the sliding cases were at 0.83 with f64's former 3 kHz contact, whose own
+/// dynamics kept them out of the asymptotic range (`MatchedSettings::chosen`).
 #[test]
 fn rapier_converges_at_first_order() {
     for s in sweeps() {
-        let frozen = if s.case.starts_with("springs") {
-            0.98
-        } else if s.case.contains("slide") {
-            0.83
-        } else {
-            0.95
-        };
         let p = order(&s.case, "rapier_f64");
-        assert!((p - frozen).abs() <= 0.1, "{} rapier_f64: {p}", s.case);
+        assert!((p - 0.97).abs() <= 0.05, "{} rapier_f64: {p}", s.case);
     }
 }
 

@@ -349,7 +349,14 @@ fn floor_cause(path: &SweepPath, value: f64, twin: Option<&SweepPath>, contact: 
             format!("solver at the fixed increment {increment:.1e} s")
         }
         (false, _) if path.engine.starts_with("rapier") => {
-            "solver: rapier's contact softness (3 kHz) and PGS sweeps".to_string()
+            format!(
+                "solver: rapier's contact softness ({}) and PGS sweeps",
+                if path.precision == "f32" {
+                    "3 kHz"
+                } else {
+                    "10 kHz"
+                }
+            )
         }
         _ => "solver".to_string(),
     }

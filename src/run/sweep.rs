@@ -287,7 +287,7 @@ fn point_engine(name: &str, kind: PathKind, substeps: Option<usize>) -> Box<dyn 
                 precision,
                 Configuration::Matched(MatchedSettings {
                     solver_iterations,
-                    ..MatchedSettings::CHOSEN
+                    ..MatchedSettings::chosen(precision)
                 }),
             ))
         }

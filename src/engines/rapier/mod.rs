@@ -78,7 +78,7 @@ pub enum Precision {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Configuration {
     /// Same time increment as the central-difference engine, solver converged, contact tightened: the
-    /// settings of [`MatchedSettings::CHOSEN`] (or others, for studies).
+    /// settings of [`MatchedSettings::chosen`] (or others, for studies).
     Matched(MatchedSettings),
     /// What a typical user gets: `IntegrationParameters::default()` (4 substeps, 1 PGS sweep,
     /// contact softness 30 Hz / ζ = 10, 60 Hz against fixed bodies, contact recycling) and
@@ -113,7 +113,8 @@ pub struct MatchedSettings {
 }
 
 impl MatchedSettings {
-    /// The matched configuration (chosen by the studies in `tests/rapier.rs`).
+    /// The matched configuration of `precision` (chosen by the studies in `tests/rapier.rs`
+    /// and `tests/rapier_limits.rs`).
     ///
     /// - Time increment: the one the job planner hands over (`run::matching`: what the
     ///   central-difference engine takes on the case, i.e. the case's `[time] increment` or 0.9 ×
@@ -125,19 +126,40 @@ impl MatchedSettings {
     ///   the count stays rapier's own and what is matched is the increment. Reaching the 1e-4
     ///   criterion through substeps would take ~256 of them in the rigid cases (60× the cost).
     /// - `pgs_iterations` = 2 Gauss–Seidel sweeps per substep: the smallest count where doubling
-    ///   changes no contract column by 1e-4 of its peak (1 → 2: 2.6e-4, 2 → 4: 7.3e-6,
-    ///   4 → 8: 6e-9, worst case the pinned surface-mass body).
-    /// - Contact softness 3 kHz with damping ratio 1, for contacts between dynamic bodies and
-    ///   against fixed ones (default 30 Hz and 60 Hz, ζ = 10): mean penetration 5e-6 pinned,
-    ///   1.4e-4 sliding, against 2e-4 to 6e-3 with the defaults. Stiffer is stable in f64 (up to
-    ///   1e7 Hz; 1e4 Hz gives 4e-7) but not in f32, whose 6e-8 position quantum times the
-    ///   correction rate makes the contact chatter (separations of 3e-7 and force noise of 0.7
-    ///   of the peak at 1e4 Hz, 0.3 at 5e3 Hz); 3 kHz is the stiffest setting tried that stays
-    ///   closed in f32. A damping ratio below 1 softens rapier's contact (more penetration).
+    ///   changes no contract column by 1e-4 of its peak (f64 at 10 kHz: 1 → 2: 6.6e-4,
+    ///   2 → 4: 5.2e-5, 4 → 8: 3.4e-7, worst case the pinned surface-mass body).
+    /// - Contact softness, for contacts between dynamic bodies and against fixed ones (default
+    ///   30 Hz and 60 Hz, ζ = 10), damping ratio 1, as stiff as the precision allows:
+    ///   - **f64: 10 kHz.** Rapier's error is then first order in the increment from 4e-5 s
+    ///     down to 5e-6 s (successive halvings shrink the differences by 1.95–2.00 on every
+    ///     column of the sliding lumped case). At 3 kHz it was not: the soft contact's own
+    ///     dynamics made that case's differences shrink by 2.17, then 1.64, then 1.23 below
+    ///     1e-5 s, so that no extrapolation in h converged there. Stiffer moves every column by
+    ///     at most 1.5e-4 of its peak (10 → 100 kHz at 1e-5 s), about 1 % of rapier's
+    ///     first-order error, but needs more Gauss–Seidel sweeps (at 30 kHz 2 → 4 sweeps moves
+    ///     the pinned surface case by 1.4e-4). A damping ratio below 1 softens rapier's contact
+    ///     (more penetration).
+    ///   - **f32: 3 kHz.** f32's 6e-8 position quantum times the correction rate makes a
+    ///     stiffer contact chatter (separations of 3e-7 and force noise of 0.7 of the peak at
+    ///     1e4 Hz, 0.3 at 5e3 Hz); 3 kHz is the stiffest setting tried that stays closed in f32
+    ///     (mean penetration 5e-6 pinned, 1.4e-4 sliding, against 2e-4 to 6e-3 with the
+    ///     defaults).
     /// - Allowed linear error 1e-6 and prediction distance 1e-4 (defaults 5e-3 and 2e-2), and
     ///   no contact recycling: with recycling (the default) the contact point and normal are
     ///   frozen until the pair has moved 0.05, and the rotating face then feels a stale normal
     ///   (contact force error 1.9 of the peak at the matched increment instead of 0.07).
+    pub const fn chosen(precision: Precision) -> MatchedSettings {
+        MatchedSettings {
+            contact_frequency: match precision {
+                Precision::F64 => 1.0e4,
+                Precision::F32 => 3.0e3,
+            },
+            ..Self::CHOSEN
+        }
+    }
+
+    /// The settings [`MatchedSettings::chosen`] shares between the precisions (its contact
+    /// softness is f32's).
     pub const CHOSEN: MatchedSettings = MatchedSettings {
         solver_iterations: 4,
         pgs_iterations: 2,
@@ -164,7 +186,10 @@ pub struct RapierEngine {
 impl RapierEngine {
     /// `rapier_f64` / `rapier_f32`: the matched configuration.
     pub fn matched(precision: Precision) -> Self {
-        Self::with(precision, Configuration::Matched(MatchedSettings::CHOSEN))
+        Self::with(
+            precision,
+            Configuration::Matched(MatchedSettings::chosen(precision)),
+        )
     }
 
     /// `rapier_f64_default` / `rapier_f32_default`: rapier out of the box.

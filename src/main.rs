@@ -170,8 +170,8 @@ struct RunArgs {
     /// Also run the stability map (as `crosscheck stability`, into the same report).
     #[arg(long)]
     stability: bool,
-    /// Also ask the explicit engines for each tolerance 1e-3 … 1e-6 (accuracy on request) and
-    /// report requested against achieved, with the cost.
+    /// Also ask the explicit engines for each tolerance 1e-3, 1e-4 and 1e-5 (accuracy on
+    /// request) and report requested against achieved, with the cost.
     #[arg(long)]
     on_request: bool,
     /// Runs per sweep point (with --sweep).

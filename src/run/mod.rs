@@ -242,9 +242,15 @@ pub fn execute(plan: &Plan, progress: bool) -> Outcome {
 /// A job's relative cost for scheduling only: the increments it will take (from its increment
 /// rule; the output rows where the engine chooses), weighted by 40 for an engine stepped at the
 /// explicit engine's increment (rapier: a few substeps of a constraint solver per increment,
-/// 26–62× the explicit step measured).
+/// 26–62× the explicit step measured). A job whose settings cannot be worked out here (they
+/// panic) goes first, at infinite cost: its own run reports the failure.
 fn estimated_cost(scene: &Scene, engine: &dyn Engine, settings: &RunSettings) -> f64 {
-    let job = matching::job_settings(engine, scene, settings);
+    let job = match panic::catch_unwind(AssertUnwindSafe(|| {
+        matching::job_settings(engine, scene, settings)
+    })) {
+        Ok(job) => job,
+        Err(_) => return f64::INFINITY,
+    };
     let h = match job.increment.unwrap_or(scene.settings.increment) {
         IncrementRule::Given(h) | IncrementRule::Forced(h) | IncrementRule::Exact(h) => h,
         _ => scene.duration() / scene.output_rows.max(2) as f64,

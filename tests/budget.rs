@@ -141,10 +141,10 @@ fn explicit_budgets_are_converged_one_level_further() {
     }
 }
 
-/// rapier_f64 (matched): first order in h on every column (measured 0.96–1.08; the contact force
+/// rapier_f64 (matched): first order in h on every column (measured 0.96–0.99; the contact force
 /// is compared from the first increment on, its t = 0 value being the first increment's impulse,
 /// which is not a power series in h), and its time-step part moves by less than 10 % one level
-/// further wherever it is at least 1 % of its error against its own model (measured ≤ 2.9 %;
+/// further wherever it is at least 1 % of its error against its own model (measured ≤ 3.0 %;
 /// it was 23 % on the sliding lumped cases with a 3 kHz soft contact, whose own dynamics kept
 /// rapier out of its asymptotic range: see `MatchedSettings::chosen`). Left out, as the test
 /// says: columns whose closed form is zero (a pinned body's ux, where rapier's pin drifts by

@@ -314,7 +314,7 @@ fn rapier_f64_contact_is_stiff_enough_to_be_first_order_in_the_increment() {
     for c in columns {
         let r = ratios(&runs, c);
         println!("{chosen:e} Hz, {c}: ratios {r:.3?}");
-        // First order: 2 per halving, within the next term's share (measured 1.95–1.99).
+        // First order: 2 per halving, within the next term's share (measured 1.95–2.00).
         assert!(r.iter().all(|r| (r - 2.0).abs() < 0.1), "{c}: {r:?}");
     }
     let soft = at(3.0e3, &[1e-5, 5e-6, 2.5e-6]);

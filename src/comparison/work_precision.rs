@@ -350,12 +350,8 @@ fn floor_cause(path: &SweepPath, value: f64, twin: Option<&SweepPath>, contact: 
         }
         (false, _) if path.engine.starts_with("rapier") => {
             format!(
-                "solver: rapier's contact softness ({}) and PGS sweeps",
-                if path.precision == "f32" {
-                    "3 kHz"
-                } else {
-                    "10 kHz"
-                }
+                "solver: rapier's contact softness ({} kHz) and PGS sweeps",
+                sweep::matched_contact_frequency(&path.engine) / 1e3
             )
         }
         _ => "solver".to_string(),

@@ -264,14 +264,23 @@ pub fn run(
     out
 }
 
-/// The settings of one point of a path: the engine (rapier's substeps are its configuration)
-/// and the run overrides.
-fn point_engine(name: &str, kind: PathKind, substeps: Option<usize>) -> Box<dyn Engine> {
-    let precision = if name.contains("f32") {
+/// The contact softness (Hz) of a matched rapier engine's points, by engine name.
+pub fn matched_contact_frequency(name: &str) -> f64 {
+    MatchedSettings::chosen(precision_of(name)).contact_frequency
+}
+
+fn precision_of(name: &str) -> Precision {
+    if name.contains("f32") {
         Precision::F32
     } else {
         Precision::F64
-    };
+    }
+}
+
+/// The settings of one point of a path: the engine (rapier's substeps are its configuration)
+/// and the run overrides.
+fn point_engine(name: &str, kind: PathKind, substeps: Option<usize>) -> Box<dyn Engine> {
+    let precision = precision_of(name);
     match name {
         "explicit" => Box::new(explicit::ExplicitEngine::finite()),
         "explicit_small" => Box::new(explicit::ExplicitEngine::small()),

@@ -880,8 +880,23 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             - S::turned(&cfg.br[c.body], &c.face)
     }
 
-    /// Position-dependent forces: springs, contact, loads. Fills `out` (cleared first).
+    /// Position-dependent forces: springs, contact, loads. Fills `out` (cleared first), with
+    /// the elastic energy.
     pub fn forces(
+        &self,
+        cfg: &Config<S>,
+        mode: ContactMode,
+        out: &mut Forces<S>,
+        counters: &mut Counters,
+    ) {
+        self.forces_with::<true>(cfg, mode, out, counters);
+    }
+
+    /// [`Model::forces`], with the elastic energy summed only when `ENERGY` (an increment that
+    /// writes no row does not read it; the sum is a chain of dependent additions, one per
+    /// element, that would otherwise set the pace of a large scene's force pass). The forces
+    /// are the same either way, bit for bit; without `ENERGY`, `out.elastic` is 0.
+    pub fn forces_with<const ENERGY: bool>(
         &self,
         cfg: &Config<S>,
         mode: ContactMode,
@@ -894,12 +909,16 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         for s in &self.grounded_springs {
             if let Some(d) = s.direction {
                 let u = d.dot(&self.displacement(cfg, &s.point));
-                elastic += 0.5 * s.c * u * u;
+                if ENERGY {
+                    elastic += 0.5 * s.c * u * u;
+                }
                 self.apply(cfg, &s.point, d * (-s.c * u), out);
             }
             if let Some((b, axis)) = s.rotation {
                 let angle = self.rotation_about(cfg, b, &axis);
-                elastic += 0.5 * s.c * angle * angle;
+                if ENERGY {
+                    elastic += 0.5 * s.c * angle * angle;
+                }
                 out.m[b] -= axis * (s.c * angle);
             }
         }
@@ -908,7 +927,9 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 if i == GROUND { S::V::zero() } else { cfg.u[i] }
             };
             let e = s.direction.dot(&(at(s.b) - at(s.a)));
-            elastic += 0.5 * s.c * e * e;
+            if ENERGY {
+                elastic += 0.5 * s.c * e * e;
+            }
             let f = s.direction * (s.c * e);
             if s.a != GROUND {
                 out.p[s.a] += f;
@@ -926,7 +947,9 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             } else {
                 (s.direction.dot(&stretch), s.direction)
             };
-            elastic += 0.5 * s.c * e * e;
+            if ENERGY {
+                elastic += 0.5 * s.c * e * e;
+            }
             let f = dir * (s.c * e);
             self.apply(cfg, &s.a, f, out);
             self.apply(cfg, &s.b, -f, out);
@@ -941,7 +964,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                     ContactMode::Given(f) => f[k],
                     ContactMode::Off => unreachable!(),
                 };
-                if !matches!(mode, ContactMode::Given(_)) {
+                if ENERGY && !matches!(mode, ContactMode::Given(_)) {
                     elastic += 0.5 * f * f / self.penalty;
                 }
                 out.contact[k] = f;

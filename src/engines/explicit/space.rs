@@ -530,6 +530,15 @@ pub fn solve_body<S: Space>(
     force: &S::V,
     moment: &S::W,
 ) -> (S::V, S::W) {
+    if held_translations.len() == S::DIM {
+        // A pinned reference node: the translations drop out and I α = M on the free axes
+        // (what the general path below computes with every projection exactly zero).
+        let operator = |alpha: &S::W| S::inertia_apply(&b.inertia, alpha);
+        return (
+            S::V::zero(),
+            solve_small::<S::W>(free_rotations, operator, moment),
+        );
+    }
     let project = |v: S::V| {
         let mut v = v;
         for d in held_translations {

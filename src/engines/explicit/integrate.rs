@@ -508,8 +508,11 @@ pub fn integrate<S: Space, const FINITE: bool>(
                                 let mut converged = false;
                                 let mut previous_change = 0.0;
                                 for pass in 0..MAX_DAMPING_ITERATIONS {
-                                    total.copy_from(&forces);
-                                    if model.has_dashpots() {
+                                    // Without dashpots the velocity enters through the
+                                    // centripetal and gyroscopic terms only: the position
+                                    // forces serve every pass as they are.
+                                    let applied = if model.has_dashpots() {
+                                        total.copy_from(&forces);
                                         model.damping_along(
                                             &cfg,
                                             &directions,
@@ -518,10 +521,13 @@ pub fn integrate<S: Space, const FINITE: bool>(
                                             &mut counters,
                                         );
                                         power = total.dissipation;
-                                    }
+                                        &total
+                                    } else {
+                                        &forces
+                                    };
                                     model.accelerations(
                                         &cfg,
-                                        &total,
+                                        applied,
                                         &v_guess,
                                         &held,
                                         &mut acc,

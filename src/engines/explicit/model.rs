@@ -229,16 +229,16 @@ struct TwoPoint<S: Space> {
 /// the compact form the force pass streams through.
 #[derive(Debug, Clone, Copy)]
 struct LineSpring<S: Space> {
-    /// Particle at end a, or [`GROUND`].
-    a: usize,
+    /// Particle at end a, or [`GROUND`] (32 bits: the pass streams 32 bytes per 2D spring).
+    a: u32,
     /// Particle at end b, or [`GROUND`].
-    b: usize,
+    b: u32,
     direction: S::V,
     c: f64,
 }
 
 /// A [`LineSpring`] end that does not move.
-const GROUND: usize = usize::MAX;
+const GROUND: u32 = u32::MAX;
 
 /// Where a contact node is relative to its solid (see [`Model::solid_positions`]).
 #[derive(Debug, Clone, Copy)]
@@ -316,9 +316,12 @@ pub struct Body<S: Space> {
 pub struct Constraints<S: Space> {
     /// Held directions per particle (orthonormal).
     pub particle_held: Vec<Vec<S::V>>,
-    /// The same, as the projection each particle's acceleration takes (no indirection in the
-    /// time loop).
-    pub particle_motion: Vec<Motion<S>>,
+    /// The distinct projections the particles' accelerations take (a few, whatever the number
+    /// of particles).
+    pub motions: Vec<Motion<S>>,
+    /// Each particle's projection, as an index into `motions` (4 bytes per particle streamed
+    /// by the time loop instead of a projection's 40 or 56).
+    pub particle_motion: Vec<u32>,
     /// Held translation axes per body.
     pub body_held_t: Vec<Vec<S::V>>,
     /// Held rotation axes per body.
@@ -623,7 +626,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             .collect();
         let springs = two_point(&scene.springs);
         let end = |p: &Point<S>| match p {
-            Point::Particle(i) => Some(*i),
+            Point::Particle(i) => u32::try_from(*i).ok().filter(|i| *i != GROUND),
             Point::Ground(_) => Some(GROUND),
             Point::Body { .. } => None,
         };
@@ -923,8 +926,12 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             }
         }
         for s in &self.line_springs {
-            let at = |i: usize| {
-                if i == GROUND { S::V::zero() } else { cfg.u[i] }
+            let at = |i: u32| {
+                if i == GROUND {
+                    S::V::zero()
+                } else {
+                    cfg.u[i as usize]
+                }
             };
             let e = s.direction.dot(&(at(s.b) - at(s.a)));
             if ENERGY {
@@ -932,10 +939,10 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             }
             let f = s.direction * (s.c * e);
             if s.a != GROUND {
-                out.p[s.a] += f;
+                out.p[s.a as usize] += f;
             }
             if s.b != GROUND {
-                out.p[s.b] -= f;
+                out.p[s.b as usize] -= f;
             }
         }
         for s in self.other_springs.iter().map(|k| &self.springs[*k]) {
@@ -1102,7 +1109,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             .zip(&forces.p)
             .zip(self.inverse_masses.iter().zip(&held.particle_motion))
         {
-            *a = motion.project(*f * *inverse_mass);
+            *a = held.motions[*motion as usize].project(*f * *inverse_mass);
         }
         self.accelerate_bodies(cfg, forces, vel, held, out, counters);
     }
@@ -1162,9 +1169,9 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         let n = self.particles.len();
         let (u, c, v) = (&mut cfg.u[..n], &mut carry.p[..n], &mut vel.p[..n]);
         let (f, inverse) = (&forces.p[..n], &self.inverse_masses[..n]);
-        let motion = &held.particle_motion[..n];
+        let (motion, motions) = (&held.particle_motion[..n], &held.motions[..]);
         for i in 0..n {
-            let a = motion[i].project(f[i] * inverse[i]);
+            let a = motions[motion[i] as usize].project(f[i] * inverse[i]);
             v[i] += a * h;
             compensated_add(&mut u[i], &mut c[i], v[i] * h);
         }
@@ -1266,6 +1273,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         let nb = self.bodies.len();
         let mut c = Constraints {
             particle_held: vec![Vec::new(); np],
+            motions: Vec::new(),
             particle_motion: Vec::new(),
             body_held_t: vec![Vec::new(); nb],
             body_held_r: vec![Vec::new(); nb],
@@ -1299,7 +1307,29 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             }
         }
         let _ = scene;
-        c.particle_motion = c.particle_held.iter().map(|h| Motion::of(h)).collect();
+        // The distinct held sets, each with its projection (the last one found is tried first:
+        // neighbours usually share theirs; a set not among the first 64 is added again rather
+        // than searched for, so a scene of many frames compiles in linear time).
+        let mut distinct: Vec<&Vec<S::V>> = Vec::new();
+        let mut last = 0;
+        c.particle_motion = c
+            .particle_held
+            .iter()
+            .map(|h| {
+                if distinct.get(last).is_none_or(|d| *d != h) {
+                    last = distinct
+                        .iter()
+                        .take(64)
+                        .position(|d| *d == h)
+                        .unwrap_or_else(|| {
+                            distinct.push(h);
+                            distinct.len() - 1
+                        });
+                }
+                last as u32
+            })
+            .collect();
+        c.motions = distinct.iter().map(|h| Motion::of(h)).collect();
         for b in 0..nb {
             c.body_free_r[b] = S::free_rotations(&c.body_held_r[b]);
             let free_r = S::ROT - c.body_held_r[b].len();

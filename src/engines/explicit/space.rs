@@ -20,6 +20,7 @@ pub trait Lin:
     + Neg<Output = Self>
     + AddAssign
     + SubAssign
+    + PartialEq
 {
     /// The zero value.
     fn zero() -> Self;

@@ -257,7 +257,8 @@ fn the_stable_increment_adapts_to_extreme_ratios() {
 #[test]
 fn heavily_damped_centred_runs_solve_the_stiff_dashpot_directly() {
     // ζ = 5 on the stiff mode: the centred velocity iteration contracts by ζ·ω·h ≈ 9.8 per pass
-    // at 0.98×, so it cannot converge; the engine solves the affine map instead, and the run is
+    // at 0.98×, so it could not converge; the engine solves the centred velocity directly in the
+    // dashpots' rates (the pair's dashpots join particles), and the run is
     // as accurate as the undamped one (the damped mode carries ~1e-4 of the motion).
     let scene = stress("stress_pair_zeta5");
     let exact = AnalyticEngine.run(&scene, &RunSettings::default()).unwrap();

@@ -7,7 +7,10 @@
 //! `v(n) = (v(n−½) + v(n+½))/2`, solved by fixed-point iteration from the predictor
 //! `v(n−½) + (h/2)·a(n−1)`, which keeps the scheme second order; the lagged treatment uses
 //! `v(n−½)` (first order, the classic explicit form). Scenes without such forces skip the pass.
+//! Where every dashpot joins particles (or a particle and the ground) and no body has
+//! velocity terms, the centred velocity is solved directly instead ([`super::centred`]).
 
+use super::centred::ParticleDashpots;
 use super::diagnosis::{PAST_LIMIT_GROWTH, PastLimit, growing_mode};
 use super::linear::{StableIncrement, static_step};
 use super::model::{Config, Constraints, ContactMode, Counters, Forces, Model, Rates, Target};
@@ -319,6 +322,8 @@ pub fn integrate<S: Space, const FINITE: bool>(
     let mut v_next = model.zero_rates();
     let mut carry = model.zero_rates();
     let mut directions = Vec::new();
+    // Dashpots between particles only: the centred velocity is solved directly.
+    let particle_dashpots = ParticleDashpots::of(&model);
     let mut sampler = RowSampler::new(&times, interval, interval);
     // Solid contacts are watched for a node going through its solid.
     let solids = model.has_solids();
@@ -395,6 +400,9 @@ pub fn integrate<S: Space, const FINITE: bool>(
         let affine =
             model.has_dashpots() && !held.any_velocity_terms() && dofs.len() <= DENSE_LIMIT;
         let mut affine_solve = false;
+        let direct = particle_dashpots
+            .as_ref()
+            .filter(|_| model.has_dashpots() && !held.any_velocity_terms());
         // Rows fall on increments unless a stability study asked for an increment that does
         // not divide the output interval; then every increment is a row for the sampler, and
         // the last dynamic step runs past its end to the first increment after it.
@@ -500,6 +508,21 @@ pub fn integrate<S: Space, const FINITE: bool>(
                                 power = total.dissipation;
                             }
                             model.accelerations(&cfg, &total, &v_n, &held, &mut acc, &mut counters);
+                        }
+                        DampingTreatment::Centred if let Some(direct) = direct => {
+                            model.dashpot_directions(&cfg, &mut directions);
+                            power = direct.solve(
+                                &model,
+                                &cfg,
+                                &forces,
+                                &directions,
+                                &v_half,
+                                h,
+                                &held,
+                                &mut acc,
+                                &mut v_n,
+                                &mut counters,
+                            );
                         }
                         DampingTreatment::Centred => {
                             model.dashpot_directions(&cfg, &mut directions);

@@ -1,5 +1,6 @@
 //! `explicit`: our central-difference explicit integrator with penalty contact.
 
+pub mod centred;
 pub mod diagnosis;
 pub mod integrate;
 pub mod linear;

@@ -393,6 +393,31 @@ pub enum Target<S: Space> {
     Rotation(usize, S::W),
 }
 
+/// A dashpot whose ends are particles or the ground, as the centred velocity solve sees it:
+/// its rate is `d·(v_b − v_a)` (an absent end does not move) and its force on the ends is
+/// `−c·rate` times `(−d at a, +d at b)`.
+#[derive(Debug, Clone, Copy)]
+pub struct ParticleDashpot<S: Space> {
+    /// Damping coefficient.
+    pub c: f64,
+    /// Particle at end a (None: the ground).
+    pub a: Option<usize>,
+    /// Particle at end b (None: the ground).
+    pub b: Option<usize>,
+    /// Line of action.
+    pub line: DashpotLine<S>,
+}
+
+/// Where a [`ParticleDashpot`]'s line of action comes from.
+#[derive(Debug, Clone, Copy)]
+pub enum DashpotLine<S: Space> {
+    /// A fixed direction (grounded dashpots).
+    Fixed(S::V),
+    /// The two-point dashpot of this index, whose direction [`Model::dashpot_directions`]
+    /// gives at each configuration.
+    TwoPoint(usize),
+}
+
 /// The compiled scene.
 #[derive(Debug, Clone)]
 pub struct Model<S: Space, const FINITE: bool> {
@@ -1012,6 +1037,55 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 s.direction
             }
         }));
+    }
+
+    /// Every dashpot as a [`ParticleDashpot`], when every one acts between particles or a
+    /// particle and the ground along a line (no body end, no rotational dashpot, no contact
+    /// dashpot); None otherwise. Dashpots on the ground alone are left out (they never act).
+    pub fn particle_dashpots(&self) -> Option<Vec<ParticleDashpot<S>>> {
+        if self.contacts.iter().any(|c| c.damping != 0.0) {
+            return None;
+        }
+        let end = |p: &Point<S>| match p {
+            Point::Particle(i) => Some(Some(*i)),
+            Point::Ground(_) => Some(None),
+            Point::Body { .. } => None,
+        };
+        let mut out = Vec::new();
+        for s in &self.grounded_dashpots {
+            let (Some(d), None) = (s.direction, s.rotation) else {
+                return None;
+            };
+            if let Some(b) = end(&s.point)?
+                && s.c != 0.0
+            {
+                out.push(ParticleDashpot {
+                    c: s.c,
+                    a: None,
+                    b: Some(b),
+                    line: DashpotLine::Fixed(d),
+                });
+            }
+        }
+        for (k, s) in self.dashpots.iter().enumerate() {
+            let (a, b) = (end(&s.a)?, end(&s.b)?);
+            if (a.is_some() || b.is_some()) && s.c != 0.0 {
+                out.push(ParticleDashpot {
+                    c: s.c,
+                    a,
+                    b,
+                    line: DashpotLine::TwoPoint(k),
+                });
+            }
+        }
+        Some(out)
+    }
+
+    /// `P M⁻¹ f` for particle `i` under the step's constraints: the acceleration a force `f`
+    /// gives it.
+    #[inline]
+    pub fn particle_response(&self, held: &Constraints<S>, i: usize, f: S::V) -> S::V {
+        held.motions[held.particle_motion[i] as usize].project(f * self.inverse_masses[i])
     }
 
     /// [`Model::damping`] with the two-point dashpots' directions given (from

@@ -20,10 +20,15 @@ use super::space::{Lin, Space};
 /// Above this many dashpots the iteration is used (the elimination is O(k³) per increment).
 pub const MAX_DASHPOTS: usize = 8;
 
-/// The dashpots of a scene that the direct solve applies to.
+/// The dashpots of a scene that the direct solve applies to, with the solve's scratch space.
 #[derive(Debug, Clone)]
 pub struct ParticleDashpots<S: Space> {
     list: Vec<ParticleDashpot<S>>,
+    /// Each dashpot's moving ends at this increment: (dashpot, particle, signed direction,
+    /// P M⁻¹ of that direction).
+    ends: Vec<(usize, usize, S::V, S::V)>,
+    /// The augmented system `[I + (h/2)·K | E w]`, row-major, k × (k + 1).
+    system: Vec<f64>,
 }
 
 impl<S: Space> ParticleDashpots<S> {
@@ -31,7 +36,12 @@ impl<S: Space> ParticleDashpots<S> {
     /// ground along a line and there are at most [`MAX_DASHPOTS`] of them.
     pub fn of<const FINITE: bool>(model: &Model<S, FINITE>) -> Option<Self> {
         let list = model.particle_dashpots()?;
-        (list.len() <= MAX_DASHPOTS).then_some(Self { list })
+        let k = list.len();
+        (k <= MAX_DASHPOTS).then(|| Self {
+            list,
+            ends: Vec::with_capacity(2 * k),
+            system: vec![0.0; k * (k + 1)],
+        })
     }
 
     /// The centred velocity `v_n` and the accelerations `acc` at it, from the position forces
@@ -40,7 +50,7 @@ impl<S: Space> ParticleDashpots<S> {
     /// centripetal or gyroscopic terms (the bodies' accelerations do not read the velocity).
     #[allow(clippy::too_many_arguments)]
     pub fn solve<const FINITE: bool>(
-        &self,
+        &mut self,
         model: &Model<S, FINITE>,
         cfg: &Config<S>,
         forces: &Forces<S>,
@@ -56,9 +66,7 @@ impl<S: Space> ParticleDashpots<S> {
         model.accelerations(cfg, forces, v_half, held, acc, counters);
         v_n.set_plus(v_half, 0.5 * h, acc);
         let k = self.list.len();
-        // Each dashpot's moving ends: (particle, signed direction, P M⁻¹ of that direction).
-        let mut ends = [[(0usize, S::V::zero(), S::V::zero()); 2]; MAX_DASHPOTS];
-        let mut count = [0usize; MAX_DASHPOTS];
+        self.ends.clear();
         for (j, dashpot) in self.list.iter().enumerate() {
             let d = match dashpot.line {
                 DashpotLine::Fixed(d) => d,
@@ -66,70 +74,71 @@ impl<S: Space> ParticleDashpots<S> {
             };
             for (end, e) in [(dashpot.a, -d), (dashpot.b, d)] {
                 if let Some(p) = end {
-                    ends[j][count[j]] = (p, e, model.particle_response(held, p, e));
-                    count[j] += 1;
+                    self.ends
+                        .push((j, p, e, model.particle_response(held, p, e)));
                 }
             }
         }
-        // The augmented system [I + (h/2)·K | E w].
-        let mut system = [[0.0; MAX_DASHPOTS + 1]; MAX_DASHPOTS];
+        // Row i of [I + (h/2)·K | E w]: K_ij = c_j Σ over the particles both move of e_i·g_j.
+        let width = k + 1;
+        let system = &mut self.system;
+        system.iter_mut().for_each(|x| *x = 0.0);
         for i in 0..k {
-            system[i][i] = 1.0;
-            for &(p, e, _) in &ends[i][..count[i]] {
-                system[i][MAX_DASHPOTS] += e.dot(&v_n.p[p]);
-            }
-            for j in 0..k {
-                let scale = 0.5 * h * self.list[j].c;
-                for &(p, e, _) in &ends[i][..count[i]] {
-                    for &(q, _, g) in &ends[j][..count[j]] {
-                        if p == q {
-                            system[i][j] += scale * e.dot(&g);
-                        }
-                    }
+            system[i * width + i] = 1.0;
+        }
+        for &(i, p, e, _) in &self.ends {
+            system[i * width + k] += e.dot(&v_n.p[p]);
+            for &(j, q, _, g) in &self.ends {
+                if p == q {
+                    system[i * width + j] += 0.5 * h * self.list[j].c * e.dot(&g);
                 }
             }
         }
-        let rates = eliminate(&mut system, k);
-        let mut power = 0.0;
-        for j in 0..k {
-            let force = self.list[j].c * rates[j];
-            power += force * rates[j];
-            for &(p, _, g) in &ends[j][..count[j]] {
-                acc.p[p] -= g * force;
-            }
+        let mut rates = [0.0; MAX_DASHPOTS];
+        if k == 1 {
+            rates[0] = system[1] / system[0];
+        } else {
+            eliminate(system, k, &mut rates);
         }
-        v_n.set_plus(v_half, 0.5 * h, acc);
+        let mut power = 0.0;
+        for (j, dashpot) in self.list.iter().enumerate() {
+            power += dashpot.c * rates[j] * rates[j];
+        }
+        for &(j, p, _, g) in &self.ends {
+            acc.p[p] -= g * (self.list[j].c * rates[j]);
+            v_n.p[p] = v_half.p[p] + acc.p[p] * (0.5 * h);
+        }
         power
     }
 }
 
-/// Gaussian elimination with partial pivoting of the first `k` rows of an augmented system
-/// whose right-hand side sits in the last column; returns the solution.
-#[allow(clippy::needless_range_loop)] // index notation of the elimination
-fn eliminate(a: &mut [[f64; MAX_DASHPOTS + 1]; MAX_DASHPOTS], k: usize) -> [f64; MAX_DASHPOTS] {
-    const R: usize = MAX_DASHPOTS;
+/// Gaussian elimination with partial pivoting of a k × (k + 1) augmented system (row-major,
+/// right-hand side last); the solution goes to `x[..k]`.
+fn eliminate(a: &mut [f64], k: usize, x: &mut [f64; MAX_DASHPOTS]) {
+    let w = k + 1;
     for col in 0..k {
         let pivot = (col..k)
-            .max_by(|x, y| a[*x][col].abs().total_cmp(&a[*y][col].abs()))
+            .max_by(|r, s| a[r * w + col].abs().total_cmp(&a[s * w + col].abs()))
             .unwrap_or(col);
-        a.swap(col, pivot);
+        if pivot != col {
+            for c in col..w {
+                a.swap(col * w + c, pivot * w + c);
+            }
+        }
         for row in col + 1..k {
-            let factor = a[row][col] / a[col][col];
+            let factor = a[row * w + col] / a[col * w + col];
             if factor != 0.0 {
-                for c in col..k {
-                    a[row][c] -= factor * a[col][c];
+                for c in col..w {
+                    a[row * w + c] -= factor * a[col * w + c];
                 }
-                a[row][R] -= factor * a[col][R];
             }
         }
     }
-    let mut x = [0.0; MAX_DASHPOTS];
     for row in (0..k).rev() {
-        let mut s = a[row][R];
+        let mut s = a[row * w + k];
         for c in row + 1..k {
-            s -= a[row][c] * x[c];
+            s -= a[row * w + c] * x[c];
         }
-        x[row] = s / a[row][row];
+        x[row] = s / a[row * w + row];
     }
-    x
 }

@@ -323,7 +323,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
     let mut carry = model.zero_rates();
     let mut directions = Vec::new();
     // Dashpots between particles only: the centred velocity is solved directly.
-    let particle_dashpots = ParticleDashpots::of(&model);
+    let mut particle_dashpots = ParticleDashpots::of(&model);
     let mut sampler = RowSampler::new(&times, interval, interval);
     // Solid contacts are watched for a node going through its solid.
     let solids = model.has_solids();
@@ -400,9 +400,8 @@ pub fn integrate<S: Space, const FINITE: bool>(
         let affine =
             model.has_dashpots() && !held.any_velocity_terms() && dofs.len() <= DENSE_LIMIT;
         let mut affine_solve = false;
-        let direct = particle_dashpots
-            .as_ref()
-            .filter(|_| model.has_dashpots() && !held.any_velocity_terms());
+        let direct =
+            particle_dashpots.is_some() && model.has_dashpots() && !held.any_velocity_terms();
         // Rows fall on increments unless a stability study asked for an increment that does
         // not divide the output interval; then every increment is a row for the sampler, and
         // the last dynamic step runs past its end to the first increment after it.
@@ -509,9 +508,11 @@ pub fn integrate<S: Space, const FINITE: bool>(
                             }
                             model.accelerations(&cfg, &total, &v_n, &held, &mut acc, &mut counters);
                         }
-                        DampingTreatment::Centred if let Some(direct) = direct => {
+                        DampingTreatment::Centred
+                            if direct && let Some(solve) = particle_dashpots.as_mut() =>
+                        {
                             model.dashpot_directions(&cfg, &mut directions);
-                            power = direct.solve(
+                            power = solve.solve(
                                 &model,
                                 &cfg,
                                 &forces,

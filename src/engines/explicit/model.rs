@@ -1161,7 +1161,12 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         let i = &self.bodies[b].inertia;
         BodyInertia {
             mass: i.mass,
-            centre: S::rotate(r, &i.centre),
+            // A body whose mass centre is its reference node (lumped) keeps it there.
+            centre: if i.centre == S::V::zero() {
+                i.centre
+            } else {
+                S::rotate(r, &i.centre)
+            },
             inertia: S::rotate_inertia(r, &i.inertia),
         }
     }

@@ -460,8 +460,17 @@ impl Space for Spatial {
         t * q.w + v.cross(&t)
     }
     fn rotate_inertia(r: &Self::R, i: &Self::Inertia) -> Self::Inertia {
-        let m = r.to_rotation_matrix();
-        m.matrix() * i * m.matrix().transpose()
+        // R I Rᵀ written out: T = R I, then the upper triangle of T Rᵀ, mirrored (the result
+        // is symmetric by construction; 45 multiply-adds instead of two general products).
+        let m = *r.to_rotation_matrix().matrix();
+        let t = Matrix3::from_fn(|a, b| {
+            m[(a, 0)] * i[(0, b)] + m[(a, 1)] * i[(1, b)] + m[(a, 2)] * i[(2, b)]
+        });
+        let e = |a: usize, b: usize| {
+            t[(a, 0)] * m[(b, 0)] + t[(a, 1)] * m[(b, 1)] + t[(a, 2)] * m[(b, 2)]
+        };
+        let (xy, xz, yz) = (e(0, 1), e(0, 2), e(1, 2));
+        Matrix3::new(e(0, 0), xy, xz, xy, e(1, 1), yz, xz, yz, e(2, 2))
     }
     fn inertia_apply(i: &Self::Inertia, w: &Self::W) -> Self::W {
         i * w

@@ -4,9 +4,10 @@
 //! For N = 10, 100, …, `max_n` masses of the chain family ([`crate::case::chain`]), the study
 //! runs `explicit` (every N) and `rapier_f64` in its matched configuration (while a run is
 //! predicted to finish within [`RAPIER_BUDGET_SECONDS`]), and measures per point:
-//! - the marginal wall time per increment: runs of S and 2S increments (each repeated so that
-//!   it takes a measurable time, the mean taken), (t₂ − t₁)/S, so the setup (building the
-//!   scene's model, the static step, the stable increment) drops out;
+//! - the marginal wall time per increment: runs of S and 2S increments (each repeated at least
+//!   [`MIN_REPEATS`] times and until it adds up to a measurable time, the fastest repeat
+//!   taken, since on a shared machine interference only ever adds time), (t₂ − t₁)/S, so the
+//!   setup (building the scene's model, the static step, the stable increment) drops out;
 //! - the peak resident memory of the longer run (the kernel's high-water mark, reset before
 //!   it);
 //! - the error of the probed displacements against the exact solution, with the error that
@@ -34,6 +35,10 @@ pub const STEPS: u64 = 400;
 /// chain is timed over a measurable interval.
 const WORK_PER_POINT: f64 = 2.0e7;
 
+/// Every timed run is repeated at least this often (the fastest repeat counts): at N = 10^6 a
+/// single run's time moved by up to 1.8× from one study to the next on this machine.
+pub const MIN_REPEATS: u64 = 3;
+
 /// One measured point.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Point {
@@ -43,7 +48,7 @@ pub struct Point {
     pub n: usize,
     /// Increments of the shorter run (the longer takes twice as many).
     pub steps: u64,
-    /// Times each run was repeated (the timings are means over the repeats).
+    /// Times each run was repeated (the timings are the fastest of the repeats).
     pub repeats: u64,
     /// Marginal wall time per increment, ns.
     pub ns_per_step: f64,
@@ -90,7 +95,7 @@ pub fn sizes(max_n: usize) -> Vec<usize> {
 
 /// Times each run is repeated at N.
 pub fn repeats_for(n: usize) -> u64 {
-    ((WORK_PER_POINT / (n as f64 * STEPS as f64)).ceil() as u64).max(1)
+    ((WORK_PER_POINT / (n as f64 * STEPS as f64)).ceil() as u64).max(MIN_REPEATS)
 }
 
 /// Run the study; `progress` is told each point as it starts (engine, N).
@@ -132,20 +137,21 @@ pub fn study(max_n: usize, mut progress: impl FnMut(&str, usize)) -> Result<Stud
 /// Measure one engine at one N.
 pub fn measure(engine: &dyn Engine, n: usize) -> Result<Point, String> {
     let repeats = repeats_for(n);
-    // Mean seconds of a run of `steps` increments, its peak RSS and error.
+    // Seconds of the fastest of the repeated runs of `steps` increments, its peak RSS and
+    // error.
     let timed = |steps: u64| -> Result<(f64, u64, f64, Chain), String> {
         let chain = Chain::new(n, steps);
         let scene = chain.scene();
         let settings = matching::job_settings(engine, &scene, &RunSettings::default());
         reset_peak_rss();
-        let mut seconds = 0.0;
+        let mut seconds = f64::INFINITY;
         let mut output = None;
         for _ in 0..repeats {
             let start = Instant::now();
             let run = engine
                 .run(&scene, &settings)
                 .map_err(|e| format!("{} on chain N = {n}: {e}", engine.name()))?;
-            seconds += start.elapsed().as_secs_f64();
+            seconds = seconds.min(start.elapsed().as_secs_f64());
             output = Some(run);
         }
         let output = output.expect("at least one repeat");
@@ -159,7 +165,7 @@ pub fn measure(engine: &dyn Engine, n: usize) -> Result<Point, String> {
             ));
         }
         let error = displacement_error(&chain, &output.history)?;
-        Ok((seconds / repeats as f64, rss, error, chain))
+        Ok((seconds, rss, error, chain))
     };
     let (short, _, _, chain) = timed(STEPS)?;
     let (long, rss, error, long_chain) = timed(2 * chain.steps)?;
@@ -199,8 +205,8 @@ fn displacement_error(chain: &Chain, history: &crate::contract::History) -> Resu
 }
 
 /// The streaming loop's marginal ns per DOF and increment at N: central differences of the
-/// chain over plain arrays (x, v, 1/m, k), `steps` and `2·steps` increments timed, the
-/// difference taken, so it reads and writes what one increment of the chain must and nothing
+/// chain over plain arrays (x, v, 1/m, k), `steps` and `2·steps` increments timed (the fastest
+/// of `repeats` each), the difference taken, so it reads and writes what one increment of the chain must and nothing
 /// more.
 pub fn streaming_limit(n: usize, steps: u64, repeats: u64) -> f64 {
     let run = |steps: u64| {
@@ -225,9 +231,13 @@ pub fn streaming_limit(n: usize, steps: u64, repeats: u64) -> f64 {
         std::hint::black_box((&x, &v));
         seconds
     };
-    let mean = |steps: u64| (0..repeats).map(|_| run(steps)).sum::<f64>() / repeats as f64;
-    let short = mean(steps);
-    let long = mean(2 * steps);
+    let best = |steps: u64| {
+        (0..repeats)
+            .map(|_| run(steps))
+            .fold(f64::INFINITY, f64::min)
+    };
+    let short = best(steps);
+    let long = best(2 * steps);
     (long - short).max(0.0) * 1e9 / (steps as f64 * n as f64)
 }
 

@@ -5,9 +5,9 @@
 //! runs `explicit` (every N) and `rapier_f64` in its matched configuration (while a run is
 //! predicted to finish within [`RAPIER_BUDGET_SECONDS`]), and measures per point:
 //! - the marginal wall time per increment: runs of S and 2S increments (each repeated at least
-//!   [`MIN_REPEATS`] times and until it adds up to a measurable time, the fastest repeat
-//!   taken, since on a shared machine interference only ever adds time), (t₂ − t₁)/S, so the
-//!   setup (building the scene's model, the static step, the stable increment) drops out;
+//!   [`MIN_REPEATS`] times, small chains more often, the fastest repeat taken, since on a
+//!   shared machine interference only ever adds time), (t₂ − t₁)/S, so the setup (building
+//!   the scene's model, the static step, the stable increment) drops out;
 //! - the peak resident memory of the longer run (the kernel's high-water mark, reset before
 //!   it);
 //! - the error of the probed displacements against the exact solution, with the error that
@@ -23,16 +23,18 @@ use crate::engines::{Engine, RunSettings};
 use crate::run::matching;
 use std::time::Instant;
 
-/// `rapier_f64` is run at the next N only while its run is predicted (from the last N, linearly
-/// in N) to take at most this long, seconds.
+/// `rapier_f64` is run at the next N only while its longer run is predicted (from the last N,
+/// linearly in N) to take at most this long, seconds. The budget is per run: the point repeats
+/// the short and the long run, so it takes about 1.5 × repeats × this at the most.
 pub const RAPIER_BUDGET_SECONDS: f64 = 60.0;
 
 /// Increments of the shorter of the two timed runs at every N (the longer takes twice as
 /// many): about 2.5 periods of the mode at h = 0.1·√(m/k).
 pub const STEPS: u64 = 400;
 
-/// DOF-increments each timed run is repeated up to (R·S·N ≥ this), so that even the smallest
-/// chain is timed over a measurable interval.
+/// DOF-increments each timed run is repeated up to (R·S·N ≥ this): a small chain's run takes
+/// microseconds, so it is repeated often enough that its fastest repeat is not one lucky
+/// timer reading.
 const WORK_PER_POINT: f64 = 2.0e7;
 
 /// Every timed run is repeated at least this often (the fastest repeat counts): at N = 10^6 a
@@ -205,9 +207,9 @@ fn displacement_error(chain: &Chain, history: &crate::contract::History) -> Resu
 }
 
 /// The streaming loop's marginal ns per DOF and increment at N: central differences of the
-/// chain over plain arrays (x, v, 1/m, k), `steps` and `2·steps` increments timed (the fastest
-/// of `repeats` each), the difference taken, so it reads and writes what one increment of the chain must and nothing
-/// more.
+/// chain over plain arrays (x, v, 1/m, k), `steps` and `2·steps` increments timed (the
+/// fastest of `repeats` each), the difference taken, so it reads and writes what one increment
+/// of the chain must and nothing more.
 pub fn streaming_limit(n: usize, steps: u64, repeats: u64) -> f64 {
     let run = |steps: u64| {
         let h = 1e-3;

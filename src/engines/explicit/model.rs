@@ -1405,7 +1405,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                             distinct.len() - 1
                         });
                 }
-                last as u32
+                u32::try_from(last).expect("fewer than 2^32 distinct projections")
             })
             .collect();
         c.motions = distinct.iter().map(|h| Motion::of(h)).collect();

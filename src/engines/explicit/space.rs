@@ -542,7 +542,8 @@ pub fn solve_body<S: Space>(
 ) -> (S::V, S::W) {
     if held_translations.len() == S::DIM {
         // A pinned reference node: the translations drop out and I α = M on the free axes
-        // (what the general path below computes with every projection exactly zero).
+        // (what the general path below computes, its projections then zero: exactly for
+        // axis-aligned held directions, to round-off for rotated ones).
         let operator = |alpha: &S::W| S::inertia_apply(&b.inertia, alpha);
         return (
             S::V::zero(),

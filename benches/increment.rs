@@ -11,11 +11,18 @@
 //! `setup/<case>/explicit`: the explicit engine's stable-increment analysis, which compiles the
 //! scene, runs its static steps and linearises it (what a run does before stepping).
 //!
+//! `floor/<case>/{registers,slices}`: the arithmetic floor (`run::floor`), the same recurrence
+//! as the explicit engine's on the single damped oscillator (`tests/floor.rs`: equal to
+//! round-off), written out by hand, at the same increment and length as `increment/<case>/…`:
+//! with the state in registers (the dependent chain alone) and in heap slices, one pass per
+//! stage (what a scene-driven engine must at least do).
+//!
 //! Run with `cargo bench --bench increment`; `BENCHMARKS.md` gives the table.
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use crosscheck::case;
 use crosscheck::engines::explicit::ExplicitEngine;
 use crosscheck::engines::{self, RunSettings};
+use crosscheck::run::floor::DampedOscillator;
 use crosscheck::run::matching;
 use crosscheck::scene::IncrementRule;
 use std::hint::black_box;
@@ -85,5 +92,31 @@ fn setup(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, increment, setup);
+fn floor(c: &mut Criterion) {
+    let mut group = c.benchmark_group("floor");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(300))
+        .measurement_time(Duration::from_secs(2));
+    for scene in seed_cases() {
+        let Some(oscillator) = DampedOscillator::of(&scene) else {
+            continue;
+        };
+        let IncrementRule::Given(h) = scene.settings.increment else {
+            continue;
+        };
+        let h = h / REFINEMENT;
+        let steps = (oscillator.duration / h).round() as u64;
+        group.throughput(Throughput::Elements(steps));
+        group.bench_function(format!("{}/registers", scene.id), |b| {
+            b.iter(|| black_box(oscillator).in_registers(black_box(h), steps))
+        });
+        group.bench_function(format!("{}/slices", scene.id), |b| {
+            b.iter(|| black_box(oscillator).in_slices(black_box(h), steps))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, increment, setup, floor);
 criterion_main!(benches);

@@ -1,0 +1,168 @@
+//! The arithmetic floor of one increment: the explicit scheme's recurrence for the simplest
+//! seed scene, a mass on a grounded spring and dashpot, written out by hand, so a benchmark can
+//! say how far the general engine is from the arithmetic it must do.
+//!
+//! The recurrence is the one the explicit engine runs on such a scene: central differences
+//! with the centred dashpot treatment (the dashpot's rate solves
+//! `(1 + (h/2)·c/m) r = v(n−½) + (h/2)·F/m`), the half-step velocity restarted from rest at the
+//! release (`v(−½) = −(h/2)·a(0)`), and the displacement summed with a compensated (Kahan)
+//! addition. It is written here from the scheme, not taken from the engine, and
+//! `tests/floor.rs` checks that the two agree to round-off.
+//!
+//! Two forms of the same arithmetic:
+//! - [`DampedOscillator::in_registers`]: the state in local variables, which the compiler
+//!   keeps in registers; only the dependent chain of the increment is left (the latency floor);
+//! - [`DampedOscillator::in_slices`]: the state in heap slices of a length known only at run
+//!   time, in the fewest passes an engine driven by a scene needs (forces from an element list
+//!   with node indices, then the dashpots' centred forces, then one pass over the particles).
+//!   What one pass computes reaches the next through memory.
+
+use crate::scene::{Connection, Dof, Scene, StepKind};
+use std::hint::black_box;
+
+/// One mass on a grounded spring and a grounded dashpot acting on the same translation,
+/// released from rest at a displacement.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DampedOscillator {
+    /// Mass (kg).
+    pub mass: f64,
+    /// Spring stiffness (N/m).
+    pub stiffness: f64,
+    /// Dashpot coefficient (N·s/m).
+    pub damping: f64,
+    /// Displacement at the release (m).
+    pub released_from: f64,
+    /// Duration of the dynamic step (s).
+    pub duration: f64,
+}
+
+impl DampedOscillator {
+    /// The oscillator a scene describes, when it is exactly that: one mass, one grounded spring
+    /// and one grounded dashpot on the same translation of its node, no bodies, contacts, loads
+    /// or initial velocities, a static step that prescribes that translation and a dynamic step
+    /// that releases it.
+    pub fn of(scene: &Scene) -> Option<Self> {
+        if !scene.bodies.is_empty()
+            || !scene.contacts.is_empty()
+            || !scene.loads.is_empty()
+            || !scene.initial_velocities.is_empty()
+        {
+            return None;
+        }
+        let [spring] = scene.springs.as_slice() else {
+            return None;
+        };
+        let [dashpot] = scene.dashpots.as_slice() else {
+            return None;
+        };
+        let Connection::Grounded {
+            node,
+            dof: dof @ Dof::Translation(_),
+        } = spring.connection
+        else {
+            return None;
+        };
+        if dashpot.connection != spring.connection {
+            return None;
+        }
+        let massive: Vec<_> = scene.nodes.iter().filter(|n| n.mass > 0.0).collect();
+        if massive.len() != 1 || !std::ptr::eq(massive[0], &scene.nodes[node]) {
+            return None;
+        }
+        let [static_step, dynamic] = scene.steps.as_slice() else {
+            return None;
+        };
+        let (StepKind::Static, StepKind::Dynamic { duration }) = (static_step.kind, dynamic.kind)
+        else {
+            return None;
+        };
+        let released_from = static_step
+            .conditions
+            .iter()
+            .find(|c| c.node == node && c.dof == dof)?
+            .value?;
+        // Released: the dynamic step neither holds nor prescribes the spring's translation.
+        if dynamic
+            .conditions
+            .iter()
+            .any(|c| c.node == node && c.dof == dof)
+        {
+            return None;
+        }
+        Some(Self {
+            mass: scene.nodes[node].mass,
+            stiffness: spring.coefficient,
+            damping: dashpot.coefficient,
+            released_from,
+            duration,
+        })
+    }
+
+    /// Displacement and half-step velocity after `steps` increments of `h`, the state in
+    /// registers.
+    pub fn in_registers(&self, h: f64, steps: u64) -> (f64, f64) {
+        let inverse_mass = 1.0 / self.mass;
+        let (k, c) = (self.stiffness, self.damping);
+        let mut u = self.released_from;
+        let mut carry = 0.0;
+        // v(−½) = v(0) − (h/2)·a(0), from rest (the dashpot's force is zero at rest).
+        let mut v_half = -(0.5 * h) * (-k * u * inverse_mass);
+        let diagonal = 1.0 + 0.5 * h * c * inverse_mass;
+        for _ in 0..steps {
+            let mut a = -k * u * inverse_mass;
+            let rate = (v_half + a * (0.5 * h)) / diagonal;
+            a -= inverse_mass * (c * rate);
+            v_half += a * h;
+            compensated_add(&mut u, &mut carry, v_half * h);
+        }
+        (u, v_half)
+    }
+
+    /// [`DampedOscillator::in_registers`] with the state in heap slices of a length the
+    /// compiler does not know, in the fewest passes a scene-driven step needs: clear the
+    /// forces, accumulate the springs' (from an element list with node indices), the
+    /// dashpots' centred forces (which need every other force on their nodes first), then
+    /// accelerations, velocities and compensated positions in one pass over the particles.
+    pub fn in_slices(&self, h: f64, steps: u64) -> (f64, f64) {
+        let n = black_box(1usize);
+        let mut u = vec![self.released_from; n];
+        let mut carry = vec![0.0; n];
+        let mut v_half = vec![0.0; n];
+        let mut force = vec![0.0; n];
+        let mut dashpot_force = vec![0.0; n];
+        let inverse_mass = vec![1.0 / self.mass; n];
+        // The element lists: (node, coefficient).
+        let springs = vec![(0usize, self.stiffness); n];
+        let dashpots = vec![(0usize, self.damping); n];
+        for i in 0..n {
+            v_half[i] = -(0.5 * h) * (-self.stiffness * u[i] * inverse_mass[i]);
+        }
+        for _ in 0..steps {
+            force.iter_mut().for_each(|f| *f = 0.0);
+            for &(node, k) in &springs {
+                force[node] -= k * u[node];
+            }
+            for &(node, c) in &dashpots {
+                let v_n = v_half[node] + force[node] * inverse_mass[node] * (0.5 * h);
+                let rate = v_n / (1.0 + 0.5 * h * c * inverse_mass[node]);
+                dashpot_force[node] = c * rate;
+            }
+            for i in 0..n {
+                let a = force[i] * inverse_mass[i] - inverse_mass[i] * dashpot_force[i];
+                v_half[i] += a * h;
+                let dx = v_half[i] * h;
+                compensated_add(&mut u[i], &mut carry[i], dx);
+            }
+        }
+        (u[0], v_half[0])
+    }
+}
+
+/// `x += dx` with the rounding error carried to the next addition (Kahan).
+#[inline(always)]
+fn compensated_add(x: &mut f64, carry: &mut f64, dx: f64) {
+    let y = dx - *carry;
+    let t = *x + y;
+    *carry = (t - *x) - y;
+    *x = t;
+}

@@ -44,10 +44,12 @@ impl<S: Space> ParticleDashpots<S> {
         })
     }
 
-    /// The centred velocity `v_n` and the accelerations `acc` at it, from the position forces
-    /// and the half-step velocity `v_half`, with `directions` the two-point dashpots' lines at
-    /// this configuration; returns the dashpots' dissipation power. Only for a step without
-    /// centripetal or gyroscopic terms (the bodies' accelerations do not read the velocity).
+    /// The accelerations `acc` at the centred velocity, and that velocity into `v_n` where one
+    /// is given (an increment that only advances needs neither it nor its pass over memory),
+    /// from the position forces and the half-step velocity `v_half`, with `directions` the
+    /// two-point dashpots' lines at this configuration; returns the dashpots' dissipation
+    /// power. Only for a step without centripetal or gyroscopic terms (the bodies'
+    /// accelerations do not read the velocity).
     #[allow(clippy::too_many_arguments)]
     pub fn solve<const FINITE: bool>(
         &mut self,
@@ -59,12 +61,14 @@ impl<S: Space> ParticleDashpots<S> {
         h: f64,
         held: &Constraints<S>,
         acc: &mut Rates<S>,
-        v_n: &mut Rates<S>,
+        mut v_n: Option<&mut Rates<S>>,
         counters: &mut Counters,
     ) -> f64 {
         counters.damping_evaluations += 1;
         model.accelerations(cfg, forces, v_half, held, acc, counters);
-        v_n.set_plus(v_half, 0.5 * h, acc);
+        if let Some(v_n) = v_n.as_deref_mut() {
+            v_n.set_plus(v_half, 0.5 * h, acc);
+        }
         let k = self.list.len();
         self.ends.clear();
         for (j, dashpot) in self.list.iter().enumerate() {
@@ -87,7 +91,9 @@ impl<S: Space> ParticleDashpots<S> {
             system[i * width + i] = 1.0;
         }
         for &(i, p, e, _) in &self.ends {
-            system[i * width + k] += e.dot(&v_n.p[p]);
+            // The centred velocity before the dashpots act, as `Rates::set_plus` forms it.
+            let centred = v_half.p[p] + acc.p[p] * (0.5 * h);
+            system[i * width + k] += e.dot(&centred);
             for &(j, q, _, g) in &self.ends {
                 if p == q {
                     system[i * width + j] += 0.5 * h * self.list[j].c * e.dot(&g);
@@ -106,7 +112,9 @@ impl<S: Space> ParticleDashpots<S> {
         }
         for &(j, p, _, g) in &self.ends {
             acc.p[p] -= g * (self.list[j].c * rates[j]);
-            v_n.p[p] = v_half.p[p] + acc.p[p] * (0.5 * h);
+            if let Some(v_n) = v_n.as_deref_mut() {
+                v_n.p[p] = v_half.p[p] + acc.p[p] * (0.5 * h);
+            }
         }
         power
     }

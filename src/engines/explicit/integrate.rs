@@ -402,6 +402,12 @@ pub fn integrate<S: Space, const FINITE: bool>(
         let mut affine_solve = false;
         let direct =
             particle_dashpots.is_some() && model.has_dashpots() && !held.any_velocity_terms();
+        // Without dashpots and with every turning body on one free axis, the centred velocity
+        // has a closed form (`Model::centred_single_axis`).
+        let single_axis = settings.damping == DampingTreatment::Centred
+            && !model.has_dashpots()
+            && held.any_velocity_terms()
+            && model.single_axis(&held);
         // Rows fall on increments unless a stability study asked for an increment that does
         // not divide the output interval; then every increment is a row for the sampler, and
         // the last dynamic step runs past its end to the first increment after it.
@@ -474,6 +480,61 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 last_power = 0.0;
                 continue;
             }
+            // The same increment where the centred velocity is solved directly (dashpots
+            // between particles; or bodies turning about one axis each, without dashpots): the
+            // accelerations at the centred velocity, then velocities and positions in one pass
+            // (the centred velocity itself is not kept).
+            if !restart
+                && (direct || single_axis)
+                && settings.damping == DampingTreatment::Centred
+                && n % stride != 0
+                && n + 1 < first + steps_here
+            {
+                let power = match particle_dashpots.as_mut() {
+                    Some(solve) if direct => {
+                        model.dashpot_directions(&cfg, &mut directions);
+                        Some(solve.solve(
+                            &model,
+                            &cfg,
+                            &forces,
+                            &directions,
+                            &v_half,
+                            h,
+                            &held,
+                            &mut acc,
+                            None,
+                            &mut counters,
+                        ))
+                    }
+                    _ => model
+                        .centred_single_axis(
+                            &cfg,
+                            &forces,
+                            &v_half,
+                            &held,
+                            h,
+                            &mut acc,
+                            &mut counters,
+                        )
+                        .then_some(0.0),
+                };
+                if let Some(power) = power {
+                    if n > 0 {
+                        dissipated += 0.5 * h * (last_power + power);
+                    }
+                    model.advance_by(
+                        &mut cfg,
+                        &mut carry,
+                        h,
+                        &acc,
+                        &mut v_half,
+                        &held,
+                        &mut counters,
+                    );
+                    last_power = power;
+                    continue;
+                }
+            }
             let mut power = 0.0;
             // At t = 0 and at every step boundary v(n) is known (at a boundary: the previous
             // step completed, v(n−½) + (h/2)·a(n−1), then the new constraints applied), so the
@@ -521,9 +582,23 @@ pub fn integrate<S: Space, const FINITE: bool>(
                                 h,
                                 &held,
                                 &mut acc,
-                                &mut v_n,
+                                Some(&mut v_n),
                                 &mut counters,
                             );
+                        }
+                        DampingTreatment::Centred
+                            if single_axis
+                                && model.centred_single_axis(
+                                    &cfg,
+                                    &forces,
+                                    &v_half,
+                                    &held,
+                                    h,
+                                    &mut acc,
+                                    &mut counters,
+                                ) =>
+                        {
+                            v_n.set_plus(&v_half, 0.5 * h, &acc);
                         }
                         DampingTreatment::Centred => {
                             model.dashpot_directions(&cfg, &mut directions);

@@ -1182,6 +1182,12 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         out: &mut Rates<S>,
         counters: &mut Counters,
     ) {
+        self.accelerate_particles(forces, held, out);
+        self.accelerate_bodies(cfg, forces, vel, held, out, counters);
+    }
+
+    /// The particles' part of [`Model::accelerations`] (no particle force reads the velocity).
+    fn accelerate_particles(&self, forces: &Forces<S>, held: &Constraints<S>, out: &mut Rates<S>) {
         for ((a, f), (inverse_mass, motion)) in out
             .p
             .iter_mut()
@@ -1190,7 +1196,65 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         {
             *a = held.motions[*motion as usize].project(*f * *inverse_mass);
         }
-        self.accelerate_bodies(cfg, forces, vel, held, out, counters);
+    }
+
+    /// Whether every body with centripetal or gyroscopic terms in this step turns about a
+    /// single free axis (always so in 2D): then [`Model::centred_single_axis`] applies to a
+    /// scene without dashpots.
+    pub fn single_axis(&self, held: &Constraints<S>) -> bool {
+        (0..self.bodies.len()).all(|b| !held.velocity_terms[b] || held.body_free_r[b].len() == 1)
+    }
+
+    /// The accelerations at the centred velocity `v(n) = v(n−½) + (h/2)·a(n)`, solved in
+    /// closed form, for a step whose only velocity-dependent forces are the centripetal and
+    /// gyroscopic terms of bodies that each turn about one free axis g (no dashpots; see
+    /// [`Model::single_axis`]). With ω = s·g those terms are s² times the terms at ω = g, and
+    /// the body solve is linear, so a(s) = a₀ + s²·a₁ with a₀ from the forces and a₁ from the
+    /// unit-rate terms (two solves), and s solves `(h/2)·q·s² − s + s_h + (h/2)·p = 0`
+    /// (p = g·α₀, q = g·α₁, s_h = g·ω(n−½)): the root that tends to `s_h + (h/2)·p` as
+    /// h → 0. This is the fixed point the velocity iteration converges to, reached without
+    /// iterating. False, with `out` unfinished, where that root is not real (h·|ω| far past
+    /// anything stable); the caller then iterates.
+    #[allow(clippy::too_many_arguments)]
+    pub fn centred_single_axis(
+        &self,
+        cfg: &Config<S>,
+        forces: &Forces<S>,
+        v_half: &Rates<S>,
+        held: &Constraints<S>,
+        h: f64,
+        out: &mut Rates<S>,
+        counters: &mut Counters,
+    ) -> bool {
+        self.accelerate_particles(forces, held, out);
+        for b in 0..self.bodies.len() {
+            let inertia = self.body_inertia(cfg, b);
+            let (held_t, free_r) = (&held.body_held_t[b], &held.body_free_r[b]);
+            counters.body_solves += 1;
+            let (a0, alpha0) = solve_body(inertia, held_t, free_r, &forces.b[b], &forces.m[b]);
+            if !(FINITE && held.velocity_terms[b]) {
+                out.b[b] = a0;
+                out.w[b] = alpha0;
+                continue;
+            }
+            let g = free_r[0];
+            let unit_force = S::cross(&g, &S::cross(&g, &inertia.centre)) * (-inertia.mass);
+            let unit_moment = S::gyroscopic(&g, &inertia.inertia) * -1.0;
+            counters.body_solves += 1;
+            let (a1, alpha1) = solve_body(inertia, held_t, free_r, &unit_force, &unit_moment);
+            let beta = 0.5 * h * g.dot(&alpha1);
+            let gamma = g.dot(&v_half.w[b]) + 0.5 * h * g.dot(&alpha0);
+            let discriminant = 1.0 - 4.0 * beta * gamma;
+            // Negative or NaN: no real root.
+            if discriminant.is_nan() || discriminant < 0.0 {
+                return false;
+            }
+            let rate = 2.0 * gamma / (1.0 + discriminant.sqrt());
+            let squared = rate * rate;
+            out.b[b] = a0 + a1 * squared;
+            out.w[b] = alpha0 + alpha1 * squared;
+        }
+        true
     }
 
     /// The bodies' part of [`Model::accelerations`].
@@ -1252,6 +1316,39 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         for i in 0..n {
             let a = motions[motion[i] as usize].project(f[i] * inverse[i]);
             v[i] += a * h;
+            compensated_add(&mut u[i], &mut c[i], v[i] * h);
+        }
+        self.advance_bodies(cfg, carry, h, vel, held, counters);
+    }
+
+    /// The half-step velocities `vel` advanced in place by `h·acc` and the configuration by
+    /// `h·vel`, each particle in one pass over memory: the arithmetic of [`Rates::set_plus`]
+    /// and [`Model::advance`] in turn, bit for bit (for an increment that writes no row, after
+    /// its accelerations are known).
+    #[allow(clippy::too_many_arguments)]
+    pub fn advance_by(
+        &self,
+        cfg: &mut Config<S>,
+        carry: &mut Rates<S>,
+        h: f64,
+        acc: &Rates<S>,
+        vel: &mut Rates<S>,
+        held: &Constraints<S>,
+        counters: &mut Counters,
+    ) {
+        for b in 0..self.bodies.len() {
+            vel.b[b] += acc.b[b] * h;
+            vel.w[b] += acc.w[b] * h;
+        }
+        let n = self.particles.len();
+        let (u, c, v, a) = (
+            &mut cfg.u[..n],
+            &mut carry.p[..n],
+            &mut vel.p[..n],
+            &acc.p[..n],
+        );
+        for i in 0..n {
+            v[i] += a[i] * h;
             compensated_add(&mut u[i], &mut c[i], v[i] * h);
         }
         self.advance_bodies(cfg, carry, h, vel, held, counters);

@@ -116,12 +116,12 @@ fn turning_body_takes_the_closed_form_centred_velocity() {
         println!("{id}: body solves per increment: {per_step:.5}");
         // 2 per increment, plus about 20 for the setup (static steps, start, linearisation).
         assert!((2.0..=2.003).contains(&per_step), "{id}: {c:?}");
-        // The same scene with a dashpot far too weak to act (1e-100 N·s/m, the smallest a case accepts, on the body's
-        // spring node) takes the velocity iteration instead: the closed form must be its fixed
-        // point. The iteration stops within 1e-14 of the velocity scale per increment; over
-        // 10^4 increments the positions then differ by about 1e-12 of their peak and the
-        // contact force, through the penalty's 1e10 N/m, by about 1e-10 of its peak
-        // (measured 8.3e-11); 1e-9 bounds it.
+        // The same scene with a dashpot far too weak to act (1e-100 N·s/m, the smallest a
+        // case accepts, on the body's spring node) takes the velocity iteration instead: the
+        // closed form must be its fixed point. The iteration stops within 1e-14 of the
+        // velocity scale per increment; over 10^4 increments the positions then differ by
+        // about 1e-12 of their peak and the contact force, through the penalty's 1e10 N/m, by
+        // about 1e-10 of its peak (measured 8.3e-11); 1e-9 bounds it.
         let iterated = variant(
             id,
             &[(

@@ -17,7 +17,7 @@
 //!   with node indices, then the dashpots' centred forces, then one pass over the particles).
 //!   What one pass computes reaches the next through memory.
 
-use crate::scene::{Connection, Dof, Scene, StepKind};
+use crate::scene::{Connection, DampingTreatment, Dof, Scene, StepKind};
 use std::hint::black_box;
 
 /// One mass on a grounded spring and a grounded dashpot acting on the same translation,
@@ -40,9 +40,10 @@ impl DampedOscillator {
     /// The oscillator a scene describes, when it is exactly that: one mass, one grounded spring
     /// and one grounded dashpot on the same translation of its node, no bodies, contacts, loads
     /// or initial velocities, a static step that prescribes that translation and a dynamic step
-    /// that releases it.
+    /// that releases it, and the centred dashpot treatment (the recurrence written here).
     pub fn of(scene: &Scene) -> Option<Self> {
-        if !scene.bodies.is_empty()
+        if scene.settings.damping != DampingTreatment::Centred
+            || !scene.bodies.is_empty()
             || !scene.contacts.is_empty()
             || !scene.loads.is_empty()
             || !scene.initial_velocities.is_empty()

@@ -490,50 +490,33 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 && n % stride != 0
                 && n + 1 < first + steps_here
             {
-                let power = match particle_dashpots.as_mut() {
-                    Some(solve) if direct => {
-                        model.dashpot_directions(&cfg, &mut directions);
-                        Some(solve.solve(
-                            &model,
-                            &cfg,
-                            &forces,
-                            &directions,
-                            &v_half,
-                            h,
-                            &held,
-                            &mut acc,
-                            None,
-                            &mut counters,
-                        ))
-                    }
-                    _ => model
-                        .centred_single_axis(
-                            &cfg,
-                            &forces,
-                            &v_half,
-                            &held,
-                            h,
-                            &mut acc,
-                            &mut counters,
-                        )
-                        .then_some(0.0),
-                };
-                if let Some(power) = power {
-                    if n > 0 {
-                        dissipated += 0.5 * h * (last_power + power);
-                    }
-                    model.advance_by(
-                        &mut cfg,
-                        &mut carry,
-                        h,
-                        &acc,
-                        &mut v_half,
-                        &held,
-                        &mut counters,
-                    );
-                    last_power = power;
-                    continue;
-                }
+                let power = centred_directly(
+                    &model,
+                    &cfg,
+                    &forces,
+                    &v_half,
+                    h,
+                    &held,
+                    particle_dashpots.as_mut().filter(|_| direct),
+                    &mut directions,
+                    &mut acc,
+                    None,
+                    &mut counters,
+                )
+                .ok_or_else(|| no_centred_rate(n as f64 * h, h))?;
+                // Never a restart, so n > 0.
+                dissipated += 0.5 * h * (last_power + power);
+                model.advance_by(
+                    &mut cfg,
+                    &mut carry,
+                    h,
+                    &acc,
+                    &mut v_half,
+                    &held,
+                    &mut counters,
+                );
+                last_power = power;
+                continue;
             }
             let mut power = 0.0;
             // At t = 0 and at every step boundary v(n) is known (at a boundary: the previous
@@ -569,36 +552,21 @@ pub fn integrate<S: Space, const FINITE: bool>(
                             }
                             model.accelerations(&cfg, &total, &v_n, &held, &mut acc, &mut counters);
                         }
-                        DampingTreatment::Centred
-                            if direct && let Some(solve) = particle_dashpots.as_mut() =>
-                        {
-                            model.dashpot_directions(&cfg, &mut directions);
-                            power = solve.solve(
+                        DampingTreatment::Centred if direct || single_axis => {
+                            power = centred_directly(
                                 &model,
                                 &cfg,
                                 &forces,
-                                &directions,
                                 &v_half,
                                 h,
                                 &held,
+                                particle_dashpots.as_mut().filter(|_| direct),
+                                &mut directions,
                                 &mut acc,
                                 Some(&mut v_n),
                                 &mut counters,
-                            );
-                        }
-                        DampingTreatment::Centred
-                            if single_axis
-                                && model.centred_single_axis(
-                                    &cfg,
-                                    &forces,
-                                    &v_half,
-                                    &held,
-                                    h,
-                                    &mut acc,
-                                    &mut counters,
-                                ) =>
-                        {
-                            v_n.set_plus(&v_half, 0.5 * h, &acc);
+                            )
+                            .ok_or_else(|| no_centred_rate(n as f64 * h, h))?;
                         }
                         DampingTreatment::Centred => {
                             model.dashpot_directions(&cfg, &mut directions);
@@ -858,6 +826,50 @@ impl RowSampler {
             self.next += 1;
         }
     }
+}
+
+/// The accelerations at the centred velocity without iterating, and that velocity into `v_n`
+/// where one is given: by the particle dashpots' direct solve (`dashpots`, with the two-point
+/// dashpots' lines refreshed into `directions`) or, without dashpots, by the closed form for
+/// bodies turning about one axis ([`Model::centred_single_axis`]). Returns the dashpots'
+/// dissipation power, or None where the closed form has no real root (see
+/// [`no_centred_rate`]).
+#[allow(clippy::too_many_arguments)]
+fn centred_directly<S: Space, const FINITE: bool>(
+    model: &Model<S, FINITE>,
+    cfg: &Config<S>,
+    forces: &Forces<S>,
+    v_half: &Rates<S>,
+    h: f64,
+    held: &Constraints<S>,
+    dashpots: Option<&mut ParticleDashpots<S>>,
+    directions: &mut Vec<S::V>,
+    acc: &mut Rates<S>,
+    v_n: Option<&mut Rates<S>>,
+    counters: &mut Counters,
+) -> Option<f64> {
+    if let Some(solve) = dashpots {
+        model.dashpot_directions(cfg, directions);
+        return Some(solve.solve(
+            model, cfg, forces, directions, v_half, h, held, acc, v_n, counters,
+        ));
+    }
+    if !model.centred_single_axis(cfg, forces, v_half, held, h, acc, counters) {
+        return None;
+    }
+    if let Some(v_n) = v_n {
+        v_n.set_plus(v_half, 0.5 * h, acc);
+    }
+    Some(0.0)
+}
+
+/// The failure of an increment whose centred angular rate has no real value: the
+/// centripetal terms grow faster with the rate than the increment can follow (h·|ω| far past
+/// the stable range), so no v(n) satisfies the scheme's equation.
+fn no_centred_rate(t: f64, h: f64) -> EngineError {
+    EngineError::Failed(format!(
+        "the centred angular velocity has no real solution at t = {t:e}: the centripetal terms are too strong for increment {h:e}; use a smaller increment or damping = \"lagged\""
+    ))
 }
 
 /// The centred velocity v(n) = v(n−½) + (h/2)·a(v(n)) solved directly, for a map that is affine

@@ -1212,9 +1212,10 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// the body solve is linear, so a(s) = a₀ + s²·a₁ with a₀ from the forces and a₁ from the
     /// unit-rate terms (two solves), and s solves `(h/2)·q·s² − s + s_h + (h/2)·p = 0`
     /// (p = g·α₀, q = g·α₁, s_h = g·ω(n−½)): the root that tends to `s_h + (h/2)·p` as
-    /// h → 0. This is the fixed point the velocity iteration converges to, reached without
-    /// iterating. False, with `out` unfinished, where that root is not real (h·|ω| far past
-    /// anything stable); the caller then iterates.
+    /// h → 0. Where the velocity iteration converges, this is its fixed point, reached without
+    /// iterating (it also exists where the iteration would not contract, up to a discriminant
+    /// of zero). False, with `out` unfinished, where the roots are not real: no centred velocity
+    /// exists there (h·|ω| far past anything stable).
     #[allow(clippy::too_many_arguments)]
     pub fn centred_single_axis(
         &self,
@@ -1239,6 +1240,8 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             }
             let g = free_r[0];
             let unit_force = S::cross(&g, &S::cross(&g, &inertia.centre)) * (-inertia.mass);
+            // Zero along g (g·(g × I g) = 0), so it adds round-off only; kept so that the
+            // load is the one `accelerate_bodies` applies.
             let unit_moment = S::gyroscopic(&g, &inertia.inertia) * -1.0;
             counters.body_solves += 1;
             let (a1, alpha1) = solve_body(inertia, held_t, free_r, &unit_force, &unit_moment);

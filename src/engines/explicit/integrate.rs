@@ -8,7 +8,9 @@
 //! `v(n−½) + (h/2)·a(n−1)`, which keeps the scheme second order; the lagged treatment uses
 //! `v(n−½)` (first order, the classic explicit form). Scenes without such forces skip the pass.
 //! Where every dashpot joins particles (or a particle and the ground) and no body has
-//! velocity terms, the centred velocity is solved directly instead ([`super::centred`]).
+//! velocity terms, the centred velocity is solved directly instead ([`super::centred`]); where
+//! there are no dashpots and every body with velocity terms turns about one axis, in closed
+//! form ([`Model::centred_single_axis`]).
 
 use super::centred::ParticleDashpots;
 use super::diagnosis::{PAST_LIMIT_GROWTH, PastLimit, growing_mode};

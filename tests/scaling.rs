@@ -1,5 +1,5 @@
 //! The scaling study's chain family: the explicit engine's error against the exact solution
-//! is the one central differences must give, at N = 10, 1000 and 100 000.
+//! is the one central differences must give, at N = 10, 1000, 100 000 and 300 000.
 //!
 //! Central differences started from rest reproduce a discrete mode's shape exactly and shift
 //! only its frequency, from ω to (2/h) asin(ωh/2) (`Chain::predicted_error`), so the measured
@@ -7,6 +7,7 @@
 //! start, a lost DOF, a wrong mode shape) would show at once.
 use crosscheck::case::chain::Chain;
 use crosscheck::engines::explicit::ExplicitEngine;
+use crosscheck::engines::explicit::model::BLOCKS_FROM;
 use crosscheck::engines::{Engine, RunSettings};
 use crosscheck::run::scaling::{self, STEPS};
 
@@ -57,6 +58,15 @@ fn chain_of_1000_matches_the_error_model() {
 #[test]
 fn chain_of_100_000_matches_the_error_model() {
     assert_matches_prediction(100_000);
+}
+
+/// Large enough for the time loop to step by blocks of springs (`Model::step_by_blocks`;
+/// `tests/blocks.rs` finds it equal to the two passes bit for bit): the run through the
+/// engine holds the error model too.
+#[test]
+fn chain_of_300_000_stepped_by_blocks_matches_the_error_model() {
+    const { assert!(300_000 >= BLOCKS_FROM) };
+    assert_matches_prediction(300_000);
 }
 
 #[test]

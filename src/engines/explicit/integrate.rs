@@ -10,12 +10,17 @@
 //! Where every dashpot joins particles (or a particle and the ground) and no body has
 //! velocity terms, the centred velocity is solved directly instead ([`super::centred`]); where
 //! there are no dashpots and every body with velocity terms turns about one axis, in closed
-//! form ([`Model::centred_single_axis`]).
+//! form ([`Model::centred_single_axis`]). A large scene of particles, springs along fixed
+//! lines and loads takes its one-pass increments block by block of springs
+//! ([`Model::step_by_blocks`]): one trip through memory instead of a force pass and an
+//! update.
 
 use super::centred::ParticleDashpots;
 use super::diagnosis::{PAST_LIMIT_GROWTH, PastLimit, growing_mode};
 use super::linear::{StableIncrement, static_step};
-use super::model::{Config, Constraints, ContactMode, Counters, Forces, Model, Rates, Target};
+use super::model::{
+    BLOCKS_FROM, Config, Constraints, ContactMode, Counters, Forces, Model, Rates, Target,
+};
 use super::space::{Lin, Space};
 use crate::contract::ENERGY_COLUMNS;
 use crate::engines::{EngineError, History};
@@ -315,6 +320,9 @@ pub fn integrate<S: Space, const FINITE: bool>(
     let mut cfg_start = cfg.clone();
     let mut past_limit: Option<PastLimit<S>> = None;
     let mut forces = model.zero_forces();
+    // The forces `Model::step_by_blocks` sums (zero between its increments).
+    let mut pending = model.zero_forces();
+    let by_blocks = model.can_step_by_blocks() && model.particles.len() >= BLOCKS_FROM;
     let mut total: Forces<S> = model.zero_forces();
     let mut acc = model.zero_rates();
     let mut acc_prev = model.zero_rates();
@@ -437,6 +445,27 @@ pub fn integrate<S: Space, const FINITE: bool>(
             if n % INTERRUPT_STRIDE == 0 && crate::interrupt::requested() {
                 return Err(EngineError::Failed(format!("interrupted at increment {n}")));
             }
+            let restart = !started || n == first;
+            // An increment that restarts nothing, has no velocity-dependent force, writes no
+            // row and is neither the step's last nor the one before it (whose acceleration
+            // starts the next step) needs no acceleration kept: it runs in one pass.
+            let one_pass =
+                !restart && !velocity_pass && n % stride != 0 && n + 1 < first + steps_here;
+            // A large scene of particles, springs along fixed lines and loads: forces and
+            // update block by block of springs, each particle's data touched while in cache.
+            if one_pass && by_blocks {
+                model.step_by_blocks(
+                    &mut cfg,
+                    &mut carry,
+                    h,
+                    &mut v_half,
+                    &held,
+                    &mut pending,
+                    &mut counters,
+                );
+                last_power = 0.0;
+                continue;
+            }
             // Only an increment that writes a row reads the elastic energy.
             if n % stride == 0 {
                 model.forces(&cfg, ContactMode::Unilateral, &mut forces, &mut counters);
@@ -464,11 +493,9 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 std::mem::swap(&mut solid_before, &mut solid_now);
                 watching = true;
             }
-            let restart = !started || n == first;
-            // An increment that restarts nothing, has no velocity-dependent force, writes no
-            // row and is neither the step's last nor the one before it (whose acceleration
-            // starts the next step): accelerations, velocities and positions in one pass.
-            if !restart && !velocity_pass && n % stride != 0 && n + 1 < first + steps_here {
+            // Otherwise the one-pass increment: accelerations, velocities and positions in
+            // one pass over the particles, after the force pass.
+            if one_pass {
                 model.step(
                     &mut cfg,
                     &mut carry,

@@ -1,0 +1,211 @@
+//! The explicit engine's increment by blocks of springs (`Model::step_by_blocks`) against the
+//! force pass and the one-pass update it fuses (`Model::forces_with`, then `Model::step`): the
+//! same sums in the same order per particle, so the same state bit for bit, on scenes whose
+//! springs are scattered over many blocks, with loads, grounded springs, ground ends,
+//! particles no spring touches and particles under different held directions, in 2D and 3D
+//! and under both rotation models.
+mod common;
+use common::*;
+use crosscheck::case::chain::Chain;
+use crosscheck::engines::explicit::model::{ContactMode, Counters, Model};
+use crosscheck::engines::explicit::space::{Lin, Planar, Space, Spatial};
+use crosscheck::scene::{BoundaryCondition, Connection, Dof, Element, PointLoad, Scene, StepKind};
+use nalgebra::{Rotation3, Vector3};
+
+/// A chain of `n` masses with its springs in a scrambled order (so that a particle's last
+/// spring lies in a far block, and the particles a block finishes are not consecutive),
+/// and with what a chain lacks: loads, grounded springs, a spring to the ground mid-chain,
+/// a node no spring touches, and particles held in x as well as y, or in neither.
+fn scattered_chain(n: usize) -> Scene {
+    let mut scene = Chain::new(n, 100).scene();
+    let springs = scene.springs.len();
+    // 37 and n + 1 share no factor for the sizes below: a permutation.
+    let scrambled: Vec<Element> = (0..springs)
+        .map(|k| scene.springs[(k * 37) % springs].clone())
+        .collect();
+    // Nodes 300 (loaded below) and 500 (not) lose both their springs: touched by none.
+    scene.springs = scrambled
+        .into_iter()
+        .filter(|e| {
+            !matches!(e.connection, Connection::FixedDirection { nodes, .. }
+                if nodes.contains(&300) || nodes.contains(&500))
+        })
+        .collect();
+    scene.springs.push(Element {
+        name: "to-ground".into(),
+        connection: Connection::FixedDirection {
+            nodes: [n + 1, 150],
+            direction: Vector3::new(0.6, 0.8, 0.0),
+        },
+        coefficient: 3.0e3,
+    });
+    for node in [7, 150, 151, n] {
+        scene.springs.push(Element {
+            name: format!("grounded-{node}"),
+            connection: Connection::Grounded {
+                node,
+                dof: Dof::Translation(0),
+            },
+            coefficient: 2.0e3,
+        });
+    }
+    for (node, force) in [(150, 1.0), (300, -2.0), (150, 0.5), (n / 2, 3.0)] {
+        scene.loads.push(PointLoad {
+            node,
+            force: Vector3::new(force, 0.25 * force, 0.0),
+        });
+    }
+    // Node 20 held in x too (held), node 40 free in y (free), and nodes 60..70 held along a
+    // tilted direction instead of y (their frame turned by 0.5 rad about z: the held DOF is
+    // the frame's second axis).
+    for node in 60..70 {
+        scene.nodes[node].frame = *Rotation3::from_axis_angle(&Vector3::z_axis(), 0.5).matrix();
+    }
+    let dynamic = scene
+        .steps
+        .iter_mut()
+        .find(|s| matches!(s.kind, StepKind::Dynamic { .. }))
+        .expect("the chain has a dynamic step");
+    dynamic.conditions.push(BoundaryCondition {
+        node: 20,
+        dof: Dof::Translation(0),
+        value: None,
+    });
+    dynamic.conditions.retain(|c| c.node != 40);
+    scene
+}
+
+/// Run `increments` increments from a displaced, moving state both ways; the states must
+/// agree bit for bit, and the pending forces must be zero again.
+fn fused_equals_unfused<S: Space, const FINITE: bool>(scene: &Scene, increments: usize) {
+    let model = Model::<S, FINITE>::compile(scene, 0.0);
+    assert!(model.can_step_by_blocks(), "{}", scene.id);
+    let step = scene
+        .steps
+        .iter()
+        .find(|s| matches!(s.kind, StepKind::Dynamic { .. }))
+        .unwrap();
+    let held = model.constraints(scene, step);
+    let mut cfg = model.initial_config();
+    let mut vel = model.zero_rates();
+    for (i, (u, v)) in cfg.u.iter_mut().zip(vel.p.iter_mut()).enumerate() {
+        let x = i as f64;
+        *u = S::v(&Vector3::new(
+            1e-3 * (0.1 * x).sin(),
+            1e-4 * (0.3 * x).cos(),
+            2e-4,
+        ));
+        *v = S::v(&Vector3::new(1e-2 * (0.2 * x).cos(), 0.0, -1e-3));
+    }
+    model.enforce(&mut vel, &held);
+    let start = cfg.u.clone();
+    let h = 1e-3;
+    let (mut cfg_b, mut vel_b) = (cfg.clone(), vel.clone());
+    let (mut carry, mut carry_b) = (model.zero_rates(), model.zero_rates());
+    let (mut forces, mut pending) = (model.zero_forces(), model.zero_forces());
+    let mut acc = model.zero_rates();
+    let mut counters = Counters::default();
+    for _ in 0..increments {
+        model.forces_with::<false>(&cfg, ContactMode::Unilateral, &mut forces, &mut counters);
+        model.step(
+            &mut cfg,
+            &mut carry,
+            h,
+            &forces,
+            &mut vel,
+            &held,
+            &mut acc,
+            &mut counters,
+        );
+        model.step_by_blocks(
+            &mut cfg_b,
+            &mut carry_b,
+            h,
+            &mut vel_b,
+            &held,
+            &mut pending,
+            &mut counters,
+        );
+    }
+    // The state moved (the comparison is not of two untouched copies).
+    let moved = cfg.u.iter().zip(&start).filter(|(u, u0)| u != u0).count();
+    assert!(moved > cfg.u.len() / 2, "{moved} of {} moved", cfg.u.len());
+    // Same operations in the same order: equal bit for bit, not merely to round-off.
+    for (what, a, b) in [
+        ("position", &cfg.u, &cfg_b.u),
+        ("rounding carry", &carry.p, &carry_b.p),
+        ("velocity", &vel.p, &vel_b.p),
+    ] {
+        assert!(a.iter().all(|x| x.dot(x).is_finite()), "{what}: not finite");
+        if let Some(i) = (0..a.len()).find(|i| a[*i] != b[*i]) {
+            panic!(
+                "{what} of particle {i}: {:?} by passes, {:?} by blocks",
+                a[i], b[i]
+            );
+        }
+    }
+    assert!(
+        pending.p.iter().all(|f| *f == S::v(&Vector3::zeros())),
+        "pending forces left non-zero"
+    );
+}
+
+#[test]
+fn blocks_give_the_two_passes_bit_for_bit_in_2d() {
+    // 699 springs in the chain after the cut, and one to the ground: three blocks of springs
+    // and a remainder.
+    fused_equals_unfused::<Planar, true>(&scattered_chain(700), 50);
+}
+
+#[test]
+fn blocks_give_the_two_passes_bit_for_bit_in_3d() {
+    let mut scene = scattered_chain(700);
+    scene.dimension = crosscheck::scene::Dimension::Three;
+    // The chain's nodes move in z too in 3D; its ends are held in z as well (massless nodes
+    // held in every DOF are the ground).
+    for step in &mut scene.steps {
+        for node in [0, 701] {
+            step.conditions.push(BoundaryCondition {
+                node,
+                dof: Dof::Translation(2),
+                value: None,
+            });
+        }
+    }
+    fused_equals_unfused::<Spatial, true>(&scene, 50);
+}
+
+#[test]
+fn blocks_give_the_two_passes_bit_for_bit_under_small_rotation() {
+    fused_equals_unfused::<Planar, false>(&scattered_chain(700), 50);
+}
+
+#[test]
+fn blocks_without_line_springs_finish_every_particle_after_the_loads() {
+    let mut scene = scattered_chain(700);
+    scene
+        .springs
+        .retain(|e| matches!(e.connection, Connection::Grounded { .. }));
+    fused_equals_unfused::<Planar, true>(&scene, 50);
+}
+
+#[test]
+fn blocks_apply_to_particles_and_springs_only() {
+    assert!(Model::<Planar, true>::compile(&Chain::new(10, 100).scene(), 0.0).can_step_by_blocks());
+    assert!(
+        Model::<Planar, true>::compile(&scene("stress/stress_pair_undamped"), 0.0)
+            .can_step_by_blocks()
+    );
+    // Dashpots, bodies and contacts keep the general increment.
+    for id in [
+        "springs_grounded_a",
+        "springs_n2n_c",
+        "rigid2d_pin_lumped",
+        "stress/contact_drop_e1",
+    ] {
+        assert!(
+            !Model::<Planar, true>::compile(&scene(id), 1e6).can_step_by_blocks(),
+            "{id}"
+        );
+    }
+}

@@ -152,8 +152,8 @@ fn fused_equals_unfused<S: Space, const FINITE: bool>(scene: &Scene, increments:
 
 #[test]
 fn blocks_give_the_two_passes_bit_for_bit_in_2d() {
-    // 699 springs in the chain after the cut, and one to the ground: three blocks of springs
-    // and a remainder.
+    // 698 line springs (the chain's 701, less the four the cuts remove, and one to the
+    // ground): blocks of 256, 256 and 186 springs, then the block after the loads.
     fused_equals_unfused::<Planar, true>(&scattered_chain(700), 50);
 }
 

@@ -1167,6 +1167,11 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     }
 
     /// Add the grounded springs' forces to `out`; their elastic energy (0 unless `ENERGY`).
+    /// Always inlined, as are [`Model::apply_loads`] and `line_spring_forces`: the force pass
+    /// keeps the shape it had before they were split out (with this one called instead, the
+    /// time loop ran `rigid2d_pin_lumped` in 112 ns instead of 55: code layout,
+    /// `BENCHMARKS.md`).
+    #[inline(always)]
     fn grounded_spring_forces<const ENERGY: bool>(
         &self,
         cfg: &Config<S>,
@@ -1193,6 +1198,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     }
 
     /// Add the loads to `out`.
+    #[inline(always)]
     fn apply_loads(&self, cfg: &Config<S>, out: &mut Forces<S>) {
         for l in &self.loads {
             self.apply(cfg, &l.point, l.force, out);
@@ -1217,7 +1223,12 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// cache.
     ///
     /// `pending` is zero on entry and zero again on return.
+    ///
+    /// Never inlined: inlined into the time loop, it changed how the loop keeps its other
+    /// paths' values on the stack, and the 2D rigid cases, which never come here, took twice
+    /// as long (`BENCHMARKS.md`, code layout).
     #[allow(clippy::too_many_arguments)]
+    #[inline(never)]
     pub fn step_by_blocks(
         &self,
         cfg: &mut Config<S>,

@@ -1781,7 +1781,6 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             })
             .collect();
         c.motions = distinct.iter().map(|h| Motion::of(h)).collect();
-        c.motion_runs = Vec::new();
         for (i, m) in c.particle_motion.iter().enumerate() {
             let end = u32::try_from(i + 1).expect("fewer than 2^32 particles");
             match c.motion_runs.last_mut() {

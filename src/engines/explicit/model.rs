@@ -6,7 +6,7 @@
 //! small-rotation idealisation (`explicit_small`); it is resolved at compile time.
 
 use super::space::SharedSolid;
-use super::space::{BodyInertia, Lin, Space, compensated_add, solve_body};
+use super::space::{BodyInertia, BodySolve, Lin, Space, compensated_add};
 use crate::scene::{
     Attachment, BoundaryCondition, Connection, ContactPair, ContactState, Dof, Scene, Step,
     StepKind, Surface, surface_distance,
@@ -1502,8 +1502,9 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         for b in 0..self.bodies.len() {
             let inertia = self.body_inertia(cfg, b);
             let (held_t, free_r) = (&held.body_held_t[b], &held.body_free_r[b]);
+            let solve = BodySolve::new(inertia, held_t, free_r);
             counters.body_solves += 1;
-            let (a0, alpha0) = solve_body(inertia, held_t, free_r, &forces.b[b], &forces.m[b]);
+            let (a0, alpha0) = solve.solve(&forces.b[b], &forces.m[b]);
             if !(FINITE && held.velocity_terms[b]) {
                 out.b[b] = a0;
                 out.w[b] = alpha0;
@@ -1515,7 +1516,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             // load is the one `accelerate_bodies` applies.
             let unit_moment = S::gyroscopic(&g, &inertia.inertia) * -1.0;
             counters.body_solves += 1;
-            let (a1, alpha1) = solve_body(inertia, held_t, free_r, &unit_force, &unit_moment);
+            let (a1, alpha1) = solve.solve(&unit_force, &unit_moment);
             let beta = 0.5 * h * g.dot(&alpha1);
             let gamma = g.dot(&v_half.w[b]) + 0.5 * h * g.dot(&alpha0);
             let discriminant = 1.0 - 4.0 * beta * gamma;
@@ -1552,7 +1553,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             }
             counters.body_solves += 1;
             let (a, alpha) =
-                solve_body(inertia, &held.body_held_t[b], &held.body_free_r[b], &f, &m);
+                BodySolve::new(inertia, &held.body_held_t[b], &held.body_free_r[b]).solve(&f, &m);
             out.b[b] = a;
             out.w[b] = alpha;
         }

@@ -522,96 +522,174 @@ impl Space for Spatial {
     }
 }
 
-/// Solve the rigid-body equations at the reference node,
+/// The rigid-body equations of one body at the reference node,
 /// `m a + m α×c = f`, `m c×a + I_O α = m_O`, with the accelerations along the held translation
-/// axes (orthonormal, `held_translations`) forced to zero and α confined to the span of
-/// `free_rotations` (orthonormal).
+/// axes (orthonormal, `held_translations`) forced to zero and α confined to the span of the
+/// free rotation axes g_i (orthonormal), factorised once for the body's configuration so that
+/// several loads can be solved against one factorisation (the centred velocity of a body
+/// turning about one axis solves two).
 ///
 /// Block elimination: with Q the projector onto the free translations, `a = Q(f/m − α×c)`, and
-/// α solves the reduced rotational system `(I_O − m [c]× Q [c]×) α = m_O − c × Q f` on the free
-/// axes (at most 3×3, positive definite for a body with mass; about the centre of mass when no
-/// translation is held). A non-positive pivot (only a diverged, non-finite state gives one)
-/// yields non-finite accelerations, which the time loop reports as a failed run.
-#[inline]
-pub fn solve_body<S: Space>(
-    b: &BodyInertia<S>,
-    held_translations: &[S::V],
-    free_rotations: &[S::W],
-    force: &S::V,
-    moment: &S::W,
-) -> (S::V, S::W) {
-    if held_translations.len() == S::DIM {
-        // A pinned reference node: the translations drop out and I α = M on the free axes
-        // (what the general path below computes, its projections then zero: exactly for
-        // axis-aligned held directions, to round-off for rotated ones).
-        let operator = |alpha: &S::W| S::inertia_apply(&b.inertia, alpha);
-        return (
-            S::V::zero(),
-            solve_small::<S::W>(free_rotations, operator, moment),
-        );
-    }
-    let project = |v: S::V| {
-        let mut v = v;
-        for d in held_translations {
-            v -= *d * d.dot(&v);
-        }
-        v
-    };
-    let c = b.centre;
-    let operator = |alpha: &S::W| {
-        S::inertia_apply(&b.inertia, alpha) - S::moment(&c, &project(S::cross(alpha, &c))) * b.mass
-    };
-    let rhs = *moment - S::moment(&c, &project(*force));
-    let alpha = solve_small::<S::W>(free_rotations, operator, &rhs);
-    let a = project(*force * (1.0 / b.mass) - S::cross(&alpha, &c));
-    (a, alpha)
+/// α = Σ s_j g_j solves the reduced rotational system on the free axes,
+/// `Σ_j (g_i·I_O g_j − m w_i·w_j) s_j = g_i·m_O − f·w_i` with `w_i = Q(g_i × c)` (Q symmetric
+/// and idempotent: `g_i·(c × Q(g_j × c)) = w_i·w_j`, `g_i·(c × Q f) = f·w_i`); then
+/// `a = Q f/m − Σ s_j w_j`. The system is at most 3×3 and positive definite for a body with
+/// mass (about the centre of mass when no translation is held). A non-positive pivot (only a
+/// diverged, non-finite state gives one) yields non-finite accelerations, which the time loop
+/// reports as a failed run.
+pub struct BodySolve<'a, S: Space> {
+    body: &'a BodyInertia<S>,
+    held_translations: &'a [S::V],
+    free_rotations: &'a [S::W],
+    /// `w_i = Q(g_i × c)`, the translation each unit rotation rate drags through the held
+    /// directions' complement (zero for a pinned reference node).
+    drag: [S::V; 3],
+    /// The reduced operator on the free axes: on one axis its value, on more its Cholesky
+    /// factor L (lower triangle, L Lᵀ); NaN where it is not positive definite.
+    factor: [[f64; 3]; 3],
 }
 
-/// Solve `Gᵀ A G x = Gᵀ r` for x on at most three orthonormal axes G, with A given as an
-/// operator (symmetric positive definite on the axes), by a hand-written Cholesky
-/// factorisation; returns `G x`.
+impl<'a, S: Space> BodySolve<'a, S> {
+    /// Factorise the reduced rotational operator of body `b` under its constraints.
+    #[inline]
+    pub fn new(
+        b: &'a BodyInertia<S>,
+        held_translations: &'a [S::V],
+        free_rotations: &'a [S::W],
+    ) -> Self {
+        let mut drag = [S::V::zero(); 3];
+        let pinned = held_translations.len() == S::DIM;
+        if !pinned {
+            for (w, g) in drag.iter_mut().zip(free_rotations) {
+                *w = project(held_translations, S::cross(g, &b.centre));
+            }
+        }
+        let n = free_rotations.len();
+        let mut a = [[0.0; 3]; 3];
+        if n == 1 {
+            // Every planar body and every body turning about one axis: written out.
+            let g = &free_rotations[0];
+            a[0][0] = g.dot(&S::inertia_apply(&b.inertia, g));
+            if !pinned {
+                a[0][0] -= b.mass * drag[0].dot(&drag[0]);
+            }
+        } else {
+            for j in 0..n {
+                let column = S::inertia_apply(&b.inertia, &free_rotations[j]);
+                for i in 0..=j {
+                    let mut e = free_rotations[i].dot(&column);
+                    if !pinned {
+                        e -= b.mass * drag[i].dot(&drag[j]);
+                    }
+                    a[i][j] = e;
+                    a[j][i] = e;
+                }
+            }
+        }
+        BodySolve {
+            body: b,
+            held_translations,
+            free_rotations,
+            drag,
+            factor: factorise(n, &a),
+        }
+    }
+
+    /// The accelerations `(a, α)` of the reference node under `force` and `moment`.
+    #[inline]
+    pub fn solve(&self, force: &S::V, moment: &S::W) -> (S::V, S::W) {
+        let n = self.free_rotations.len();
+        let pinned = self.held_translations.len() == S::DIM;
+        if n == 1 {
+            // As in `new`, written out (the pivot is NaN where the factorisation failed).
+            let (g, pivot) = (&self.free_rotations[0], self.factor[0][0]);
+            if pinned {
+                return (S::V::zero(), *g * (g.dot(moment) / pivot));
+            }
+            let s = (g.dot(moment) - force.dot(&self.drag[0])) / pivot;
+            let a = project(self.held_translations, *force) * (1.0 / self.body.mass);
+            return (a - self.drag[0] * s, *g * s);
+        }
+        let mut r = [0.0; 3];
+        for ((r, g), w) in r.iter_mut().zip(self.free_rotations).zip(&self.drag) {
+            *r = g.dot(moment);
+            if !pinned {
+                *r -= force.dot(w);
+            }
+        }
+        let s = substitute(n, &self.factor, &r);
+        let (mut a, mut alpha) = (S::V::zero(), S::W::zero());
+        if !pinned {
+            a = project(self.held_translations, *force) * (1.0 / self.body.mass);
+        }
+        for ((g, w), s) in self.free_rotations.iter().zip(&self.drag).zip(s) {
+            alpha += *g * s;
+            if !pinned {
+                a -= *w * s;
+            }
+        }
+        (a, alpha)
+    }
+}
+
+/// `v` projected onto the complement of the orthonormal directions `held`.
+#[inline]
+fn project<V: Lin>(held: &[V], v: V) -> V {
+    let mut v = v;
+    for d in held {
+        v -= *d * d.dot(&v);
+    }
+    v
+}
+
+/// Factorise the symmetric n×n system `a` (n ≤ 3): for n = 1 its value, for more its
+/// Cholesky factor L (L Lᵀ, by hand); NaN in the first pivot where it is not positive definite.
 #[inline]
 #[allow(clippy::needless_range_loop)] // index notation of the factorisation
-fn solve_small<W: Lin>(axes: &[W], operator: impl Fn(&W) -> W, rhs: &W) -> W {
-    let n = axes.len();
-    if n == 0 {
-        return W::zero();
-    }
-    if n == 1 {
-        let a = axes[0].dot(&operator(&axes[0]));
-        if a.is_nan() || a <= 0.0 {
-            return W::zero() * f64::NAN;
-        }
-        return axes[0] * (axes[0].dot(rhs) / a);
-    }
-    let mut a = [[0.0; 3]; 3];
-    let mut r = [0.0; 3];
-    for j in 0..n {
-        let column = operator(&axes[j]);
-        for i in 0..n {
-            a[i][j] = axes[i].dot(&column);
-        }
-        r[j] = axes[j].dot(rhs);
-    }
-    // Cholesky of the symmetric part, L Lᵀ.
+fn factorise(n: usize, a: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
     let mut l = [[0.0; 3]; 3];
+    if n == 1 {
+        let a = a[0][0];
+        l[0][0] = if a.is_nan() || a <= 0.0 { f64::NAN } else { a };
+        return l;
+    }
     for j in 0..n {
         let mut d = a[j][j];
         for k in 0..j {
             d -= l[j][k] * l[j][k];
         }
         if d.is_nan() || d <= 0.0 {
-            return W::zero() * f64::NAN;
+            l[0][0] = f64::NAN;
+            return l;
         }
         let d = d.sqrt();
         l[j][j] = d;
         for i in j + 1..n {
-            let mut s = 0.5 * (a[i][j] + a[j][i]);
+            let mut s = a[i][j];
             for k in 0..j {
                 s -= l[i][k] * l[j][k];
             }
             l[i][j] = s / d;
         }
+    }
+    l
+}
+
+/// Solve the system factorised by [`factorise`] for the right-hand side `r` (NaN where the
+/// factorisation failed).
+#[inline]
+#[allow(clippy::needless_range_loop)] // index notation of the substitutions
+fn substitute(n: usize, l: &[[f64; 3]; 3], r: &[f64; 3]) -> [f64; 3] {
+    let mut x = [0.0; 3];
+    if n == 0 {
+        return x;
+    }
+    if l[0][0].is_nan() {
+        return [f64::NAN; 3];
+    }
+    if n == 1 {
+        x[0] = r[0] / l[0][0];
+        return x;
     }
     let mut y = [0.0; 3];
     for i in 0..n {
@@ -621,7 +699,6 @@ fn solve_small<W: Lin>(axes: &[W], operator: impl Fn(&W) -> W, rhs: &W) -> W {
         }
         y[i] = s / l[i][i];
     }
-    let mut x = [0.0; 3];
     for i in (0..n).rev() {
         let mut s = y[i];
         for k in i + 1..n {
@@ -629,9 +706,5 @@ fn solve_small<W: Lin>(axes: &[W], operator: impl Fn(&W) -> W, rhs: &W) -> W {
         }
         x[i] = s / l[i][i];
     }
-    let mut out = W::zero();
-    for i in 0..n {
-        out += axes[i] * x[i];
-    }
-    out
+    x
 }

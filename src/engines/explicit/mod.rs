@@ -127,6 +127,9 @@ impl Engine for ExplicitEngine {
             ("rotation_updates".to_string(), c.rotation_updates),
             ("body_solves".to_string(), c.body_solves),
         ]);
+        if c.block_increments > 0 {
+            counters.insert("block_increments".to_string(), c.block_increments);
+        }
         if let Some(n) = pilot_increments {
             counters.insert("pilot_increments".to_string(), n);
         }

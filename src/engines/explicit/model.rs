@@ -198,8 +198,10 @@ pub struct Counters {
     pub damping_evaluations: u64,
     /// Body orientation updates.
     pub rotation_updates: u64,
-    /// Rigid-body acceleration solves.
+    /// Rigid-body acceleration solves (one per load solved against a body's factorisation).
     pub body_solves: u64,
+    /// Increments stepped block by block of springs ([`Model::step_by_blocks`]).
+    pub block_increments: u64,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -1243,6 +1245,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             .block_schedule
             .as_ref()
             .expect("Model::step_by_blocks is called only where Model::can_step_by_blocks");
+        counters.block_increments += 1;
         counters.force_evaluations += 1;
         self.grounded_spring_forces::<false>(cfg, pending);
         let n = self.particles.len();

@@ -178,14 +178,14 @@ const SMALL_ANGLE: f64 = 1e-2;
 /// small (h·|ω| below the stability limit), so the shortest form is the common one.
 ///
 /// At y < `TWO_TERMS` (a < 2.2e-4) sin(a)/a keeps 1 − y/6 (the next term, y²/120, is below
-/// 2.1e-17) and cos(a) − 1 keeps −y/2 + y²/24 (the next, y³/720, is below 6.9e-18 of y/2);
+/// 2.1e-17) and cos(a) − 1 keeps −y/2 + y²/24 (the next, y³/720, is below 7e-18 of y/2);
 /// at y < `THREE_TERMS` (a < 6.3e-3) they keep one term more (the next, y³/5040 and
 /// y⁴/40320, are below 1.3e-17 and 3.2e-18 of y/2).
 const TWO_TERMS: f64 = 5e-8;
 /// See [`TWO_TERMS`].
 const THREE_TERMS: f64 = 4e-5;
 
-/// sin(a)/a as a polynomial in y = a² (Taylor, through a⁸).
+/// sin(a)/a as a polynomial in y = a² (Taylor, through a⁸; fewer terms below [`THREE_TERMS`]).
 #[inline]
 fn sinc_series(y: f64) -> f64 {
     const C: [f64; 5] = [1.0, -1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362_880.0];
@@ -198,7 +198,8 @@ fn sinc_series(y: f64) -> f64 {
     }
 }
 
-/// cos(a) − 1 as a polynomial in y = a² (Taylor, through a⁸), without the cancellation of
+/// cos(a) − 1 as a polynomial in y = a² (Taylor, through a⁸; fewer terms below
+/// [`THREE_TERMS`]), without the cancellation of
 /// forming cos(a) first.
 #[inline]
 fn cos_minus_one_series(y: f64) -> f64 {
@@ -212,8 +213,8 @@ fn cos_minus_one_series(y: f64) -> f64 {
     }
 }
 
-/// `(sin x, cos x − 1)`, from the Taylor series for |x| < [`SMALL_ANGLE`] (the first
-/// neglected terms, x^11/11! and x^10/10!, are below 1e-25 there) and from −2 sin²(x/2)
+/// `(sin x, cos x − 1)`, from the Taylor series for |x| < [`SMALL_ANGLE`] (the terms they
+/// leave out are under a fifth of an ulp of the result: [`TWO_TERMS`]) and from −2 sin²(x/2)
 /// beyond.
 #[inline]
 fn sin_cos_minus_one(x: f64) -> (f64, f64) {
@@ -505,8 +506,8 @@ impl Space for Spatial {
         // exp(dθ/2) − 1 = (cos(|dθ|/2) − 1, sin(|dθ|/2)/|dθ| · dθ).
         let angle2 = dtheta.norm_squared();
         let (w, s) = if angle2 < SMALL_ANGLE * SMALL_ANGLE {
-            // Taylor series at a = |dθ|/2 < 5e-3; the first neglected terms, a^10/10! and
-            // a^10/11!, are below 1e-29.
+            // Taylor series at a = |dθ|/2 < 5e-3; the terms they leave out are under a fifth
+            // of an ulp of the result (`TWO_TERMS`).
             let y = 0.25 * angle2; // a²
             (cos_minus_one_series(y), 0.5 * sinc_series(y))
         } else {

@@ -5,7 +5,7 @@
 //! equations they solve.
 
 use crosscheck::engines::explicit::space::{BodyInertia, BodySolve, Planar, Space, Spatial};
-use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, Vector2, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, UnitQuaternion, Vector2, Vector3};
 use proptest::prelude::*;
 
 /// Round-off of two direct solves of a system whose condition number stays below about 1e4
@@ -25,12 +25,13 @@ fn dense_3d(
     let n = 6 + held_t.len() + held_r.len();
     let mut k = DMatrix::<f64>::zeros(n, n);
     let c = body.centre.cross_matrix() * body.mass;
+    let inertia = world_inertia(body);
     for i in 0..3 {
         k[(i, i)] = body.mass;
         for j in 0..3 {
             k[(i, 3 + j)] = -c[(i, j)];
             k[(3 + i, j)] = c[(i, j)];
-            k[(3 + i, 3 + j)] = body.inertia[(i, j)];
+            k[(3 + i, 3 + j)] = inertia[(i, j)];
         }
     }
     for (row, d) in held_t.iter().enumerate() {
@@ -58,6 +59,17 @@ fn dense_3d(
     )
 }
 
+/// The body's inertia in world axes, R I Rᵀ, by nalgebra's rotation matrix and products.
+fn world_inertia(body: &BodyInertia<Spatial>) -> Matrix3<f64> {
+    match body.orientation {
+        None => body.inertia,
+        Some(r) => {
+            let r = r.to_rotation_matrix();
+            r.matrix() * body.inertia * r.matrix().transpose()
+        }
+    }
+}
+
 /// Orthonormal held directions: the first `count` columns of a rotation.
 fn held(rotation: &Rotation3<f64>, count: usize) -> Vec<Vector3<f64>> {
     (0..count)
@@ -77,13 +89,15 @@ proptest! {
     #![proptest_config(ProptestConfig::with_cases(400))]
 
     /// Every combination of held translations (0–3) and rotations (0–2, at least one axis
-    /// free), along tilted directions, for a body whose mass centre is off the reference node.
+    /// free), along tilted directions, for a body whose mass centre is off the reference node,
+    /// its inertia given in world axes or in turned body axes with their orientation.
     #[test]
     fn spatial_matches_the_dense_system(
         mass in 0.5..50.0f64,
         centre in vector(),
         principal in [0.1..10.0f64, 0.1..10.0f64, 0.1..10.0f64],
         axes in vector(),
+        turned in proptest::option::of(vector()),
         frame_t in vector(),
         frame_r in vector(),
         count_t in 0usize..=3,
@@ -100,7 +114,24 @@ proptest! {
             * turn.matrix().transpose();
         let inertia = about_centre
             + (Matrix3::identity() * centre.norm_squared() - centre * centre.transpose()) * mass;
-        let body = BodyInertia::<Spatial> { mass, centre, inertia };
+        // The centre and the inertia above are in the body's axes; the centre is kept in
+        // the world's.
+        let orientation = turned.map(|t| UnitQuaternion::new(scaled(t, 3.0)));
+        let body = BodyInertia::<Spatial> {
+            mass,
+            centre: orientation.map_or(centre, |r| r * centre),
+            inertia,
+            orientation,
+        };
+        // The inertia applied in world axes, and its value on an axis.
+        let (world, w) = (world_inertia(&body), scaled(moment, 1.0));
+        prop_assert!((body.apply(&w) - world * w).norm() <= TOLERANCE * (world * w).norm().max(1.0));
+        // The axial value reaches about 600 (m ≤ 50, lever arms ≤ 2√3): its round-off is
+        // near 1e-13, so 1e-10 of the largest entry bounds it with a wide margin.
+        if let Some(axis) = w.try_normalize(1e-3) {
+            let expected = axis.dot(&(world * axis));
+            prop_assert!((body.axial(&axis) - expected).abs() <= TOLERANCE * world.amax());
+        }
         let held_t = held(&Rotation3::new(scaled(frame_t, 3.0)), count_t);
         let held_r = held(&Rotation3::new(scaled(frame_r, 3.0)), count_r);
         let free_r = Spatial::free_rotations(&held_r);
@@ -137,7 +168,12 @@ proptest! {
     ) {
         let centre = Vector2::new(centre[0], centre[1]) * 2.0;
         let inertia = polar + mass * centre.norm_squared();
-        let body = BodyInertia::<Planar> { mass, centre, inertia };
+        let body = BodyInertia::<Planar> {
+            mass,
+            centre,
+            inertia,
+            orientation: None,
+        };
         let axes = [Vector2::new(angle.cos(), angle.sin()), Vector2::new(-angle.sin(), angle.cos())];
         let held_t = &axes[..count_t];
         let free_r = Planar::free_rotations(&[]);
@@ -150,6 +186,7 @@ proptest! {
             mass,
             centre: Vector3::new(centre.x, centre.y, 0.0),
             inertia: Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, inertia)),
+            orientation: None,
         };
         let mut held_3d: Vec<Vector3<f64>> =
             held_t.iter().map(|d| Vector3::new(d.x, d.y, 0.0)).collect();
@@ -175,6 +212,7 @@ fn a_singular_body_gives_non_finite_accelerations() {
         mass: 1.0,
         centre: Vector3::zeros(),
         inertia: Matrix3::zeros(),
+        orientation: None,
     };
     let free_r = Spatial::free_rotations(&[]);
     let (a, alpha) = BodySolve::new(&body, &[], &free_r).solve(&Vector3::x(), &Vector3::z());

@@ -674,6 +674,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                     mass: b.mass,
                     centre: S::v(&b.centre_offset),
                     inertia: S::inertia(&b.inertia),
+                    orientation: None,
                 },
                 axes: axes(&node.frame),
                 rot_axes: rot_axes(&node.frame),
@@ -1430,7 +1431,8 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         &cfg.inertia[b]
     }
 
-    /// Mass properties of a body in world axes at orientation `r` (finite rotation).
+    /// Mass properties of a body at orientation `r` (finite rotation): the centre in world
+    /// axes, the inertia with its orientation.
     fn oriented(&self, b: usize, r: &S::R) -> BodyInertia<S> {
         let i = &self.bodies[b].inertia;
         BodyInertia {
@@ -1441,7 +1443,8 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             } else {
                 S::rotate(r, &i.centre)
             },
-            inertia: S::rotate_inertia(r, &i.inertia),
+            inertia: i.inertia,
+            orientation: Some(*r),
         }
     }
 
@@ -1515,11 +1518,11 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             }
             let g = free_r[0];
             let unit_force = S::cross(&g, &S::cross(&g, &inertia.centre)) * (-inertia.mass);
-            // Zero along g (g·(g × I g) = 0), so it adds round-off only; kept so that the
-            // load is the one `accelerate_bodies` applies.
-            let unit_moment = S::gyroscopic(&g, &inertia.inertia) * -1.0;
+            // The gyroscopic moment at ω = g, g × I g, is perpendicular to g, and the solve on
+            // the one axis g reads only the moment along it: left out, as in
+            // `accelerate_bodies`.
             counters.body_solves += 1;
-            let (a1, alpha1) = solve.solve(&unit_force, &unit_moment);
+            let (a1, alpha1) = solve.solve(&unit_force, &S::W::zero());
             let beta = 0.5 * h * g.dot(&alpha1);
             let gamma = g.dot(&v_half.w[b]) + 0.5 * h * g.dot(&alpha0);
             let discriminant = 1.0 - 4.0 * beta * gamma;
@@ -1552,7 +1555,12 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             if FINITE && held.velocity_terms[b] {
                 let w = vel.w[b];
                 f -= S::cross(&w, &S::cross(&w, &inertia.centre)) * inertia.mass;
-                m -= S::gyroscopic(&w, &inertia.inertia);
+                // ω × I ω is perpendicular to ω: on a body turning about one axis g (ω along
+                // g, the held components removed) the solve, which reads only the moment along
+                // g, would see round-off of it alone.
+                if held.body_free_r[b].len() > 1 {
+                    m -= S::gyroscopic(&w, &inertia.apply(&w));
+                }
             }
             counters.body_solves += 1;
             let (a, alpha) =
@@ -1650,7 +1658,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         let i = self.body_inertia(cfg, b);
         (
             (*v + S::cross(w, &i.centre)) * i.mass,
-            S::moment(&i.centre, v) * i.mass + S::inertia_apply(&i.inertia, w),
+            S::moment(&i.centre, v) * i.mass + i.apply(w),
         )
     }
 

@@ -229,31 +229,61 @@ const TWO_TERMS: f64 = 5e-8;
 /// See [`TWO_TERMS`].
 const THREE_TERMS: f64 = 4e-5;
 
-/// sin(a)/a as a polynomial in y = a² (Taylor, through a⁸; fewer terms below [`THREE_TERMS`]).
-#[inline]
-fn sinc_series(y: f64) -> f64 {
-    const C: [f64; 5] = [1.0, -1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362_880.0];
-    if y < TWO_TERMS {
-        C[0] + y * C[1]
-    } else if y < THREE_TERMS {
-        C[0] + y * (C[1] + y * C[2])
+/// Taylor coefficients of sin(a)/a − 1 in y = a²: −1/6, 1/120, −1/5040, 1/362880.
+const SINC: [f64; 4] = [-1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362_880.0];
+/// Taylor coefficients of cos(a) − 1 in y = a².
+const COS: [f64; 4] = [-0.5, 1.0 / 24.0, -1.0 / 720.0, 1.0 / 40_320.0];
+/// The same for half the angle of a rotation vector dθ, in y = |dθ|² (a = |dθ|/2, a² = y/4):
+/// ½ sin(a)/a − ½ (the quaternion's vector part per unit dθ, less ½) and cos(a) − 1, the
+/// factor a²⁽ᵏ⁾ → yᵏ/4ᵏ folded into the coefficients, so that no product forms a² first.
+const HALF_SINC: [f64; 4] = [
+    -1.0 / 48.0,
+    1.0 / 3840.0,
+    -1.0 / 645_120.0,
+    1.0 / 185_794_560.0,
+];
+/// See [`HALF_SINC`].
+const HALF_COS: [f64; 4] = [
+    -1.0 / 8.0,
+    1.0 / 384.0,
+    -1.0 / 46_080.0,
+    1.0 / 10_321_920.0,
+];
+
+/// `y (c₀ + y (c₁ + …))` through the first `terms` coefficients, by Horner's rule.
+#[inline(always)]
+fn polynomial(y: f64, c: &[f64; 4], terms: usize) -> f64 {
+    let mut p = c[terms - 1];
+    for k in (0..terms - 1).rev() {
+        p = c[k] + y * p;
+    }
+    y * p
+}
+
+/// sin(a)/a − 1 from the coefficients `c` ([`SINC`], or [`HALF_SINC`] with `per_a2` = 4, y
+/// per a²): through a⁸, one term below [`TWO_TERMS`], two below [`THREE_TERMS`].
+#[inline(always)]
+fn sinc_minus_one_series(y: f64, c: &[f64; 4], per_a2: f64) -> f64 {
+    if y < TWO_TERMS * per_a2 {
+        polynomial(y, c, 1)
+    } else if y < THREE_TERMS * per_a2 {
+        polynomial(y, c, 2)
     } else {
-        C[0] + y * (C[1] + y * (C[2] + y * (C[3] + y * C[4])))
+        polynomial(y, c, 4)
     }
 }
 
-/// cos(a) − 1 as a polynomial in y = a² (Taylor, through a⁸; fewer terms below
-/// [`THREE_TERMS`]), without the cancellation of
-/// forming cos(a) first.
-#[inline]
-fn cos_minus_one_series(y: f64) -> f64 {
-    const C: [f64; 4] = [-0.5, 1.0 / 24.0, -1.0 / 720.0, 1.0 / 40_320.0];
-    if y < TWO_TERMS {
-        y * (C[0] + y * C[1])
-    } else if y < THREE_TERMS {
-        y * (C[0] + y * (C[1] + y * C[2]))
+/// cos(a) − 1, without the cancellation of forming cos(a) first, from the coefficients `c`
+/// ([`COS`], or [`HALF_COS`] with `per_a2` = 4): through a⁸, two terms below [`TWO_TERMS`],
+/// three below [`THREE_TERMS`].
+#[inline(always)]
+fn cos_minus_one_series(y: f64, c: &[f64; 4], per_a2: f64) -> f64 {
+    if y < TWO_TERMS * per_a2 {
+        polynomial(y, c, 2)
+    } else if y < THREE_TERMS * per_a2 {
+        polynomial(y, c, 3)
     } else {
-        y * (C[0] + y * (C[1] + y * (C[2] + y * C[3])))
+        polynomial(y, c, 4)
     }
 }
 
@@ -264,7 +294,8 @@ fn cos_minus_one_series(y: f64) -> f64 {
 fn sin_cos_minus_one(x: f64) -> (f64, f64) {
     if x.abs() < SMALL_ANGLE {
         let y = x * x;
-        (x * sinc_series(y), cos_minus_one_series(y))
+        let sinc = 1.0 + sinc_minus_one_series(y, &SINC, 1.0);
+        (x * sinc, cos_minus_one_series(y, &COS, 1.0))
     } else {
         let half = (0.5 * x).sin();
         (x.sin(), -2.0 * half * half)
@@ -553,25 +584,38 @@ impl Space for Spatial {
         i * w
     }
     fn advance_compensated(r: &Self::R, carry: &mut [f64; 4], dtheta: &Vector3<f64>) -> Self::R {
-        // exp(dθ/2) − 1 = (cos(|dθ|/2) − 1, sin(|dθ|/2)/|dθ| · dθ).
+        // exp(dθ/2) − 1 = (cos(|dθ|/2) − 1, sin(|dθ|/2)/|dθ| · dθ) = (w, (½ + t) dθ).
         let angle2 = dtheta.norm_squared();
-        let (w, s) = if angle2 < SMALL_ANGLE * SMALL_ANGLE {
+        let (w, t) = if angle2 < SMALL_ANGLE * SMALL_ANGLE {
             // Taylor series at a = |dθ|/2 < 5e-3; the terms they leave out are under a fifth
             // of an ulp of the result (`TWO_TERMS`).
-            let y = 0.25 * angle2; // a²
-            (cos_minus_one_series(y), 0.5 * sinc_series(y))
+            (
+                cos_minus_one_series(angle2, &HALF_COS, 4.0),
+                sinc_minus_one_series(angle2, &HALF_SINC, 4.0),
+            )
         } else {
             let angle = angle2.sqrt();
             let (s, c) = (0.5 * angle).sin_cos();
-            (c - 1.0, s / angle)
+            (c - 1.0, s / angle - 0.5)
         };
-        let q = r.quaternion().coords;
+        let quaternion = r.quaternion();
+        let q = quaternion.coords;
         // As in 2D: the carried value q − carry misses unit norm by `excess`; the factor
         // 1 − excess/2 restores it within the increment.
         let low = nalgebra::Vector4::from(*carry);
         let excess = (q.norm_squared() - 1.0) - 2.0 * q.dot(&low);
-        let step = nalgebra::Quaternion::from_parts(w - 0.5 * excess, dtheta * s);
-        let dq = (step * r.quaternion()).coords;
+        // The increment (w − excess/2, (½ + t) dθ) ⊗ q, as ½ p + t p + (w − excess/2) q with
+        // p = (0, dθ) ⊗ q written out: p needs only dθ, not its length, so the chain of
+        // dependent operations from dθ to the new orientation is three steps shorter than
+        // forming the increment's quaternion first.
+        let (v, s) = (quaternion.imag(), quaternion.w);
+        let p = nalgebra::Vector4::new(
+            s * dtheta.x + (dtheta.y * v.z - dtheta.z * v.y),
+            s * dtheta.y + (dtheta.z * v.x - dtheta.x * v.z),
+            s * dtheta.z + (dtheta.x * v.y - dtheta.y * v.x),
+            -(dtheta.x * v.x + dtheta.y * v.y + dtheta.z * v.z),
+        );
+        let dq = (p * 0.5 - q * (0.5 * excess)) + (p * t + q * w);
         let mut out = q;
         for i in 0..4 {
             compensated_add(&mut out[i], &mut carry[i], dq[i]);

@@ -4,7 +4,9 @@
 //! (Lagrange multipliers), factorised by nalgebra's LU. The two share nothing but the
 //! equations they solve.
 
-use crosscheck::engines::explicit::space::{BodyInertia, BodySolve, Planar, Space, Spatial};
+use crosscheck::engines::explicit::space::{
+    BodyInertia, BodySolve, Orientation, Planar, Space, Spatial,
+};
 use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, UnitQuaternion, Vector2, Vector3};
 use proptest::prelude::*;
 
@@ -64,7 +66,7 @@ fn world_inertia(body: &BodyInertia<Spatial>) -> Matrix3<f64> {
     match body.orientation {
         None => body.inertia,
         Some(r) => {
-            let r = r.to_rotation_matrix();
+            let r = r.quaternion().to_rotation_matrix();
             r.matrix() * body.inertia * r.matrix().transpose()
         }
     }
@@ -116,10 +118,10 @@ proptest! {
             + (Matrix3::identity() * centre.norm_squared() - centre * centre.transpose()) * mass;
         // The centre and the inertia above are in the body's axes; the centre is kept in
         // the world's.
-        let orientation = turned.map(|t| UnitQuaternion::new(scaled(t, 3.0)));
+        let orientation = turned.map(|t| Orientation::new(UnitQuaternion::new(scaled(t, 3.0))));
         let body = BodyInertia::<Spatial> {
             mass,
-            centre: orientation.map_or(centre, |r| r * centre),
+            centre: orientation.map_or(centre, |r| r.quaternion() * centre),
             inertia,
             orientation,
         };

@@ -3,7 +3,7 @@
 //! every form must agree with `f64::sin_cos` to round-off on both sides of each switch.
 
 use crosscheck::engines::explicit::space::{Planar, Space, Spatial};
-use nalgebra::{UnitQuaternion, Vector3};
+use nalgebra::Vector3;
 
 /// Angles (rad) on both sides of the series' switches (a = 2.2e-4 and 6.3e-3 for the
 /// argument of the series; the 3D quaternion takes half the increment's angle, so its series
@@ -69,7 +69,7 @@ fn spatial_increment_matches_the_library() {
     let axis = Vector3::new(1.0, -2.0, 2.0) / 3.0;
     for x in angles() {
         let mut carry = [0.0; 4];
-        let r = Spatial::advance_compensated(&UnitQuaternion::identity(), &mut carry, &(axis * x));
+        let r = Spatial::advance_compensated(&Spatial::identity(), &mut carry, &(axis * x));
         let q = r.quaternion();
         let (sin, cos) = (0.5 * x).sin_cos();
         if x < SERIES_END {

@@ -6,10 +6,11 @@
 use crosscheck::engines::explicit::model::centred_rate;
 
 /// The residual of the computed root, relative to |s|: the terms β s², s and γ each carry
-/// round-off of about ε|s| (|β s²| ≤ |s|/4 and |γ| ≤ 2|s| on this branch), so 4ε bounds a
+/// round-off of about ε|s| (|β s²| ≤ 0.3|s| and |γ| ≤ 2|s| on this branch for |z| ≤ 0.2), so
+/// 4ε bounds a
 /// correct root's residual, and a series that leaves out only terms under round-off (14 z⁴ at
 /// z = 3.5e-5 is 2e-17 of s, 132 z⁶ at the next switch 1.6e-17) stays under it. Tried: a wrong
-/// z³ coefficient (4 for 5) and either switch moved tenfold each fail it (residuals of
+/// z³ coefficient (4 for 5) and either switch raised tenfold each fail it (residuals of
 /// 1.1e-15 to 1.3e-15 of s at the first z past the change, growing with z).
 const RESIDUAL: f64 = 4.0 * f64::EPSILON;
 
@@ -54,6 +55,8 @@ fn no_real_root_is_none() {
     assert_eq!(centred_rate(-2.0, -0.2), None);
     assert_eq!(centred_rate(f64::NAN, 1.0), None);
     assert_eq!(centred_rate(1.0, f64::INFINITY), None);
+    assert_eq!(centred_rate(-1.0, f64::INFINITY), None);
+    assert_eq!(centred_rate(f64::NEG_INFINITY, 1.0), None);
     // At 4βγ = 1 the two roots meet at 2γ.
     assert_eq!(centred_rate(0.5, 0.5), Some(1.0));
 }

@@ -1,9 +1,11 @@
 //! One increment of rotation from rest orientation, against the library's sine and cosine: the
 //! explicit engine takes them from Taylor series that keep fewer terms at smaller angles, and
-//! every form must agree with `f64::sin_cos` to round-off on both sides of each switch.
+//! every form must agree with `f64::sin_cos` to round-off on both sides of each switch. In 3D
+//! also one increment from a turned orientation against nalgebra's quaternion product, and the
+//! orientation's R − 1 against nalgebra's rotation matrix.
 
-use crosscheck::engines::explicit::space::{Planar, Space, Spatial};
-use nalgebra::Vector3;
+use crosscheck::engines::explicit::space::{Orientation, Planar, Space, Spatial};
+use nalgebra::{UnitQuaternion, Vector3};
 
 /// Angles (rad) on both sides of the series' switches (a = 2.2e-4 and 6.3e-3 for the
 /// argument of the series; the 3D quaternion takes half the increment's angle, so its series
@@ -93,6 +95,70 @@ fn spatial_increment_matches_the_library() {
                 close(q.imag()[k] - carry[k], expected),
                 "v[{k}] at {x:e}: {} against {expected:e}",
                 q.imag()[k]
+            );
+        }
+    }
+}
+
+/// From a turned orientation the increment composes on the world side, exp(dθ/2) ⊗ q (the
+/// rotation vector is in world axes): against nalgebra's quaternion product, component by
+/// component within 4ε (|q| = 1; the series' and the product's few roundings), at every angle
+/// above and about three tilted axes. From rest (above) the product's cross terms vanish; here
+/// they do not, so a reversed product or a sign slip in them fails.
+#[test]
+fn spatial_increment_composes_on_the_world_side() {
+    let start = UnitQuaternion::from_scaled_axis(Vector3::new(0.3, -1.1, 0.7));
+    let axes = [
+        Vector3::new(1.0, -2.0, 2.0) / 3.0,
+        Vector3::new(0.0, 0.6, 0.8),
+        Vector3::new(-0.48, 0.6, 0.64),
+    ];
+    for axis in axes {
+        for x in angles() {
+            let mut carry = [0.0; 4];
+            let dtheta = axis * x;
+            let r = Spatial::advance_compensated(&Orientation::new(start), &mut carry, &dtheta);
+            let expected = UnitQuaternion::from_scaled_axis(dtheta) * start;
+            for (k, low) in carry.iter().enumerate() {
+                let got = r.quaternion().coords[k] - low;
+                assert!(
+                    (got - expected.coords[k]).abs() <= 4.0 * f64::EPSILON,
+                    "component {k} at {x:e} about {axis:?}: {got} against {}",
+                    expected.coords[k]
+                );
+            }
+        }
+    }
+}
+
+/// The orientation's R − 1 against nalgebra's rotation matrix: a body point turned into the
+/// world and back within 4ε of |x| (three products and two sums per entry), and, at small
+/// angles, the displacement (R − 1) x within 4ε of itself against sin θ a×x + 2 sin²(θ/2)
+/// a×(a×x), where forming R x − x would cancel.
+#[test]
+fn spatial_rotations_match_the_rotation_matrix() {
+    let x = Vector3::new(0.7, -1.9, 0.4);
+    let axis = Vector3::new(-0.48, 0.6, 0.64);
+    for angle in angles() {
+        let q = UnitQuaternion::from_scaled_axis(axis * angle);
+        let r = Orientation::new(q);
+        let matrix = q.to_rotation_matrix();
+        let (world, back) = (Spatial::rotate(&r, &x), Spatial::unrotate(&r, &x));
+        assert!(
+            (world - matrix * x).norm() <= 4.0 * f64::EPSILON * x.norm(),
+            "{angle:e}"
+        );
+        assert!(
+            (back - matrix.inverse() * x).norm() <= 4.0 * f64::EPSILON * x.norm(),
+            "{angle:e}"
+        );
+        if angle < 1e-2 {
+            let (sin, half) = (angle.sin(), (0.5 * angle).sin());
+            let expected = axis.cross(&x) * sin + axis.cross(&axis.cross(&x)) * (2.0 * half * half);
+            let turned = Spatial::turned(&r, &x);
+            assert!(
+                (turned - expected).norm() <= 4.0 * f64::EPSILON * expected.norm(),
+                "turned at {angle:e}: {turned:?} against {expected:?}"
             );
         }
     }

@@ -44,9 +44,9 @@ pub struct Config<S: Space> {
     pub br_carry: Vec<S::Carry>,
     /// Body rotation vectors (small rotation).
     pub bth: Vec<S::W>,
-    /// Mass properties of each body in world axes at this configuration, kept in step with
-    /// `br` by every method that rotates a body (finite rotation; the body-frame ones under
-    /// small rotation).
+    /// Mass properties of each body at this configuration (centre in world axes, inertia in
+    /// the body's axes with the orientation), kept in step with `br` by every method that
+    /// rotates a body (finite rotation; the unrotated ones under small rotation).
     pub inertia: Vec<BodyInertia<S>>,
 }
 
@@ -1425,7 +1425,8 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             .sum()
     }
 
-    /// Mass properties of a body in world axes at `cfg`.
+    /// Mass properties of a body at `cfg` (centre in world axes, inertia in the body's axes
+    /// with the orientation).
     #[inline]
     pub fn body_inertia<'c>(&self, cfg: &'c Config<S>, b: usize) -> &'c BodyInertia<S> {
         &cfg.inertia[b]
@@ -2147,14 +2148,15 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
 }
 
 /// Below this |z| the series of [`centred_rate`] stops at z³: the first term left out, 14 z⁴,
-/// is under 2.2e-17, a tenth of an ulp of the sum (about 1).
+/// is under 2.2e-17, a fifth of an ulp of the sum or less (the sum is about 1; its ulp is
+/// 1.1e-16 just below 1, 2.2e-16 from 1 up).
 const CATALAN_FOUR: f64 = 3.5e-5;
 
 /// Below this |z| the series stops at z⁵: the first term left out, 132 z⁶, is under 1.6e-17.
 const CATALAN_SIX: f64 = 7e-4;
 
 /// The root `s = 2γ / (1 + √(1 − 4βγ))` of `β s² − s + γ = 0` that tends to γ as β → 0;
-/// None where the roots are not real (4βγ > 1, or not finite).
+/// None where the roots are not real (4βγ > 1, or NaN) or not finite.
 ///
 /// With z = βγ the root is γ·C(z), C(z) = 2/(1 + √(1 − 4z)) = Σ Cₙ zⁿ (the Catalan numbers
 /// 1, 1, 2, 5, 14, 42, …). At the rates explicit runs take z is small (of order h·|ω|), and the
@@ -2176,8 +2178,8 @@ pub fn centred_rate(beta: f64, gamma: f64) -> Option<f64> {
         return Some(gamma * c);
     }
     let discriminant = 1.0 - 4.0 * z;
-    // Negative or NaN: no real root.
-    if discriminant.is_nan() || discriminant < 0.0 {
+    // Negative or NaN: no real root; infinite: no finite one.
+    if !(discriminant >= 0.0 && discriminant.is_finite()) {
         return None;
     }
     Some(2.0 * gamma / (1.0 + discriminant.sqrt()))

@@ -255,8 +255,9 @@ fn polynomial(y: f64, c: &[f64; 4], terms: usize) -> f64 {
     y * p
 }
 
-/// sin(a)/a − 1 from the coefficients `c` ([`SINC`], or [`HALF_SINC`] with `per_a2` = 4, y
-/// per a²): through a⁸, one term below [`TWO_TERMS`], two below [`THREE_TERMS`].
+/// sin(a)/a − 1 from the coefficients [`SINC`] (or ½ sin(a)/a − ½ from [`HALF_SINC`], with
+/// `per_a2` = 4, y per a²): through a⁸, one term below [`TWO_TERMS`], two below
+/// [`THREE_TERMS`].
 #[inline(always)]
 fn sinc_minus_one_series(y: f64, c: &[f64; 4], per_a2: f64) -> f64 {
     if y < TWO_TERMS * per_a2 {
@@ -449,8 +450,8 @@ impl Space for Planar {
 
 /// A 3D orientation: the unit quaternion the time loop advances, and R − 1, formed from it
 /// once per change. A body's points are rotated several times an increment (each load and
-/// spring end, each contact's face and normal); R − 1 applies in 15 flops, the quaternion in
-/// about 30.
+/// spring end, each contact's face and normal); R − 1 turns one in 15 flops (18 with the
+/// rotated point itself), the quaternion in about 30.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Orientation {
     quaternion: UnitQuaternion<f64>,
@@ -822,10 +823,12 @@ fn factorise(n: usize, a: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
     let mut l = [[0.0; 3]; 3];
     if n == 1 {
         let a = a[0][0];
-        l[0][0] = if a.is_nan() || a <= 0.0 {
-            f64::NAN
-        } else {
+        // Not positive and finite (NaN, or an infinite value whose reciprocal would be a
+        // finite zero): failed.
+        l[0][0] = if a > 0.0 && a.is_finite() {
             1.0 / a
+        } else {
+            f64::NAN
         };
         return l;
     }
@@ -834,7 +837,7 @@ fn factorise(n: usize, a: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
         for k in 0..j {
             d -= l[j][k] * l[j][k];
         }
-        if d.is_nan() || d <= 0.0 {
+        if !(d > 0.0 && d.is_finite()) {
             l[0][0] = f64::NAN;
             return l;
         }

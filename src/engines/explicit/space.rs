@@ -64,7 +64,7 @@ pub fn compensated_add<T: Lin>(x: &mut T, carry: &mut T, dx: T) {
 
 /// Mass properties of a body about its reference node: the mass, the centre of mass in world
 /// axes, and the inertia in the body's axes with the orientation that turns those into the
-/// world's. The inertia is not turned into world axes up front (R I Rᵀ, about 65 flops in 3D):
+/// world's. The inertia is not turned into world axes up front (R I Rᵀ, about 100 flops in 3D):
 /// the body solve needs it only on the free rotation axes, and a body turning about one axis g
 /// only g·I g, which one rotation of g into the body's axes gives ([`BodyInertia::axial`]).
 #[derive(Debug, Clone, Copy)]

@@ -255,18 +255,25 @@ fn polynomial(y: f64, c: &[f64; 4], terms: usize) -> f64 {
     y * p
 }
 
+/// The series with coefficients `c` in y, keeping `terms[0]` coefficients below
+/// [`TWO_TERMS`], `terms[1]` below [`THREE_TERMS`] and `terms[2]` beyond (`per_a2`: y per a²,
+/// 1 for the series in a², 4 for the half-angle ones in |dθ|²).
+#[inline(always)]
+fn tiered_series(y: f64, c: &[f64; 4], per_a2: f64, terms: [usize; 3]) -> f64 {
+    if y < TWO_TERMS * per_a2 {
+        polynomial(y, c, terms[0])
+    } else if y < THREE_TERMS * per_a2 {
+        polynomial(y, c, terms[1])
+    } else {
+        polynomial(y, c, terms[2])
+    }
+}
+
 /// sin(a)/a − 1 from the coefficients [`SINC`] (or ½ sin(a)/a − ½ from [`HALF_SINC`], with
-/// `per_a2` = 4, y per a²): through a⁸, one term below [`TWO_TERMS`], two below
-/// [`THREE_TERMS`].
+/// `per_a2` = 4): through a⁸, one term below [`TWO_TERMS`], two below [`THREE_TERMS`].
 #[inline(always)]
 fn sinc_minus_one_series(y: f64, c: &[f64; 4], per_a2: f64) -> f64 {
-    if y < TWO_TERMS * per_a2 {
-        polynomial(y, c, 1)
-    } else if y < THREE_TERMS * per_a2 {
-        polynomial(y, c, 2)
-    } else {
-        polynomial(y, c, 4)
-    }
+    tiered_series(y, c, per_a2, [1, 2, 4])
 }
 
 /// cos(a) − 1, without the cancellation of forming cos(a) first, from the coefficients `c`
@@ -274,13 +281,7 @@ fn sinc_minus_one_series(y: f64, c: &[f64; 4], per_a2: f64) -> f64 {
 /// three below [`THREE_TERMS`].
 #[inline(always)]
 fn cos_minus_one_series(y: f64, c: &[f64; 4], per_a2: f64) -> f64 {
-    if y < TWO_TERMS * per_a2 {
-        polynomial(y, c, 2)
-    } else if y < THREE_TERMS * per_a2 {
-        polynomial(y, c, 3)
-    } else {
-        polynomial(y, c, 4)
-    }
+    tiered_series(y, c, per_a2, [2, 3, 4])
 }
 
 /// `(sin x, cos x − 1)`, from the Taylor series for |x| < [`SMALL_ANGLE`] (the terms they

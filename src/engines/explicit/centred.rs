@@ -10,7 +10,9 @@
 //! semi-definite (P, the step's projection, commutes with each particle's scalar mass) and the
 //! `c_j` are positive, so `I + (h/2)·K` is never singular. One pass over the forces and a
 //! k×k elimination replace the iteration's two or more passes; the answer is its fixed point,
-//! to round-off.
+//! to round-off. Where no dashpot's line turns (every one but an axial dashpot under finite
+//! rotation), `I + (h/2)·K` is the same at every increment of a step, and its inverse is
+//! formed once per step.
 
 use super::model::{
     Config, Constraints, Counters, DashpotLine, Forces, Model, ParticleDashpot, Rates,
@@ -20,15 +22,22 @@ use super::space::{Lin, Space};
 /// Above this many dashpots the iteration is used (the elimination is O(k³) per increment).
 pub const MAX_DASHPOTS: usize = 8;
 
+/// A dashpot's moving end: (dashpot, particle, signed direction, P M⁻¹ of that direction).
+type End<S> = (usize, usize, <S as Space>::V, <S as Space>::V);
+
 /// The dashpots of a scene that the direct solve applies to, with the solve's scratch space.
 #[derive(Debug, Clone)]
 pub struct ParticleDashpots<S: Space> {
     list: Vec<ParticleDashpot<S>>,
-    /// Each dashpot's moving ends at this increment: (dashpot, particle, signed direction,
-    /// P M⁻¹ of that direction).
-    ends: Vec<(usize, usize, S::V, S::V)>,
+    /// Each dashpot's moving ends at this increment.
+    ends: Vec<End<S>>,
     /// The augmented system `[I + (h/2)·K | E w]`, row-major, k × (k + 1).
     system: Vec<f64>,
+    /// Where no dashpot's line turns, the ends and `(I + (h/2)·K)⁻¹` (row-major, k × k) of
+    /// the current step: both depend only on the step's constraints and the increment, so
+    /// [`ParticleDashpots::prepare`] forms them once per step and an increment only
+    /// multiplies.
+    steady: Option<(Vec<End<S>>, Vec<f64>)>,
 }
 
 impl<S: Space> ParticleDashpots<S> {
@@ -41,15 +50,105 @@ impl<S: Space> ParticleDashpots<S> {
             list,
             ends: Vec::with_capacity(2 * k),
             system: vec![0.0; k * (k + 1)],
+            steady: None,
         })
+    }
+
+    /// Whether the solve needs the two-point dashpots' current lines (some line turns).
+    pub fn needs_directions(&self) -> bool {
+        self.steady.is_none()
+    }
+
+    /// Start a step with constraints `held` at increment `h`: where no line turns, form the
+    /// step's ends and the inverse of `I + (h/2)·K` once (the same arithmetic
+    /// [`ParticleDashpots::solve`] does otherwise at every increment).
+    pub fn prepare<const FINITE: bool>(
+        &mut self,
+        model: &Model<S, FINITE>,
+        held: &Constraints<S>,
+        h: f64,
+    ) {
+        self.steady = None;
+        if self
+            .list
+            .iter()
+            .any(|d| matches!(d.line, DashpotLine::TwoPoint(_)))
+        {
+            return;
+        }
+        self.fill_ends(model, held, &[]);
+        self.fill_matrix(h);
+        let k = self.list.len();
+        let width = k + 1;
+        // Column j of the inverse solves the system for the j-th unit vector.
+        let mut inverse = vec![0.0; k * k];
+        let mut column = [0.0; MAX_DASHPOTS];
+        let mut augmented = self.system.clone();
+        for j in 0..k {
+            for (i, row) in augmented.chunks_mut(width).enumerate() {
+                row[..k].copy_from_slice(&self.system[i * width..i * width + k]);
+                row[k] = if i == j { 1.0 } else { 0.0 };
+            }
+            eliminate(&mut augmented, k, &mut column);
+            for i in 0..k {
+                inverse[i * k + j] = column[i];
+            }
+        }
+        self.steady = Some((self.ends.clone(), inverse));
+    }
+
+    /// Each dashpot's moving ends into `self.ends`, with `directions` the two-point dashpots'
+    /// lines at this configuration (unread where no line turns).
+    #[inline(always)]
+    fn fill_ends<const FINITE: bool>(
+        &mut self,
+        model: &Model<S, FINITE>,
+        held: &Constraints<S>,
+        directions: &[S::V],
+    ) {
+        self.ends.clear();
+        for (j, dashpot) in self.list.iter().enumerate() {
+            let d = match dashpot.line {
+                DashpotLine::Fixed(d) => d,
+                DashpotLine::TwoPoint(i) => directions[i],
+            };
+            for (end, e) in [(dashpot.a, -d), (dashpot.b, d)] {
+                if let Some(p) = end {
+                    self.ends
+                        .push((j, p, e, model.particle_response(held, p, e)));
+                }
+            }
+        }
+    }
+
+    /// `I + (h/2)·K` from `self.ends` into the first k columns of `self.system` (the
+    /// right-hand side column zeroed): K_ij = c_j Σ over the particles both move of e_i·g_j.
+    #[inline(always)]
+    fn fill_matrix(&mut self, h: f64) {
+        let k = self.list.len();
+        let width = k + 1;
+        let system = &mut self.system;
+        system.iter_mut().for_each(|x| *x = 0.0);
+        for i in 0..k {
+            system[i * width + i] = 1.0;
+        }
+        for &(i, p, e, _) in &self.ends {
+            for &(j, q, _, g) in &self.ends {
+                if p == q {
+                    system[i * width + j] += 0.5 * h * self.list[j].c * e.dot(&g);
+                }
+            }
+        }
     }
 
     /// The accelerations `acc` at the centred velocity, and that velocity into `v_n` where one
     /// is given (an increment that only advances needs neither it nor its pass over memory),
     /// from the position forces and the half-step velocity `v_half`, with `directions` the
-    /// two-point dashpots' lines at this configuration; returns the dashpots' dissipation
+    /// two-point dashpots' lines at this configuration (unread where
+    /// [`ParticleDashpots::needs_directions`] is false); returns the dashpots' dissipation
     /// power. Only for a step without centripetal or gyroscopic terms (the bodies'
-    /// accelerations do not read the velocity).
+    /// accelerations do not read the velocity), and at the increment and constraints of the
+    /// last [`ParticleDashpots::prepare`].
     #[allow(clippy::too_many_arguments)]
     pub fn solve<const FINITE: bool>(
         &mut self,
@@ -70,47 +169,47 @@ impl<S: Space> ParticleDashpots<S> {
             v_n.set_plus(v_half, 0.5 * h, acc);
         }
         let k = self.list.len();
-        self.ends.clear();
-        for (j, dashpot) in self.list.iter().enumerate() {
-            let d = match dashpot.line {
-                DashpotLine::Fixed(d) => d,
-                DashpotLine::TwoPoint(i) => directions[i],
-            };
-            for (end, e) in [(dashpot.a, -d), (dashpot.b, d)] {
-                if let Some(p) = end {
-                    self.ends
-                        .push((j, p, e, model.particle_response(held, p, e)));
-                }
-            }
-        }
-        // Row i of [I + (h/2)·K | E w]: K_ij = c_j Σ over the particles both move of e_i·g_j.
-        let width = k + 1;
-        let system = &mut self.system;
-        system.iter_mut().for_each(|x| *x = 0.0);
-        for i in 0..k {
-            system[i * width + i] = 1.0;
-        }
-        for &(i, p, e, _) in &self.ends {
-            // The centred velocity before the dashpots act, as `Rates::set_plus` forms it.
-            let centred = v_half.p[p] + acc.p[p] * (0.5 * h);
-            system[i * width + k] += e.dot(&centred);
-            for &(j, q, _, g) in &self.ends {
-                if p == q {
-                    system[i * width + j] += 0.5 * h * self.list[j].c * e.dot(&g);
-                }
-            }
-        }
+        // The centred velocity before the dashpots act, as `Rates::set_plus` forms it.
+        let centred = |p: usize| v_half.p[p] + acc.p[p] * (0.5 * h);
         let mut rates = [0.0; MAX_DASHPOTS];
-        if k == 1 {
-            rates[0] = system[1] / system[0];
+        if let Some((ends, inverse)) = &self.steady {
+            // E w, then the rates from the step's inverse.
+            let mut rhs = [0.0; MAX_DASHPOTS];
+            for &(i, p, e, _) in ends {
+                rhs[i] += e.dot(&centred(p));
+            }
+            if k == 1 {
+                rates[0] = inverse[0] * rhs[0];
+            } else {
+                for (j, rate) in rates[..k].iter_mut().enumerate() {
+                    *rate = inverse[j * k..(j + 1) * k]
+                        .iter()
+                        .zip(&rhs)
+                        .map(|(a, b)| a * b)
+                        .sum();
+                }
+            }
         } else {
-            eliminate(system, k, &mut rates);
+            self.fill_ends(model, held, directions);
+            self.fill_matrix(h);
+            let width = k + 1;
+            for &(i, p, e, _) in &self.ends {
+                self.system[i * width + k] += e.dot(&centred(p));
+            }
+            if k == 1 {
+                // The reciprocal depends on the configuration alone: formed beside the
+                // force pass, it leaves one product after E w instead of a division.
+                rates[0] = self.system[1] * (1.0 / self.system[0]);
+            } else {
+                eliminate(&mut self.system, k, &mut rates);
+            }
         }
+        let ends = self.steady.as_ref().map_or(&self.ends, |(ends, _)| ends);
         let mut power = 0.0;
         for (j, dashpot) in self.list.iter().enumerate() {
             power += dashpot.c * rates[j] * rates[j];
         }
-        for &(j, p, _, g) in &self.ends {
+        for &(j, p, _, g) in ends {
             acc.p[p] -= g * (self.list[j].c * rates[j]);
             if let Some(v_n) = v_n.as_deref_mut() {
                 v_n.p[p] = v_half.p[p] + acc.p[p] * (0.5 * h);

@@ -412,6 +412,9 @@ pub fn integrate<S: Space, const FINITE: bool>(
         let mut affine_solve = false;
         let direct =
             particle_dashpots.is_some() && model.has_dashpots() && !held.any_velocity_terms();
+        if let Some(dashpots) = particle_dashpots.as_mut() {
+            dashpots.prepare(&model, &held, h);
+        }
         // Without dashpots and with every turning body on one free axis, the centred velocity
         // has a closed form (`Model::centred_single_axis`).
         let single_axis = settings.damping == DampingTreatment::Centred
@@ -878,7 +881,9 @@ fn centred_directly<S: Space, const FINITE: bool>(
     counters: &mut Counters,
 ) -> Option<f64> {
     if let Some(solve) = dashpots {
-        model.dashpot_directions(cfg, directions);
+        if solve.needs_directions() {
+            model.dashpot_directions(cfg, directions);
+        }
         return Some(solve.solve(
             model, cfg, forces, directions, v_half, h, held, acc, v_n, counters,
         ));

@@ -577,10 +577,10 @@ pub struct ParticleDashpot<S: Space> {
 /// Where a [`ParticleDashpot`]'s line of action comes from.
 #[derive(Debug, Clone, Copy)]
 pub enum DashpotLine<S: Space> {
-    /// A fixed direction (grounded dashpots).
+    /// A fixed direction (grounded dashpots, and two-point ones that do not turn).
     Fixed(S::V),
-    /// The two-point dashpot of this index, whose direction [`Model::dashpot_directions`]
-    /// gives at each configuration.
+    /// The two-point dashpot of this index, which turns with its nodes: its direction
+    /// [`Model::dashpot_directions`] gives at each configuration.
     TwoPoint(usize),
 }
 
@@ -1345,12 +1345,14 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         for (k, s) in self.dashpots.iter().enumerate() {
             let (a, b) = (end(&s.a)?, end(&s.b)?);
             if (a.is_some() || b.is_some()) && s.c != 0.0 {
-                out.push(ParticleDashpot {
-                    c: s.c,
-                    a,
-                    b,
-                    line: DashpotLine::TwoPoint(k),
-                });
+                // Only an axial dashpot under finite rotation turns with its nodes
+                // (`Model::dashpot_directions`); every other keeps its direction.
+                let line = if s.axial && FINITE {
+                    DashpotLine::TwoPoint(k)
+                } else {
+                    DashpotLine::Fixed(s.direction)
+                };
+                out.push(ParticleDashpot { c: s.c, a, b, line });
             }
         }
         Some(out)

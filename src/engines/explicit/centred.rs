@@ -15,7 +15,7 @@
 //! formed once per step.
 
 use super::model::{
-    Config, Constraints, Counters, DashpotLine, Forces, Model, ParticleDashpot, Rates,
+    Config, Constraints, Counters, DashpotLine, Forces, Model, ParticleDashpot, Rates, fill_zero,
 };
 use super::space::{Lin, Space};
 
@@ -128,7 +128,7 @@ impl<S: Space> ParticleDashpots<S> {
         let k = self.list.len();
         let width = k + 1;
         let system = &mut self.system;
-        system.iter_mut().for_each(|x| *x = 0.0);
+        fill_zero(system, 0.0);
         for i in 0..k {
             system[i * width + i] = 1.0;
         }

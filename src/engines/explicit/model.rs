@@ -165,12 +165,25 @@ impl<S: Space> Forces<S> {
     }
     /// Reset to zero, keeping the allocation.
     pub fn clear(&mut self) {
-        self.p.iter_mut().for_each(|x| *x = S::V::zero());
-        self.b.iter_mut().for_each(|x| *x = S::V::zero());
-        self.m.iter_mut().for_each(|x| *x = S::W::zero());
-        self.contact.iter_mut().for_each(|x| *x = 0.0);
+        fill_zero(&mut self.p, S::V::zero());
+        fill_zero(&mut self.b, S::V::zero());
+        fill_zero(&mut self.m, S::W::zero());
+        fill_zero(&mut self.contact, 0.0);
         self.elastic = 0.0;
         self.dissipation = 0.0;
+    }
+}
+
+/// Set every element of `xs` to `zero`, through an opaque copy of it, so that the compiler
+/// cannot turn the loop into a `memset` call. This machine's `memset` clears a short slice with
+/// one masked AVX-512 store, and a masked store does not forward to the loads that follow: the
+/// force pass that adds into the cleared forces waits for it to retire (the hottest
+/// instruction of `springs_grounded_a`'s increment; `BENCHMARKS.md`).
+#[inline(always)]
+pub fn fill_zero<T: Copy>(xs: &mut [T], zero: T) {
+    let zero = std::hint::black_box(zero);
+    for x in xs {
+        *x = zero;
     }
 }
 

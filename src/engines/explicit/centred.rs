@@ -10,9 +10,14 @@
 //! semi-definite (P, the step's projection, commutes with each particle's scalar mass) and the
 //! `c_j` are positive, so `I + (h/2)·K` is never singular. One pass over the forces and a
 //! k×k elimination replace the iteration's two or more passes; the answer is its fixed point,
-//! to round-off. Where no dashpot's line turns (every one but an axial dashpot under finite
-//! rotation), `I + (h/2)·K` is the same at every increment of a step, and its inverse is
-//! formed once per step.
+//! to round-off.
+//!
+//! A line that turns (an axial dashpot under finite rotation) is taken as its span l, from end
+//! a to end b, not normalised: with `e_j` built from l_j and the unknown `σ_j = r_j/|l_j|`, the
+//! rows read `(S + (h/2)·K) σ = E w` with `S = diag(|l_j|²)` (1 for a fixed unit line), the
+//! force on the ends is `−c_j σ_j e_j` and the power `Σ c_j |l_j|² σ_j²`. No square root or
+//! normalising division is on the increment's chain. Where no line turns, `I + (h/2)·K` is the
+//! same at every increment of a step, and its inverse is formed once per step.
 
 use super::model::{
     Config, Constraints, Counters, DashpotLine, Forces, Model, ParticleDashpot, Rates, fill_zero,
@@ -22,7 +27,7 @@ use super::space::{Lin, Space};
 /// Above this many dashpots the iteration is used (the elimination is O(k³) per increment).
 pub const MAX_DASHPOTS: usize = 8;
 
-/// A dashpot's moving end: (dashpot, particle, signed direction, P M⁻¹ of that direction).
+/// A dashpot's moving end: (dashpot, particle, signed line, P M⁻¹ of that line).
 type End<S> = (usize, usize, <S as Space>::V, <S as Space>::V);
 
 /// The dashpots of a scene that the direct solve applies to, with the solve's scratch space.
@@ -31,7 +36,9 @@ pub struct ParticleDashpots<S: Space> {
     list: Vec<ParticleDashpot<S>>,
     /// Each dashpot's moving ends at this increment.
     ends: Vec<End<S>>,
-    /// The augmented system `[I + (h/2)·K | E w]`, row-major, k × (k + 1).
+    /// Each dashpot's |l|² at this increment (1 for a fixed unit line).
+    squares: [f64; MAX_DASHPOTS],
+    /// The augmented system `[S + (h/2)·K | E w]`, row-major, k × (k + 1).
     system: Vec<f64>,
     /// Where no dashpot's line turns, the ends and `(I + (h/2)·K)⁻¹` (row-major, k × k) of
     /// the current step: both depend only on the step's constraints and the increment, so
@@ -49,14 +56,10 @@ impl<S: Space> ParticleDashpots<S> {
         (k <= MAX_DASHPOTS).then(|| Self {
             list,
             ends: Vec::with_capacity(2 * k),
+            squares: [1.0; MAX_DASHPOTS],
             system: vec![0.0; k * (k + 1)],
             steady: None,
         })
-    }
-
-    /// Whether the solve needs the two-point dashpots' current lines (some line turns).
-    pub fn needs_directions(&self) -> bool {
-        self.steady.is_none()
     }
 
     /// Start a step with constraints `held` at increment `h`: where no line turns, form the
@@ -65,6 +68,7 @@ impl<S: Space> ParticleDashpots<S> {
     pub fn prepare<const FINITE: bool>(
         &mut self,
         model: &Model<S, FINITE>,
+        cfg: &Config<S>,
         held: &Constraints<S>,
         h: f64,
     ) {
@@ -76,7 +80,7 @@ impl<S: Space> ParticleDashpots<S> {
         {
             return;
         }
-        self.fill_ends(model, held, &[]);
+        self.fill_ends(model, cfg, held);
         self.fill_matrix(h);
         let k = self.list.len();
         let width = k + 1;
@@ -97,20 +101,23 @@ impl<S: Space> ParticleDashpots<S> {
         self.steady = Some((self.ends.clone(), inverse));
     }
 
-    /// Each dashpot's moving ends into `self.ends`, with `directions` the two-point dashpots'
-    /// lines at this configuration (unread where no line turns).
+    /// Each dashpot's moving ends into `self.ends` and its |l|² into `self.squares`, at `cfg`.
     #[inline(always)]
     fn fill_ends<const FINITE: bool>(
         &mut self,
         model: &Model<S, FINITE>,
+        cfg: &Config<S>,
         held: &Constraints<S>,
-        directions: &[S::V],
     ) {
         self.ends.clear();
         for (j, dashpot) in self.list.iter().enumerate() {
             let d = match dashpot.line {
                 DashpotLine::Fixed(d) => d,
-                DashpotLine::TwoPoint(i) => directions[i],
+                DashpotLine::TwoPoint(i) => {
+                    let l = model.dashpot_span(cfg, i);
+                    self.squares[j] = l.dot(&l);
+                    l
+                }
             };
             for (end, e) in [(dashpot.a, -d), (dashpot.b, d)] {
                 if let Some(p) = end {
@@ -121,8 +128,9 @@ impl<S: Space> ParticleDashpots<S> {
         }
     }
 
-    /// `I + (h/2)·K` from `self.ends` into the first k columns of `self.system` (the
-    /// right-hand side column zeroed): K_ij = c_j Σ over the particles both move of e_i·g_j.
+    /// `S + (h/2)·K` from `self.ends` and `self.squares` into the first k columns of
+    /// `self.system` (the right-hand side column zeroed): K_ij = c_j Σ over the particles both
+    /// move of e_i·g_j.
     #[inline(always)]
     fn fill_matrix(&mut self, h: f64) {
         let k = self.list.len();
@@ -130,7 +138,7 @@ impl<S: Space> ParticleDashpots<S> {
         let system = &mut self.system;
         fill_zero(system, 0.0);
         for i in 0..k {
-            system[i * width + i] = 1.0;
+            system[i * width + i] = self.squares[i];
         }
         for &(i, p, e, _) in &self.ends {
             for &(j, q, _, g) in &self.ends {
@@ -143,10 +151,8 @@ impl<S: Space> ParticleDashpots<S> {
 
     /// The accelerations `acc` at the centred velocity, and that velocity into `v_n` where one
     /// is given (an increment that only advances needs neither it nor its pass over memory),
-    /// from the position forces and the half-step velocity `v_half`, with `directions` the
-    /// two-point dashpots' lines at this configuration (unread where
-    /// [`ParticleDashpots::needs_directions`] is false); returns the dashpots' dissipation
-    /// power. Only for a step without centripetal or gyroscopic terms (the bodies'
+    /// from the position forces and the half-step velocity `v_half`; returns the dashpots'
+    /// dissipation power. Only for a step without centripetal or gyroscopic terms (the bodies'
     /// accelerations do not read the velocity), and at the increment and constraints of the
     /// last [`ParticleDashpots::prepare`].
     #[allow(clippy::too_many_arguments)]
@@ -155,7 +161,6 @@ impl<S: Space> ParticleDashpots<S> {
         model: &Model<S, FINITE>,
         cfg: &Config<S>,
         forces: &Forces<S>,
-        directions: &[S::V],
         v_half: &Rates<S>,
         h: f64,
         held: &Constraints<S>,
@@ -171,18 +176,19 @@ impl<S: Space> ParticleDashpots<S> {
         let k = self.list.len();
         // The centred velocity before the dashpots act, as `Rates::set_plus` forms it.
         let centred = |p: usize| v_half.p[p] + acc.p[p] * (0.5 * h);
-        let mut rates = [0.0; MAX_DASHPOTS];
+        // σ_j: the rates over |l_j| (the rates themselves on fixed unit lines).
+        let mut sigma = [0.0; MAX_DASHPOTS];
         if let Some((ends, inverse)) = &self.steady {
-            // E w, then the rates from the step's inverse.
+            // E w, then σ from the step's inverse.
             let mut rhs = [0.0; MAX_DASHPOTS];
             for &(i, p, e, _) in ends {
                 rhs[i] += e.dot(&centred(p));
             }
             if k == 1 {
-                rates[0] = inverse[0] * rhs[0];
+                sigma[0] = inverse[0] * rhs[0];
             } else {
-                for (j, rate) in rates[..k].iter_mut().enumerate() {
-                    *rate = inverse[j * k..(j + 1) * k]
+                for (j, s) in sigma[..k].iter_mut().enumerate() {
+                    *s = inverse[j * k..(j + 1) * k]
                         .iter()
                         .zip(&rhs)
                         .map(|(a, b)| a * b)
@@ -190,7 +196,7 @@ impl<S: Space> ParticleDashpots<S> {
                 }
             }
         } else {
-            self.fill_ends(model, held, directions);
+            self.fill_ends(model, cfg, held);
             self.fill_matrix(h);
             let width = k + 1;
             for &(i, p, e, _) in &self.ends {
@@ -199,18 +205,18 @@ impl<S: Space> ParticleDashpots<S> {
             if k == 1 {
                 // The reciprocal depends on the configuration alone: formed beside the
                 // force pass, it leaves one product after E w instead of a division.
-                rates[0] = self.system[1] * (1.0 / self.system[0]);
+                sigma[0] = self.system[1] * (1.0 / self.system[0]);
             } else {
-                eliminate(&mut self.system, k, &mut rates);
+                eliminate(&mut self.system, k, &mut sigma);
             }
         }
         let ends = self.steady.as_ref().map_or(&self.ends, |(ends, _)| ends);
         let mut power = 0.0;
         for (j, dashpot) in self.list.iter().enumerate() {
-            power += dashpot.c * rates[j] * rates[j];
+            power += dashpot.c * self.squares[j] * sigma[j] * sigma[j];
         }
         for &(j, p, _, g) in ends {
-            acc.p[p] -= g * (self.list[j].c * rates[j]);
+            acc.p[p] -= g * (self.list[j].c * sigma[j]);
             if let Some(v_n) = v_n.as_deref_mut() {
                 v_n.p[p] = v_half.p[p] + acc.p[p] * (0.5 * h);
             }

@@ -413,7 +413,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
         let direct =
             particle_dashpots.is_some() && model.has_dashpots() && !held.any_velocity_terms();
         if let Some(dashpots) = particle_dashpots.as_mut() {
-            dashpots.prepare(&model, &held, h);
+            dashpots.prepare(&model, &cfg, &held, h);
         }
         // Without dashpots and with every turning body on one free axis, the centred velocity
         // has a closed form (`Model::centred_single_axis`).
@@ -530,7 +530,6 @@ pub fn integrate<S: Space, const FINITE: bool>(
                     h,
                     &held,
                     particle_dashpots.as_mut().filter(|_| direct),
-                    &mut directions,
                     &mut acc,
                     None,
                     &mut counters,
@@ -593,7 +592,6 @@ pub fn integrate<S: Space, const FINITE: bool>(
                                 h,
                                 &held,
                                 particle_dashpots.as_mut().filter(|_| direct),
-                                &mut directions,
                                 &mut acc,
                                 Some(&mut v_n),
                                 &mut counters,
@@ -861,11 +859,10 @@ impl RowSampler {
 }
 
 /// The accelerations at the centred velocity without iterating, and that velocity into `v_n`
-/// where one is given: by the particle dashpots' direct solve (`dashpots`, with the two-point
-/// dashpots' lines refreshed into `directions`) or, without dashpots, by the closed form for
-/// bodies turning about one axis ([`Model::centred_single_axis`]). Returns the dashpots'
-/// dissipation power, or None where the closed form has no real root (see
-/// [`no_centred_rate`]).
+/// where one is given: by the particle dashpots' direct solve (`dashpots`) or, without
+/// dashpots, by the closed form for bodies turning about one axis
+/// ([`Model::centred_single_axis`]). Returns the dashpots' dissipation power, or None where
+/// the closed form has no real root (see [`no_centred_rate`]).
 #[allow(clippy::too_many_arguments)]
 fn centred_directly<S: Space, const FINITE: bool>(
     model: &Model<S, FINITE>,
@@ -875,18 +872,12 @@ fn centred_directly<S: Space, const FINITE: bool>(
     h: f64,
     held: &Constraints<S>,
     dashpots: Option<&mut ParticleDashpots<S>>,
-    directions: &mut Vec<S::V>,
     acc: &mut Rates<S>,
     v_n: Option<&mut Rates<S>>,
     counters: &mut Counters,
 ) -> Option<f64> {
     if let Some(solve) = dashpots {
-        if solve.needs_directions() {
-            model.dashpot_directions(cfg, directions);
-        }
-        return Some(solve.solve(
-            model, cfg, forces, directions, v_half, h, held, acc, v_n, counters,
-        ));
+        return Some(solve.solve(model, cfg, forces, v_half, h, held, acc, v_n, counters));
     }
     if !model.centred_single_axis(cfg, forces, v_half, held, h, acc, counters) {
         return None;

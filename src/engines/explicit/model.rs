@@ -1317,14 +1317,22 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// directions serve every velocity iterate of an increment.
     pub fn dashpot_directions(&self, cfg: &Config<S>, out: &mut Vec<S::V>) {
         out.clear();
-        out.extend(self.dashpots.iter().map(|s| {
+        out.extend(self.dashpots.iter().enumerate().map(|(k, s)| {
             if s.axial && FINITE {
-                let l = s.span0 + (self.displacement(cfg, &s.b) - self.displacement(cfg, &s.a));
+                let l = self.dashpot_span(cfg, k);
                 l * (1.0 / l.dot(&l).sqrt())
             } else {
                 s.direction
             }
         }));
+    }
+
+    /// The vector from end a to end b of two-point dashpot `k` at `cfg`: its line of action,
+    /// not normalised.
+    #[inline]
+    pub fn dashpot_span(&self, cfg: &Config<S>, k: usize) -> S::V {
+        let s = &self.dashpots[k];
+        s.span0 + (self.displacement(cfg, &s.b) - self.displacement(cfg, &s.a))
     }
 
     /// Every dashpot as a [`ParticleDashpot`], when every one acts between particles or a

@@ -102,10 +102,10 @@ fn centred_damping_follows_the_schemes_own_recurrence() {
 }
 
 /// A chain of three masses on a line, ground–1–2–3, with a spring and a dashpot on each link
-/// (dashpot `kind` as given), released from rest at the origin with initial velocities; the
-/// dashpots share nodes and have unequal rates per mass, so the direct solve's k×k system
-/// (k = 3) is full and unsymmetric.
-fn dashpot_chain(kind: &str) -> crosscheck::scene::Scene {
+/// (the dashpots of the `kinds` given, link by link), started from their reference positions
+/// with initial velocities; the dashpots share nodes and have unequal rates per mass, so the
+/// direct solve's k×k system (k = 3) is full and unsymmetric.
+fn dashpot_chain(kinds: [&str; 3]) -> crosscheck::scene::Scene {
     let mut text = String::from(
         "id = \"dashpot_chain\"\ntitle = \"three dashpots sharing nodes\"\nfamily = \"springs\"\ndimension = 2\n\n[time]\nincrement = 1.0e-3\n\n[output]\nrows = 201\n\n",
     );
@@ -126,7 +126,12 @@ fn dashpot_chain(kind: &str) -> crosscheck::scene::Scene {
             i + 1
         );
     }
-    for (i, (k, c)) in CHAIN_SPRINGS.iter().zip(CHAIN_DASHPOTS).enumerate() {
+    for (i, ((k, c), kind)) in CHAIN_SPRINGS
+        .iter()
+        .zip(CHAIN_DASHPOTS)
+        .zip(kinds)
+        .enumerate()
+    {
         let nodes = format!("nodes = [\"{i}\", \"{}\"]", i + 1);
         text += &format!(
             "[[springs]]\nid = \"s{i}\"\nkind = \"fixed_direction\"\n{nodes}\ndirection = [1.0, 0.0]\nstiffness = {k:e}\n\n"
@@ -167,13 +172,16 @@ fn several_dashpots_follow_the_schemes_own_recurrence() {
     // by x(1) = h·(v(0) + (h/2)·a(0)), a(0) = −M⁻¹C v(0) (the half-step start), with the
     // centred velocity (x(n+1) − x(n−1))/2h. It is evaluated here with nalgebra from the
     // chain's M, C and K. `explicit_small` solves the dashpots' rates with the step's inverse
-    // of I + (h/2)·K (formed once: no line turns); `explicit` with axial dashpots, whose lines
-    // it re-forms at every increment, by elimination. Both must follow the recurrence to
+    // of I + (h/2)·K (formed once: no line turns); `explicit`, with the outer two dashpots
+    // axial (their lines turn: taken along their spans, re-formed at every increment) and the
+    // middle one along a fixed direction, by elimination. Both must follow the recurrence to
     // round-off: 2000 increments of ε-sized roundings, carried forward by modes with
     // ω·h ≤ 0.03 (measured 1.0e-14 of the peak, both engines); 1e-13 bounds it. A wrong entry
     // of the 3×3 solve (its inverse transposed, say) changes the damping force by O(h·c/m)
     // and the answer far above round-off (measured: 6.6e-5 of the peak with the inverse
-    // transposed, 9.3e-5 with the coupling between dashpots that share a node dropped).
+    // transposed, which only the steady path uses; 9.3e-5 with the coupling between dashpots
+    // that share a node dropped; 2.1e-2 with the spans' |l|² left out of the diagonal). The
+    // dissipated power is checked by the energy balance (`tests/energy.rs`).
     use nalgebra::{Matrix3, Vector3};
     let h = 1.0e-3;
     let m = Matrix3::from_diagonal(&Vector3::from(CHAIN_MASSES));
@@ -202,12 +210,16 @@ fn several_dashpots_follow_the_schemes_own_recurrence() {
         d = lhs * ((m / (h * h) - c / (2.0 * h)) * d - k * x[n]);
         x.push(x[n] + d);
     }
-    for (engine, kind) in [
-        (ExplicitEngine::small(), "fixed_direction"),
-        (ExplicitEngine::finite(), "axial"),
+    for (engine, kinds) in [
+        (ExplicitEngine::small(), ["fixed_direction"; 3]),
+        (
+            ExplicitEngine::finite(),
+            ["axial", "fixed_direction", "axial"],
+        ),
     ] {
+        let kind = kinds[0];
         let out = engine
-            .run(&dashpot_chain(kind), &RunSettings::default())
+            .run(&dashpot_chain(kinds), &RunSettings::default())
             .unwrap();
         assert_eq!(out.info.steps, 2000);
         let (mut worst, mut scale): (f64, f64) = (0.0, 0.0);

@@ -12,12 +12,15 @@
 //! k×k elimination replace the iteration's two or more passes; the answer is its fixed point,
 //! to round-off.
 //!
-//! A line that turns (an axial dashpot under finite rotation) is taken as its span l, from end
-//! a to end b, not normalised: with `e_j` built from l_j and the unknown `σ_j = r_j/|l_j|`, the
-//! rows read `(S + (h/2)·K) σ = E w` with `S = diag(|l_j|²)` (1 for a fixed unit line), the
-//! force on the ends is `−c_j σ_j e_j` and the power `Σ c_j |l_j|² σ_j²`. No square root or
-//! normalising division is on the increment's chain. Where no line turns, `I + (h/2)·K` is the
-//! same at every increment of a step, and its inverse is formed once per step.
+//! A line that turns (an axial dashpot under finite rotation) is not normalised: it is taken as
+//! l, its span from end a to end b over its length at t = 0 (never zero: the case reader
+//! refuses coincident ends), and `e_j` is built from l_j. Multiplying row i of the system
+//! above by |l_i| gives the rows in the unknown `σ_j = r_j/|l_j|`:
+//! `(S + (h/2)·K) σ = E w`, with `S = diag(|l_j|²)` (1 for a fixed unit line) and K now
+//! formed from the unnormalised `e_j`; `S + (h/2)·K` is non-singular while every |l_j| > 0.
+//! The force on the ends is `−c_j σ_j e_j` and the power `Σ c_j |l_j|² σ_j²`. No square root
+//! or normalising division is on the increment's chain. Where no line turns, `I + (h/2)·K` is
+//! the same at every increment of a step, and its inverse is formed once per step.
 
 use super::model::{
     Config, Constraints, Counters, DashpotLine, Forces, Model, ParticleDashpot, Rates, fill_zero,
@@ -37,7 +40,7 @@ pub struct ParticleDashpots<S: Space> {
     /// Each dashpot's moving ends at this increment.
     ends: Vec<End<S>>,
     /// Each dashpot's |l|² at this increment (1 for a fixed unit line).
-    squares: [f64; MAX_DASHPOTS],
+    span_squares: [f64; MAX_DASHPOTS],
     /// The augmented system `[S + (h/2)·K | E w]`, row-major, k × (k + 1).
     system: Vec<f64>,
     /// Where no dashpot's line turns, the ends and `(I + (h/2)·K)⁻¹` (row-major, k × k) of
@@ -56,7 +59,7 @@ impl<S: Space> ParticleDashpots<S> {
         (k <= MAX_DASHPOTS).then(|| Self {
             list,
             ends: Vec::with_capacity(2 * k),
-            squares: [1.0; MAX_DASHPOTS],
+            span_squares: [1.0; MAX_DASHPOTS],
             system: vec![0.0; k * (k + 1)],
             steady: None,
         })
@@ -64,7 +67,8 @@ impl<S: Space> ParticleDashpots<S> {
 
     /// Start a step with constraints `held` at increment `h`: where no line turns, form the
     /// step's ends and the inverse of `I + (h/2)·K` once (the same arithmetic
-    /// [`ParticleDashpots::solve`] does otherwise at every increment).
+    /// [`ParticleDashpots::solve`] does otherwise at every increment). `cfg` is not read
+    /// then: only a turning line depends on the configuration.
     pub fn prepare<const FINITE: bool>(
         &mut self,
         model: &Model<S, FINITE>,
@@ -76,7 +80,7 @@ impl<S: Space> ParticleDashpots<S> {
         if self
             .list
             .iter()
-            .any(|d| matches!(d.line, DashpotLine::TwoPoint(_)))
+            .any(|d| matches!(d.line, DashpotLine::TwoPoint { .. }))
         {
             return;
         }
@@ -101,7 +105,7 @@ impl<S: Space> ParticleDashpots<S> {
         self.steady = Some((self.ends.clone(), inverse));
     }
 
-    /// Each dashpot's moving ends into `self.ends` and its |l|² into `self.squares`, at `cfg`.
+    /// Each dashpot's moving ends into `self.ends` and its |l|² into `self.span_squares`, at `cfg`.
     #[inline(always)]
     fn fill_ends<const FINITE: bool>(
         &mut self,
@@ -113,9 +117,9 @@ impl<S: Space> ParticleDashpots<S> {
         for (j, dashpot) in self.list.iter().enumerate() {
             let d = match dashpot.line {
                 DashpotLine::Fixed(d) => d,
-                DashpotLine::TwoPoint(i) => {
-                    let l = model.dashpot_span(cfg, i);
-                    self.squares[j] = l.dot(&l);
+                DashpotLine::TwoPoint { dashpot, scale } => {
+                    let l = model.dashpot_span(cfg, dashpot) * scale;
+                    self.span_squares[j] = l.dot(&l);
                     l
                 }
             };
@@ -128,7 +132,7 @@ impl<S: Space> ParticleDashpots<S> {
         }
     }
 
-    /// `S + (h/2)·K` from `self.ends` and `self.squares` into the first k columns of
+    /// `S + (h/2)·K` from `self.ends` and `self.span_squares` into the first k columns of
     /// `self.system` (the right-hand side column zeroed): K_ij = c_j Σ over the particles both
     /// move of e_i·g_j.
     #[inline(always)]
@@ -138,7 +142,7 @@ impl<S: Space> ParticleDashpots<S> {
         let system = &mut self.system;
         fill_zero(system, 0.0);
         for i in 0..k {
-            system[i * width + i] = self.squares[i];
+            system[i * width + i] = self.span_squares[i];
         }
         for &(i, p, e, _) in &self.ends {
             for &(j, q, _, g) in &self.ends {
@@ -213,7 +217,7 @@ impl<S: Space> ParticleDashpots<S> {
         let ends = self.steady.as_ref().map_or(&self.ends, |(ends, _)| ends);
         let mut power = 0.0;
         for (j, dashpot) in self.list.iter().enumerate() {
-            power += dashpot.c * self.squares[j] * sigma[j] * sigma[j];
+            power += dashpot.c * self.span_squares[j] * sigma[j] * sigma[j];
         }
         for &(j, p, _, g) in ends {
             acc.p[p] -= g * (self.list[j].c * sigma[j]);

@@ -412,7 +412,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
         let mut affine_solve = false;
         let direct =
             particle_dashpots.is_some() && model.has_dashpots() && !held.any_velocity_terms();
-        if let Some(dashpots) = particle_dashpots.as_mut() {
+        if direct && let Some(dashpots) = particle_dashpots.as_mut() {
             dashpots.prepare(&model, &cfg, &held, h);
         }
         // Without dashpots and with every turning body on one free axis, the centred velocity

@@ -175,7 +175,7 @@ impl<S: Space> Forces<S> {
 }
 
 /// Set every element of `xs` to `zero`, through an opaque copy of it, so that the compiler
-/// cannot turn the loop into a `memset` call. This machine's `memset` clears a short slice with
+/// does not turn the loop into a `memset` call. This machine's `memset` clears a short slice with
 /// one masked AVX-512 store, and a masked store does not forward to the loads that follow: the
 /// force pass that adds into the cleared forces waits for it to retire (the hottest
 /// instruction of `springs_grounded_a`'s increment; `BENCHMARKS.md`).
@@ -592,9 +592,15 @@ pub struct ParticleDashpot<S: Space> {
 pub enum DashpotLine<S: Space> {
     /// A fixed direction (grounded dashpots, and two-point ones that do not turn).
     Fixed(S::V),
-    /// The two-point dashpot of this index, which turns with its nodes: its direction
-    /// [`Model::dashpot_directions`] gives at each configuration.
-    TwoPoint(usize),
+    /// A two-point dashpot that turns with its nodes: its line at each configuration is
+    /// [`Model::dashpot_span`] of `dashpot`, times `scale` (one over its length at t = 0, so
+    /// that the line stays near unit length in a scene of any size).
+    TwoPoint {
+        /// Index of the two-point dashpot.
+        dashpot: usize,
+        /// One over its length at t = 0.
+        scale: f64,
+    },
 }
 
 /// The compiled scene.
@@ -1369,7 +1375,10 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 // Only an axial dashpot under finite rotation turns with its nodes
                 // (`Model::dashpot_directions`); every other keeps its direction.
                 let line = if s.axial && FINITE {
-                    DashpotLine::TwoPoint(k)
+                    DashpotLine::TwoPoint {
+                        dashpot: k,
+                        scale: 1.0 / s.length0,
+                    }
                 } else {
                     DashpotLine::Fixed(s.direction)
                 };

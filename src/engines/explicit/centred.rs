@@ -37,17 +37,17 @@ type End<S> = (usize, usize, <S as Space>::V, <S as Space>::V);
 #[derive(Debug, Clone)]
 pub struct ParticleDashpots<S: Space> {
     list: Vec<ParticleDashpot<S>>,
-    /// Each dashpot's moving ends at this increment.
+    /// Each dashpot's moving ends at this increment (for the whole step where no line turns).
     ends: Vec<End<S>>,
     /// Each dashpot's |l|² at this increment (1 for a fixed unit line).
     span_squares: [f64; MAX_DASHPOTS],
     /// The augmented system `[S + (h/2)·K | E w]`, row-major, k × (k + 1).
     system: Vec<f64>,
-    /// Where no dashpot's line turns, the ends and `(I + (h/2)·K)⁻¹` (row-major, k × k) of
-    /// the current step: both depend only on the step's constraints and the increment, so
+    /// Where no dashpot's line turns, `(I + (h/2)·K)⁻¹` (row-major, k × k) of the current
+    /// step: it and `ends` depend only on the step's constraints and the increment, so
     /// [`ParticleDashpots::prepare`] forms them once per step and an increment only
     /// multiplies.
-    steady: Option<(Vec<End<S>>, Vec<f64>)>,
+    steady: Option<Vec<f64>>,
 }
 
 impl<S: Space> ParticleDashpots<S> {
@@ -91,7 +91,7 @@ impl<S: Space> ParticleDashpots<S> {
         // Column j of the inverse solves the system for the j-th unit vector.
         let mut inverse = vec![0.0; k * k];
         let mut column = [0.0; MAX_DASHPOTS];
-        let mut augmented = self.system.clone();
+        let mut augmented = vec![0.0; k * width];
         for j in 0..k {
             for (i, row) in augmented.chunks_mut(width).enumerate() {
                 row[..k].copy_from_slice(&self.system[i * width..i * width + k]);
@@ -102,7 +102,7 @@ impl<S: Space> ParticleDashpots<S> {
                 inverse[i * k + j] = column[i];
             }
         }
-        self.steady = Some((self.ends.clone(), inverse));
+        self.steady = Some(inverse);
     }
 
     /// Each dashpot's moving ends into `self.ends` and its |l|² into `self.span_squares`, at `cfg`.
@@ -182,10 +182,10 @@ impl<S: Space> ParticleDashpots<S> {
         let centred = |p: usize| v_half.p[p] + acc.p[p] * (0.5 * h);
         // σ_j: the rates over |l_j| (the rates themselves on fixed unit lines).
         let mut sigma = [0.0; MAX_DASHPOTS];
-        if let Some((ends, inverse)) = &self.steady {
+        if let Some(inverse) = &self.steady {
             // E w, then σ from the step's inverse.
             let mut rhs = [0.0; MAX_DASHPOTS];
-            for &(i, p, e, _) in ends {
+            for &(i, p, e, _) in &self.ends {
                 rhs[i] += e.dot(&centred(p));
             }
             if k == 1 {
@@ -214,12 +214,11 @@ impl<S: Space> ParticleDashpots<S> {
                 eliminate(&mut self.system, k, &mut sigma);
             }
         }
-        let ends = self.steady.as_ref().map_or(&self.ends, |(ends, _)| ends);
         let mut power = 0.0;
         for (j, dashpot) in self.list.iter().enumerate() {
             power += dashpot.c * self.span_squares[j] * sigma[j] * sigma[j];
         }
-        for &(j, p, _, g) in ends {
+        for &(j, p, _, g) in &self.ends {
             acc.p[p] -= g * (self.list[j].c * sigma[j]);
             if let Some(v_n) = v_n.as_deref_mut() {
                 v_n.p[p] = v_half.p[p] + acc.p[p] * (0.5 * h);

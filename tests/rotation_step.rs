@@ -5,7 +5,7 @@
 //! orientation's R − 1 against nalgebra's rotation matrix.
 
 use crosscheck::engines::explicit::space::{Orientation, Planar, Space, Spatial};
-use nalgebra::{UnitQuaternion, Vector3};
+use nalgebra::{UnitComplex, UnitQuaternion, Vector3};
 
 /// Angles (rad) on both sides of the series' switches (a = 2.2e-4 and 6.3e-3 for the
 /// argument of the series; the 3D quaternion takes half the increment's angle, so its series
@@ -62,6 +62,59 @@ fn planar_increment_matches_the_library() {
                 "cos − 1 at {x:e}: {:e}",
                 (r.cos_angle() - 1.0) - carry[0]
             );
+        }
+    }
+}
+
+/// From the three other exact unit orientations (a quarter, a half and three quarters turn),
+/// where sin and cos − 1 of the increment trade places and signs: the update's terms in s,
+/// which vanish from rest, carry the increment here, so a slip in any of them fails. The
+/// orientation's change (r − r₀) − carry is exact (r₀'s parts are 0 or ±1, so r − r₀ is exact
+/// by Sterbenz's lemma), and is compared relative to itself within 4ε, as from rest.
+#[test]
+fn planar_increment_from_a_turned_orientation() {
+    for (c, s) in [(0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)] {
+        let start = UnitComplex::from_cos_sin_unchecked(c, s);
+        for x in angles() {
+            for x in [x, -x] {
+                let mut carry = [0.0; 2];
+                let r = Planar::advance_compensated(&start, &mut carry, &x);
+                let got = (
+                    (r.cos_angle() - c) - carry[0],
+                    (r.sin_angle() - s) - carry[1],
+                );
+                let half = (0.5 * x).sin();
+                let (sin, versine) = (x.sin(), -2.0 * half * half);
+                // (c + i s)(cos x + i sin x) − (c + i s), with c, s ∈ {0, ±1}.
+                let expected = (c * versine - s * sin, s * versine + c * sin);
+                assert!(
+                    within(got.0, expected.0, 4.0) && within(got.1, expected.1, 4.0),
+                    "from ({c}, {s}) by {x:e}: {got:?} against {expected:?}"
+                );
+            }
+        }
+    }
+}
+
+/// From a general orientation against the library's cosine and sine of the summed angle:
+/// within 4ε of 1 (the library's roundings of θ₀ + x and of its cosine and sine, and the
+/// update's), where the orientation's norm correction acts too (|r₀| misses 1 by an ulp or so).
+#[test]
+fn planar_increment_adds_the_angle() {
+    for start in [0.3, 2.0, -1.2, 4.0] {
+        let r0 = UnitComplex::new(start);
+        for x in angles() {
+            for x in [x, -x] {
+                let mut carry = [0.0; 2];
+                let r = Planar::advance_compensated(&r0, &mut carry, &x);
+                let (cos, sin) = ((start + x).cos(), (start + x).sin());
+                let got = (r.cos_angle() - carry[0], r.sin_angle() - carry[1]);
+                assert!(
+                    (got.0 - cos).abs() <= 4.0 * f64::EPSILON
+                        && (got.1 - sin).abs() <= 4.0 * f64::EPSILON,
+                    "from {start} by {x:e}: {got:?} against ({cos}, {sin})"
+                );
+            }
         }
     }
 }

@@ -6,7 +6,7 @@
 //! small-rotation idealisation (`explicit_small`); it is resolved at compile time.
 
 use super::space::SharedSolid;
-use super::space::{BodyInertia, BodySolve, Lin, Space, compensated_add};
+use super::space::{BodyInertia, BodyOperator, BodySolve, Lin, Space, compensated_add};
 use crate::scene::{
     Attachment, BoundaryCondition, Connection, ContactPair, ContactState, Dof, Scene, Step,
     StepKind, Surface, surface_distance,
@@ -513,12 +513,30 @@ pub struct Constraints<S: Space> {
     pub rotating: Vec<bool>,
     /// Bodies whose centripetal or gyroscopic terms act on a free DOF in this step.
     pub velocity_terms: Vec<bool>,
+    /// Per body, its solve's operator where it cannot change during the step, formed here once
+    /// instead of at every increment: under small rotations (a body keeps its reference mass
+    /// properties), and under finite rotation in the plane for a body pinned at its reference
+    /// node or with its mass centre there (the operator is then the inertia about the one
+    /// axis, which turning leaves as it is). `None` where the centre turns with the body and
+    /// drags its free translations, or the inertia turns (3D).
+    pub body_operators: Vec<Option<BodyOperator<S>>>,
 }
 
 impl<S: Space> Constraints<S> {
     /// Whether any velocity-dependent term acts (dashpots aside).
     pub fn any_velocity_terms(&self) -> bool {
         self.velocity_terms.iter().any(|x| *x)
+    }
+
+    /// The solve of body `b` at mass properties `inertia` under this step's constraints, with
+    /// the step's operator where it has one ([`Constraints::body_operators`]).
+    #[inline]
+    pub fn body_solve<'a>(&'a self, inertia: &'a BodyInertia<S>, b: usize) -> BodySolve<'a, S> {
+        let (held_t, free_r) = (&self.body_held_t[b], &self.body_free_r[b]);
+        match self.body_operators[b] {
+            Some(operator) => BodySolve::with(inertia, held_t, free_r, operator),
+            None => BodySolve::new(inertia, held_t, free_r),
+        }
     }
 }
 
@@ -1540,8 +1558,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         self.accelerate_particles(forces, held, out);
         for b in 0..self.bodies.len() {
             let inertia = self.body_inertia(cfg, b);
-            let (held_t, free_r) = (&held.body_held_t[b], &held.body_free_r[b]);
-            let solve = BodySolve::new(inertia, held_t, free_r);
+            let solve = held.body_solve(inertia, b);
             counters.body_solves += 1;
             let (a0, alpha0) = solve.solve(&forces.b[b], &forces.m[b]);
             if !(FINITE && held.velocity_terms[b]) {
@@ -1549,7 +1566,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 out.w[b] = alpha0;
                 continue;
             }
-            let g = free_r[0];
+            let g = held.body_free_r[b][0];
             let unit_force = S::cross(&g, &S::cross(&g, &inertia.centre)) * (-inertia.mass);
             // The gyroscopic moment at ω = g, g × I g, is perpendicular to g, and the solve on
             // the one axis g reads only the moment along it: left out, as in
@@ -1593,8 +1610,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 }
             }
             counters.body_solves += 1;
-            let (a, alpha) =
-                BodySolve::new(inertia, &held.body_held_t[b], &held.body_free_r[b]).solve(&f, &m);
+            let (a, alpha) = held.body_solve(inertia, b).solve(&f, &m);
             out.b[b] = a;
             out.w[b] = alpha;
         }
@@ -1774,6 +1790,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             prescribed: Vec::new(),
             rotating: vec![false; nb],
             velocity_terms: vec![false; nb],
+            body_operators: vec![None; nb],
         };
         for bc in &step.conditions {
             let BoundaryCondition { node, dof, value } = *bc;
@@ -1838,6 +1855,19 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             let centre = self.bodies[b].inertia.centre;
             let offset = centre.dot(&centre) > 0.0;
             c.velocity_terms[b] = FINITE && free_r > 0 && ((offset && free_t > 0) || free_r > 1);
+            // Under small rotations the configuration's mass properties are the reference ones
+            // throughout (`Model::initial_config`); under finite rotation in the plane the
+            // operator reads only the inertia about the axis (g·I g with g unturned, see
+            // `BodyInertia::axial`) and, unless pinned, the centre, which stays zero where it
+            // starts there (`Model::oriented`): the same operator, bit for bit.
+            let (pinned, centred) = (free_t == 0, centre == S::V::zero());
+            if !FINITE || (S::ROT == 1 && (pinned || centred)) {
+                c.body_operators[b] = Some(BodyOperator::of(
+                    &self.bodies[b].inertia,
+                    &c.body_held_t[b],
+                    &c.body_free_r[b],
+                ));
+            }
         }
         c
     }

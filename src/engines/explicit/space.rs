@@ -730,6 +730,14 @@ pub struct BodySolve<'a, S: Space> {
     body: &'a BodyInertia<S>,
     held_translations: &'a [S::V],
     free_rotations: &'a [S::W],
+    operator: BodyOperator<S>,
+}
+
+/// The part of a [`BodySolve`] that depends on the body's mass properties and constraints
+/// only, not on the loads: formed once where those do not change over a step (a body under
+/// small rotations keeps its reference mass properties; `Constraints::body_operators`).
+#[derive(Debug, Clone, Copy)]
+pub struct BodyOperator<S: Space> {
     /// `w_i = Q(g_i × c)`, the translation each unit rotation rate drags through the held
     /// directions' complement (zero for a pinned reference node).
     drag: [S::V; 3],
@@ -747,6 +755,36 @@ impl<'a, S: Space> BodySolve<'a, S> {
         held_translations: &'a [S::V],
         free_rotations: &'a [S::W],
     ) -> Self {
+        Self::with(
+            b,
+            held_translations,
+            free_rotations,
+            BodyOperator::of(b, held_translations, free_rotations),
+        )
+    }
+
+    /// The solve of body `b` with its operator already formed (by [`BodyOperator::of`] for
+    /// the same mass properties and constraints).
+    #[inline]
+    pub fn with(
+        b: &'a BodyInertia<S>,
+        held_translations: &'a [S::V],
+        free_rotations: &'a [S::W],
+        operator: BodyOperator<S>,
+    ) -> Self {
+        BodySolve {
+            body: b,
+            held_translations,
+            free_rotations,
+            operator,
+        }
+    }
+}
+
+impl<S: Space> BodyOperator<S> {
+    /// Factorise the reduced rotational operator of body `b` under its constraints.
+    #[inline]
+    pub fn of(b: &BodyInertia<S>, held_translations: &[S::V], free_rotations: &[S::W]) -> Self {
         let mut drag = [S::V::zero(); 3];
         let pinned = held_translations.len() == S::DIM;
         if !pinned {
@@ -777,15 +815,14 @@ impl<'a, S: Space> BodySolve<'a, S> {
                 }
             }
         }
-        BodySolve {
-            body: b,
-            held_translations,
-            free_rotations,
+        BodyOperator {
             drag,
             factor: factorise(n, &a),
         }
     }
+}
 
+impl<S: Space> BodySolve<'_, S> {
     /// The accelerations `(a, α)` of the reference node under `force` and `moment`.
     #[inline]
     pub fn solve(&self, force: &S::V, moment: &S::W) -> (S::V, S::W) {
@@ -794,27 +831,31 @@ impl<'a, S: Space> BodySolve<'a, S> {
         if n == 1 {
             // As in `new`, written out (the reciprocal pivot is NaN where the factorisation
             // failed).
-            let (g, inverse) = (&self.free_rotations[0], self.factor[0][0]);
+            let (g, inverse) = (&self.free_rotations[0], self.operator.factor[0][0]);
             if pinned {
                 return (S::V::zero(), *g * (g.dot(moment) * inverse));
             }
-            let s = (g.dot(moment) - force.dot(&self.drag[0])) * inverse;
+            let s = (g.dot(moment) - force.dot(&self.operator.drag[0])) * inverse;
             let a = project(self.held_translations, *force) * (1.0 / self.body.mass);
-            return (a - self.drag[0] * s, *g * s);
+            return (a - self.operator.drag[0] * s, *g * s);
         }
         let mut r = [0.0; 3];
-        for ((r, g), w) in r.iter_mut().zip(self.free_rotations).zip(&self.drag) {
+        for ((r, g), w) in r
+            .iter_mut()
+            .zip(self.free_rotations)
+            .zip(&self.operator.drag)
+        {
             *r = g.dot(moment);
             if !pinned {
                 *r -= force.dot(w);
             }
         }
-        let s = substitute(n, &self.factor, &r);
+        let s = substitute(n, &self.operator.factor, &r);
         let (mut a, mut alpha) = (S::V::zero(), S::W::zero());
         if !pinned {
             a = project(self.held_translations, *force) * (1.0 / self.body.mass);
         }
-        for ((g, w), s) in self.free_rotations.iter().zip(&self.drag).zip(s) {
+        for ((g, w), s) in self.free_rotations.iter().zip(&self.operator.drag).zip(s) {
             alpha += *g * s;
             if !pinned {
                 a -= *w * s;

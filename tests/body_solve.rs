@@ -233,8 +233,9 @@ proptest! {
             orientation: None,
         };
         let r = nalgebra::UnitComplex::new(turn);
+        // As the engine turns a body's mass properties: a centre at the node stays there.
         let turned = BodyInertia::<Planar> {
-            centre: Planar::rotate(&r, &centre),
+            centre: if centre == Vector2::zeros() { centre } else { Planar::rotate(&r, &centre) },
             orientation: Some(r),
             ..rest
         };
@@ -245,9 +246,10 @@ proptest! {
         let moment = moment * 100.0;
 
         let at_rest = BodyOperator::of(&rest, held_t, &free_r);
+        let bits = |(a, alpha): (Vector2<f64>, f64)| (a.x.to_bits(), a.y.to_bits(), alpha.to_bits());
         let cached = BodySolve::with(&turned, held_t, &free_r, at_rest).solve(&force, &moment);
         let formed = BodySolve::new(&turned, held_t, &free_r).solve(&force, &moment);
-        prop_assert_eq!(cached, formed);
+        prop_assert_eq!(bits(cached), bits(formed));
     }
 }
 

@@ -1,8 +1,10 @@
 //! One increment of rotation from rest orientation, against the library's sine and cosine: the
 //! explicit engine takes them from Taylor series that keep fewer terms at smaller angles, and
-//! every form must agree with `f64::sin_cos` to round-off on both sides of each switch. In 3D
-//! also one increment from a turned orientation against nalgebra's quaternion product, and the
-//! orientation's R − 1 against nalgebra's rotation matrix.
+//! every form must agree with `f64::sin_cos` to round-off on both sides of each switch. Also
+//! one increment from turned orientations: in 2D against the library's sine and cosine (from
+//! exact and general orientations, and with a carry to take off), in 3D against
+//! nalgebra's quaternion product; and the 3D orientation's R − 1 against nalgebra's rotation
+//! matrix.
 
 use crosscheck::engines::explicit::space::{Orientation, Planar, Space, Spatial};
 use nalgebra::{UnitComplex, UnitQuaternion, Vector3};
@@ -113,6 +115,42 @@ fn planar_increment_adds_the_angle() {
                     (got.0 - cos).abs() <= 4.0 * f64::EPSILON
                         && (got.1 - sin).abs() <= 4.0 * f64::EPSILON,
                     "from {start} by {x:e}: {got:?} against ({cos}, {sin})"
+                );
+            }
+        }
+    }
+}
+
+/// With a carry of a few ulps, as the compensated sum leaves it: the carried orientation
+/// (c, s) − k misses unit norm by −2(c·k₀ + s·k₁), and the update must take its carry off and
+/// restore the norm (its factor 1 − excess/2). From the exact orientations (c, s ∈ {0, ±1},
+/// where c² + s² = 1 exactly) the change δ = (r − r₀) − carry′ (exact, as the compensated sum
+/// leaves it) is, in exact arithmetic,
+///   δ_c = c·(cos x − 1) − s·sin x + (c·(c·k₀ + s·k₁) − k₀),
+///   δ_s = s·(cos x − 1) + c·sin x + (s·(c·k₀ + s·k₁) − k₁),
+/// with the brackets exact here; compared relative to itself within 4ε. A carry added instead
+/// of taken off, its two parts swapped, or the norm correction taken with c and s swapped is
+/// off by a carry, which at these angles is more than 4ε of δ.
+#[test]
+fn planar_increment_takes_off_its_carry() {
+    let carry = [3.3e-17, -7.7e-17];
+    for (c, s) in [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)] {
+        let start = UnitComplex::from_cos_sin_unchecked(c, s);
+        for x in angles() {
+            for x in [x, -x] {
+                let mut low = carry;
+                let r = Planar::advance_compensated(&start, &mut low, &x);
+                let got = ((r.cos_angle() - c) - low[0], (r.sin_angle() - s) - low[1]);
+                let half = (0.5 * x).sin();
+                let (sin, versine) = (x.sin(), -2.0 * half * half);
+                let along = c * carry[0] + s * carry[1];
+                let expected = (
+                    (c * versine - s * sin) + (c * along - carry[0]),
+                    (s * versine + c * sin) + (s * along - carry[1]),
+                );
+                assert!(
+                    within(got.0, expected.0, 4.0) && within(got.1, expected.1, 4.0),
+                    "from ({c}, {s}) by {x:e}: {got:?} against {expected:?}"
                 );
             }
         }

@@ -517,8 +517,10 @@ pub struct Constraints<S: Space> {
     /// instead of at every increment: under small rotations (a body keeps its reference mass
     /// properties), and under finite rotation in the plane for a body pinned at its reference
     /// node or with its mass centre there (the operator is then the inertia about the one
-    /// axis, which turning leaves as it is). `None` where the centre turns with the body and
-    /// drags its free translations, or the inertia turns (3D).
+    /// axis, which turning leaves as it is). `None` for every other body under finite
+    /// rotation (formed at every increment from the configuration's mass properties), among
+    /// them some whose operator happens not to change either, such as a 3D body with every
+    /// rotation held.
     pub body_operators: Vec<Option<BodyOperator<S>>>,
 }
 

@@ -734,8 +734,9 @@ pub struct BodySolve<'a, S: Space> {
 }
 
 /// The part of a [`BodySolve`] that depends on the body's mass properties and constraints
-/// only, not on the loads: formed once where those do not change over a step (a body under
-/// small rotations keeps its reference mass properties; `Constraints::body_operators`).
+/// only, not on the loads: formed once per step where it cannot change over the step (every
+/// body under small rotations; under finite rotation a planar body pinned at its reference
+/// node or with its mass centre there; `Constraints::body_operators`).
 #[derive(Debug, Clone, Copy)]
 pub struct BodyOperator<S: Space> {
     /// `w_i = Q(g_i × c)`, the translation each unit rotation rate drags through the held
@@ -829,8 +830,8 @@ impl<S: Space> BodySolve<'_, S> {
         let n = self.free_rotations.len();
         let pinned = self.held_translations.len() == S::DIM;
         if n == 1 {
-            // As in `new`, written out (the reciprocal pivot is NaN where the factorisation
-            // failed).
+            // As in `BodyOperator::of`, written out (the reciprocal pivot is NaN where the
+            // factorisation failed).
             let (g, inverse) = (&self.free_rotations[0], self.operator.factor[0][0]);
             if pinned {
                 return (S::V::zero(), *g * (g.dot(moment) * inverse));

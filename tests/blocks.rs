@@ -209,3 +209,219 @@ fn blocks_apply_to_particles_and_springs_only() {
         );
     }
 }
+
+/// `scattered_chain` without what takes a particle off the x axis: the spring to the ground
+/// along (0.6, 0.8) and the tilted held directions are gone, and the loads act along x. What
+/// remains of it: scrambled springs over many blocks, grounded springs along x, loads, a
+/// spring to the ground mid-chain along x, nodes no spring touches, a node held in x as well
+/// (held) and one free in y (which only loads off the axis could move off it).
+fn axial_chain(n: usize) -> Scene {
+    let mut scene = scattered_chain(n);
+    scene.springs.retain(|e| e.name != "to-ground");
+    scene.springs.push(Element {
+        name: "to-ground-along-x".into(),
+        connection: Connection::FixedDirection {
+            nodes: [150, n + 1],
+            direction: -Vector3::x(),
+        },
+        coefficient: 3.0e3,
+    });
+    for node in &mut scene.nodes {
+        node.frame = nalgebra::Matrix3::identity();
+    }
+    for load in &mut scene.loads {
+        load.force.y = 0.0;
+    }
+    scene
+}
+
+/// The state after `increments` increments by blocks on the 2D or 3D store, and on the
+/// one-dimensional one (written back twice on the way, with an increment by blocks on the
+/// written-back state between, as a row's increment takes one): equal, to the bit but for
+/// the sign of a zero (`==`). Off the axis, the displacements keep a value of their own.
+fn axial_equals_blocks<S: Space, const FINITE: bool>(scene: &Scene, increments: usize) {
+    let model = Model::<S, FINITE>::compile(scene, 0.0);
+    let step = scene
+        .steps
+        .iter()
+        .find(|s| matches!(s.kind, StepKind::Dynamic { .. }))
+        .unwrap();
+    let held = model.constraints(scene, step);
+    let mut store = model
+        .axial_store(&held)
+        .unwrap_or_else(|| panic!("{}: every particle moves along x", scene.id));
+    let mut cfg = model.initial_config();
+    let mut vel = model.zero_rates();
+    for (i, (u, v)) in cfg.u.iter_mut().zip(vel.p.iter_mut()).enumerate() {
+        let x = i as f64;
+        *u = S::v(&Vector3::new(1e-3 * (0.1 * x).sin(), 2e-4, -3e-4));
+        *v = S::v(&Vector3::new(1e-2 * (0.2 * x).cos(), 0.0, 0.0));
+    }
+    model.enforce(&mut vel, &held);
+    let start = cfg.u.clone();
+    let h = 1e-3;
+    let (mut cfg_b, mut vel_b) = (cfg.clone(), vel.clone());
+    let (mut carry, mut carry_b) = (model.zero_rates(), model.zero_rates());
+    let (mut pending, mut pending_b) = (model.zero_forces(), model.zero_forces());
+    let mut counters = Counters::default();
+    let mut counters_b = Counters::default();
+    let rows = [increments / 3, 2 * increments / 3];
+    for k in 0..increments {
+        model.step_by_blocks(
+            &mut cfg,
+            &mut carry,
+            h,
+            &mut vel,
+            &held,
+            &mut pending,
+            &mut counters,
+        );
+        if rows.contains(&k) {
+            store.write_back::<S>(&mut cfg_b.u, &mut carry_b.p, &mut vel_b.p);
+            model.step_by_blocks(
+                &mut cfg_b,
+                &mut carry_b,
+                h,
+                &mut vel_b,
+                &held,
+                &mut pending_b,
+                &mut counters_b,
+            );
+        } else {
+            assert!(model.step_axial(
+                &mut store,
+                &cfg_b,
+                &carry_b,
+                h,
+                &vel_b,
+                &held,
+                &mut counters_b
+            ));
+        }
+    }
+    store.write_back::<S>(&mut cfg_b.u, &mut carry_b.p, &mut vel_b.p);
+    assert_eq!(counters_b.block_increments, increments as u64);
+    assert_eq!(counters_b.axial_increments, increments as u64 - 2);
+    let moved = cfg.u.iter().zip(&start).filter(|(u, u0)| u != u0).count();
+    assert!(moved > cfg.u.len() / 2, "{moved} of {} moved", cfg.u.len());
+    for (what, a, b) in [
+        ("position", &cfg.u, &cfg_b.u),
+        ("rounding carry", &carry.p, &carry_b.p),
+        ("velocity", &vel.p, &vel_b.p),
+    ] {
+        assert!(a.iter().all(|x| x.dot(x).is_finite()), "{what}: not finite");
+        if let Some(i) = (0..a.len()).find(|i| a[*i] != b[*i]) {
+            panic!(
+                "{what} of particle {i}: {:?} on the 2D or 3D store, {:?} on the axis",
+                a[i], b[i]
+            );
+        }
+    }
+    // Off the axis, the displacements are as they started (y = 2e-4; z = −3e-4 in 3D).
+    for (u, u0) in cfg_b.u.iter().zip(&start) {
+        let (u, u0) = (S::v3(u), S::v3(u0));
+        assert_eq!((u.y, u.z), (u0.y, u0.z));
+    }
+}
+
+/// `axial_chain` in 3D: the chain's nodes held in z as in y (ends included), so the moving
+/// ones keep x only; node 40, free in y, stays free in z.
+fn axial_chain_3d(n: usize) -> Scene {
+    let mut scene = axial_chain(n);
+    scene.dimension = crosscheck::scene::Dimension::Three;
+    for step in &mut scene.steps {
+        let z: Vec<BoundaryCondition> = step
+            .conditions
+            .iter()
+            .filter(|c| c.dof == Dof::Translation(1))
+            .map(|c| BoundaryCondition {
+                node: c.node,
+                dof: Dof::Translation(2),
+                value: None,
+            })
+            .collect();
+        step.conditions.extend(z);
+    }
+    scene
+}
+
+#[test]
+fn the_axis_store_gives_the_blocks_bit_for_bit_in_2d() {
+    axial_equals_blocks::<Planar, true>(&axial_chain(700), 50);
+}
+
+#[test]
+fn the_axis_store_gives_the_blocks_bit_for_bit_in_3d() {
+    axial_equals_blocks::<Spatial, true>(&axial_chain_3d(700), 50);
+}
+
+#[test]
+fn the_axis_store_gives_the_blocks_bit_for_bit_under_small_rotation() {
+    axial_equals_blocks::<Planar, false>(&axial_chain(700), 50);
+}
+
+/// What would take a particle off the axis keeps the scene on its 2D store: a spring or a
+/// held direction off the axis (no store), a load off it on a particle free off it (no
+/// store), a velocity off it (the store does not load, and the increment is not taken).
+#[test]
+fn the_axis_store_is_refused_where_a_particle_could_leave_the_axis() {
+    let dynamic = |scene: &Scene| {
+        scene
+            .steps
+            .iter()
+            .find(|s| matches!(s.kind, StepKind::Dynamic { .. }))
+            .unwrap()
+            .clone()
+    };
+    let store = |scene: &Scene| {
+        let model = Model::<Planar, true>::compile(scene, 0.0);
+        model.axial_store(&model.constraints(scene, &dynamic(scene)))
+    };
+    assert!(store(&axial_chain(700)).is_some());
+    assert!(
+        store(&scattered_chain(700)).is_none(),
+        "a spring off the axis"
+    );
+    let mut tilted = axial_chain(700);
+    tilted.nodes[60].frame = *Rotation3::from_axis_angle(&Vector3::z_axis(), 0.5).matrix();
+    assert!(store(&tilted).is_none(), "a held direction off the axis");
+    let mut pushed = axial_chain(700);
+    pushed.loads[0].force.y = 1.0;
+    assert!(
+        store(&pushed).is_none(),
+        "a load off the axis, node 40 free in y"
+    );
+    // Held in y, node 40 may carry a load off the axis: the projection removes it.
+    let mut pushed_held = pushed.clone();
+    for step in &mut pushed_held.steps {
+        step.conditions.push(BoundaryCondition {
+            node: 40,
+            dof: Dof::Translation(1),
+            value: None,
+        });
+    }
+    assert!(
+        store(&pushed_held).is_some(),
+        "every particle held off the axis"
+    );
+
+    let scene = axial_chain(700);
+    let model = Model::<Planar, true>::compile(&scene, 0.0);
+    let held = model.constraints(&scene, &dynamic(&scene));
+    let mut store = model.axial_store(&held).unwrap();
+    let (cfg, carry, mut vel) = (
+        model.initial_config(),
+        model.zero_rates(),
+        model.zero_rates(),
+    );
+    let crosscheck::engines::explicit::model::Point::Particle(i) = model.points[40] else {
+        panic!("node 40 is a particle");
+    };
+    vel.p[i].y = 1e-3;
+    let mut counters = Counters::default();
+    assert!(!model.step_axial(&mut store, &cfg, &carry, 1e-3, &vel, &held, &mut counters));
+    assert_eq!(counters, Counters::default());
+    vel.p[i].y = 0.0;
+    assert!(model.step_axial(&mut store, &cfg, &carry, 1e-3, &vel, &held, &mut counters));
+    assert_eq!(counters.axial_increments, 1);
+}

@@ -7,13 +7,13 @@
 //! start, a lost DOF, a wrong mode shape) would show at once.
 use crosscheck::case::chain::Chain;
 use crosscheck::engines::explicit::ExplicitEngine;
-use crosscheck::engines::explicit::model::BLOCKS_FROM;
+use crosscheck::engines::explicit::blocks::BLOCKS_FROM;
 use crosscheck::engines::{Engine, RunSettings};
 use crosscheck::run::scaling::{self, STEPS};
 
 /// The largest error over the probes and rows, its prediction, and the increments the engine
 /// stepped by blocks of springs.
-fn measured_error(n: usize) -> (f64, f64, u64) {
+fn measured_error(n: usize) -> (f64, f64, u64, u64) {
     let chain = Chain::new(n, STEPS);
     let scene = chain.scene();
     let out = ExplicitEngine::finite()
@@ -28,11 +28,12 @@ fn measured_error(n: usize) -> (f64, f64, u64) {
             worst = worst.max((u - chain.displacement(node, *t)).abs() / chain.amplitude);
         }
     }
-    let blocks = out.info.counters.get("block_increments").copied();
+    let count = |name: &str| out.info.counters.get(name).copied().unwrap_or(0);
     (
         worst,
         chain.predicted_error(chain.increment),
-        blocks.unwrap_or(0),
+        count("block_increments"),
+        count("axial_increments"),
     )
 }
 
@@ -40,8 +41,8 @@ fn measured_error(n: usize) -> (f64, f64, u64) {
 /// compensation, so the history carries a few ulps of A; 1e-9 of the prediction (itself
 /// ~1e-2 of A) is far above that and far below any modelling mistake (a wrong ω alone would
 /// change the error at first order).
-fn assert_matches_prediction(n: usize) -> u64 {
-    let (error, predicted, blocks) = measured_error(n);
+fn assert_matches_prediction(n: usize) -> (u64, u64) {
+    let (error, predicted, blocks, axial) = measured_error(n);
     assert!(
         predicted > 1e-3,
         "the run must be long enough for the phase error to show: {predicted:e}"
@@ -50,22 +51,30 @@ fn assert_matches_prediction(n: usize) -> u64 {
         (error - predicted).abs() <= 1e-9 * predicted,
         "N = {n}: error {error:e} against predicted {predicted:e}"
     );
-    blocks
+    (blocks, axial)
 }
 
 #[test]
 fn chain_of_10_matches_the_error_model() {
-    assert_eq!(assert_matches_prediction(10), 0, "too small for blocks");
+    assert_eq!(
+        assert_matches_prediction(10),
+        (0, 0),
+        "too small for blocks"
+    );
 }
 
 #[test]
 fn chain_of_1000_matches_the_error_model() {
-    assert_eq!(assert_matches_prediction(1000), 0, "below BLOCKS_FROM");
+    assert_eq!(assert_matches_prediction(1000), (0, 0), "below BLOCKS_FROM");
 }
 
 #[test]
 fn chain_of_100_000_matches_the_error_model() {
-    assert_eq!(assert_matches_prediction(100_000), 0, "below BLOCKS_FROM");
+    assert_eq!(
+        assert_matches_prediction(100_000),
+        (0, 0),
+        "below BLOCKS_FROM"
+    );
 }
 
 /// Large enough for the time loop to step by blocks of springs (`Model::step_by_blocks`;
@@ -74,7 +83,7 @@ fn chain_of_100_000_matches_the_error_model() {
 #[test]
 fn chain_of_300_000_stepped_by_blocks_matches_the_error_model() {
     const { assert!(300_000 >= BLOCKS_FROM) };
-    let blocks = assert_matches_prediction(300_000);
+    let (blocks, axial) = assert_matches_prediction(300_000);
     // Every increment but the first (which starts the half-step velocity), those that write a
     // row and the last two (whose accelerations the end of the step keeps) takes the one
     // pass, here by blocks: of increments 1 … 398, all but the 99 multiples of the row
@@ -84,6 +93,9 @@ fn chain_of_300_000_stepped_by_blocks_matches_the_error_model() {
     let one_pass = (1..chain.steps - 1).filter(|n| n % stride != 0).count() as u64;
     assert_eq!((stride, one_pass), (4, 299));
     assert_eq!(blocks, one_pass);
+    // The chain moves along x only: every one of them on the one-dimensional store
+    // (`Model::step_axial`; `tests/blocks.rs` finds it equal to the blocks to the bit).
+    assert_eq!(axial, one_pass);
 }
 
 #[test]

@@ -15,12 +15,11 @@
 //! ([`Model::step_by_blocks`]): one trip through memory instead of a force pass and an
 //! update.
 
+use super::blocks::BLOCKS_FROM;
 use super::centred::ParticleDashpots;
 use super::diagnosis::{PAST_LIMIT_GROWTH, PastLimit, growing_mode};
 use super::linear::{StableIncrement, static_step};
-use super::model::{
-    BLOCKS_FROM, Config, Constraints, ContactMode, Counters, Forces, Model, Rates, Target,
-};
+use super::model::{Config, Constraints, ContactMode, Counters, Forces, Model, Rates, Target};
 use super::space::{Lin, Space};
 use crate::contract::ENERGY_COLUMNS;
 use crate::engines::{EngineError, History};
@@ -402,6 +401,13 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 past_limit = PastLimit::new(&model, &cfg, &held, h, settings.damping);
             }
         }
+        // A large scene whose particles all move along one axis steps its block increments on
+        // a one-dimensional store, written back before any other increment reads the state.
+        let mut axial = if by_blocks {
+            model.axial_store(&held)
+        } else {
+            None
+        };
         let velocity_pass = model.has_dashpots() || held.any_velocity_terms();
         // Without centripetal or gyroscopic terms the centred velocity map is affine (the
         // dashpots act along directions frozen for the increment), so when its fixed-point
@@ -457,6 +463,13 @@ pub fn integrate<S: Space, const FINITE: bool>(
             // A large scene of particles, springs along fixed lines and loads: forces and
             // update block by block of springs, each particle's data touched while in cache.
             if one_pass && by_blocks {
+                if let Some(store) = axial.as_mut() {
+                    if model.step_axial(store, &cfg, &carry, h, &v_half, &held, &mut counters) {
+                        last_power = 0.0;
+                        continue;
+                    }
+                    axial = None;
+                }
                 model.step_by_blocks(
                     &mut cfg,
                     &mut carry,
@@ -468,6 +481,9 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 );
                 last_power = 0.0;
                 continue;
+            }
+            if let Some(store) = axial.as_mut() {
+                store.write_back::<S>(&mut cfg.u, &mut carry.p, &mut v_half.p);
             }
             // Only an increment that writes a row reads the elastic energy.
             if n % stride == 0 {
@@ -786,6 +802,9 @@ pub fn integrate<S: Space, const FINITE: bool>(
             model.advance(&mut cfg, &mut carry, h, &v_next, &held, &mut counters);
             std::mem::swap(&mut v_half, &mut v_next);
             std::mem::swap(&mut acc_prev, &mut acc);
+        }
+        if let Some(store) = axial.as_mut() {
+            store.write_back::<S>(&mut cfg.u, &mut carry.p, &mut v_half.p);
         }
         n_global = first + steps_here;
     }

@@ -1,5 +1,6 @@
 //! `explicit`: our central-difference explicit integrator with penalty contact.
 
+pub mod blocks;
 pub mod centred;
 pub mod diagnosis;
 pub mod integrate;
@@ -129,6 +130,9 @@ impl Engine for ExplicitEngine {
         ]);
         if c.block_increments > 0 {
             counters.insert("block_increments".to_string(), c.block_increments);
+        }
+        if c.axial_increments > 0 {
+            counters.insert("axial_increments".to_string(), c.axial_increments);
         }
         if let Some(n) = pilot_increments {
             counters.insert("pilot_increments".to_string(), n);

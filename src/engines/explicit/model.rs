@@ -5,6 +5,10 @@
 //! `FINITE` const parameter selects finite rotation (`explicit`) or the benchmark's
 //! small-rotation idealisation (`explicit_small`); it is resolved at compile time.
 
+use super::blocks::{
+    Advance, Axial, AxialStore, BlockSchedule, GROUND, LineSpring, axis_of, line_spring_forces,
+    step_blocks,
+};
 use super::space::SharedSolid;
 use super::space::{BodyInertia, BodyOperator, BodySolve, Lin, Space, compensated_add};
 use crate::scene::{
@@ -213,8 +217,11 @@ pub struct Counters {
     pub rotation_updates: u64,
     /// Rigid-body acceleration solves (one per load solved against a body's factorisation).
     pub body_solves: u64,
-    /// Increments stepped block by block of springs ([`Model::step_by_blocks`]).
+    /// Increments stepped block by block of springs ([`Model::step_by_blocks`],
+    /// [`Model::step_axial`]).
     pub block_increments: u64,
+    /// Of those, the increments stepped on the one-dimensional store ([`Model::step_axial`]).
+    pub axial_increments: u64,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -238,182 +245,6 @@ struct TwoPoint<S: Space> {
     span0: S::V,
     length0: f64,
     c: f64,
-}
-
-/// A spring of fixed direction between particles or ground (the bulk of large scenes), in
-/// the compact form the force pass streams through.
-#[derive(Debug, Clone, Copy)]
-struct LineSpring<S: Space> {
-    /// Particle at end a, or [`GROUND`] (32 bits: the pass streams 32 bytes per 2D spring).
-    a: u32,
-    /// Particle at end b, or [`GROUND`].
-    b: u32,
-    direction: S::V,
-    c: f64,
-}
-
-/// A [`LineSpring`] end that does not move.
-const GROUND: u32 = u32::MAX;
-
-/// Particles from which the time loop steps a scene by blocks ([`Model::step_by_blocks`])
-/// where it can: about 45 MB of a 2D chain's data, past this machine's 32 MB third-level
-/// cache. Measured on the chain of the scaling study in one build, by blocks against the
-/// force pass and update: 8 % slower from 10^3 to 10^5 particles, where the data stay in
-/// cache and the blocks only add bookkeeping; 22 % faster at 10^6, where the second pass
-/// over memory is what they save.
-pub const BLOCKS_FROM: usize = 1 << 18;
-
-/// Line springs per block of [`Model::step_by_blocks`]: in a chain, a block's springs and the
-/// data of the particles it finishes (about 30 kB in 2D) stay in the first-level cache
-/// between its forces and its update.
-const SPRING_BLOCK: usize = 256;
-
-/// The order in which [`Model::step_by_blocks`] finishes particles, for a scene of particles
-/// with springs of fixed direction and loads (nothing else): a particle's force is complete
-/// after the last element that loads it, and no later element reads its position, so it can
-/// be advanced there, while its data are still in cache. The line springs are taken in
-/// blocks of [`SPRING_BLOCK`]; after each block's forces, the particles whose last spring
-/// was in it are advanced, as runs of consecutive particles (one run per block in a chain).
-#[derive(Debug, Clone)]
-struct BlockSchedule {
-    /// Per block: the end of its springs in the line springs, and of its runs in `runs`.
-    blocks: Vec<(u32, u32)>,
-    /// Runs of consecutive particles, `start..end`, by block. The last block has no springs:
-    /// its runs are the particles finished after the loads, those a load acts on and those
-    /// no line spring touches.
-    runs: Vec<(u32, u32)>,
-}
-
-impl BlockSchedule {
-    /// The order for these line springs and the particles that loads act on; every particle
-    /// is finished exactly once.
-    fn of<S: Space>(particles: usize, line_springs: &[LineSpring<S>], loaded: &[usize]) -> Self {
-        // The block of the last line spring to touch each particle (blocks past the last:
-        // after the loads).
-        let after_loads = line_springs.len().div_ceil(SPRING_BLOCK);
-        let mut last = vec![after_loads; particles];
-        for (k, s) in line_springs.iter().enumerate() {
-            for end in [s.a, s.b] {
-                if end != GROUND {
-                    last[end as usize] = k / SPRING_BLOCK;
-                }
-            }
-        }
-        for i in loaded {
-            last[*i] = after_loads;
-        }
-        let mut by_block: Vec<Vec<u32>> = vec![Vec::new(); after_loads + 1];
-        for (i, block) in last.iter().enumerate() {
-            by_block[*block].push(i as u32);
-        }
-        let mut blocks = Vec::with_capacity(after_loads + 1);
-        let mut runs: Vec<(u32, u32)> = Vec::new();
-        for (b, finished) in by_block.iter().enumerate() {
-            let first = runs.len();
-            for i in finished {
-                match runs[first..].last_mut() {
-                    Some((_, end)) if *end == *i => *end += 1,
-                    _ => runs.push((*i, *i + 1)),
-                }
-            }
-            let springs = ((b + 1) * SPRING_BLOCK).min(line_springs.len());
-            blocks.push((
-                u32::try_from(springs).expect("fewer than 2^32 line springs"),
-                u32::try_from(runs.len()).expect("fewer than 2^32 runs"),
-            ));
-        }
-        BlockSchedule { blocks, runs }
-    }
-}
-
-/// Add the forces of line springs at particle displacements `u` to the particle forces `p`;
-/// `elastic` with their elastic energy added term by term (unchanged unless `ENERGY`).
-#[inline(always)]
-fn line_spring_forces<S: Space, const ENERGY: bool>(
-    springs: &[LineSpring<S>],
-    u: &[S::V],
-    p: &mut [S::V],
-    mut elastic: f64,
-) -> f64 {
-    for s in springs {
-        let at = |i: u32| {
-            if i == GROUND {
-                S::V::zero()
-            } else {
-                u[i as usize]
-            }
-        };
-        let e = s.direction.dot(&(at(s.b) - at(s.a)));
-        if ENERGY {
-            elastic += 0.5 * s.c * e * e;
-        }
-        let f = s.direction * (s.c * e);
-        if s.a != GROUND {
-            p[s.a as usize] += f;
-        }
-        if s.b != GROUND {
-            p[s.b as usize] -= f;
-        }
-    }
-    elastic
-}
-
-/// The particles' data [`Model::step_by_blocks`] advances, and how: the arithmetic of
-/// [`Model::step`], over runs of particles that share a projection.
-struct Advance<'a, S: Space> {
-    u: &'a mut [S::V],
-    carry: &'a mut [S::V],
-    v: &'a mut [S::V],
-    /// Forces being summed; a particle's is reset to zero once it is advanced.
-    f: &'a mut [S::V],
-    inverse: &'a [f64],
-    motion_runs: &'a [(u32, u32)],
-    motions: &'a [Motion<S>],
-    h: f64,
-}
-
-impl<S: Space> Advance<'_, S> {
-    /// Advance the particles `start..end`, whose forces are complete: one loop per run of
-    /// a shared projection, with the projection's kind chosen once per run.
-    #[inline(always)]
-    fn particles(&mut self, start: usize, end: usize) {
-        let mut from = start;
-        let first = self
-            .motion_runs
-            .partition_point(|(e, _)| *e as usize <= start);
-        for (run_end, motion) in &self.motion_runs[first..] {
-            let to = (*run_end as usize).min(end);
-            match self.motions[*motion as usize] {
-                Motion::Free => self.run(from, to, |a| a),
-                Motion::Held => self.run(from, to, |_| S::V::zero()),
-                Motion::Across(d) => self.run(from, to, |a| a - d * d.dot(&a)),
-                motion @ Motion::AcrossTwo(..) => self.run(from, to, |a| motion.project(a)),
-            }
-            if to == end {
-                break;
-            }
-            from = to;
-        }
-    }
-
-    /// Advance the particles `start..end`, projected by `project` (the arithmetic of
-    /// [`Motion::project`] for their shared motion).
-    #[inline(always)]
-    fn run(&mut self, start: usize, end: usize, project: impl Fn(S::V) -> S::V) {
-        let (u, carry, v, f) = (
-            &mut self.u[start..end],
-            &mut self.carry[start..end],
-            &mut self.v[start..end],
-            &mut self.f[start..end],
-        );
-        let inverse = &self.inverse[start..end];
-        for i in 0..u.len() {
-            let a = project(f[i] * inverse[i]);
-            f[i] = S::V::zero();
-            v[i] += a * self.h;
-            compensated_add(&mut u[i], &mut carry[i], v[i] * self.h);
-        }
-    }
 }
 
 /// Where a contact node is relative to its solid (see [`Model::solid_positions`]).
@@ -494,7 +325,7 @@ pub struct Constraints<S: Space> {
     pub particle_held: Vec<Vec<S::V>>,
     /// The distinct projections the particles' accelerations take (a few, whatever the number
     /// of particles).
-    pub motions: Vec<Motion<S>>,
+    pub motions: Vec<Motion<S::V>>,
     /// Each particle's projection, as an index into `motions` (4 bytes per particle streamed
     /// by the time loop instead of a projection's 40 or 56).
     pub particle_motion: Vec<u32>,
@@ -544,22 +375,23 @@ impl<S: Space> Constraints<S> {
 
 /// How a particle's acceleration is projected onto its free directions in a step.
 #[derive(Debug, Clone, Copy)]
-pub enum Motion<S: Space> {
+pub enum Motion<V: Lin> {
     /// No direction held.
     Free,
     /// Every direction held.
     Held,
     /// One direction held (unit): the component along it removed.
-    Across(S::V),
+    Across(V),
     /// Two orthonormal directions held (3D): both components removed.
-    AcrossTwo(S::V, S::V),
+    AcrossTwo(V, V),
 }
 
-impl<S: Space> Motion<S> {
-    fn of(held: &[S::V]) -> Self {
+impl<V: Lin> Motion<V> {
+    /// The projection that removes the `held` directions of a space of `dim` dimensions.
+    fn of(held: &[V], dim: usize) -> Self {
         match held {
             [] => Motion::Free,
-            _ if held.len() == S::DIM => Motion::Held,
+            _ if held.len() == dim => Motion::Held,
             [d] => Motion::Across(*d),
             [d, e] => Motion::AcrossTwo(*d, *e),
             _ => Motion::Held,
@@ -568,10 +400,10 @@ impl<S: Space> Motion<S> {
 
     /// `a` with its held components removed (in the order they were held).
     #[inline]
-    pub fn project(&self, a: S::V) -> S::V {
+    pub fn project(&self, a: V) -> V {
         match self {
             Motion::Free => a,
-            Motion::Held => S::V::zero(),
+            Motion::Held => V::zero(),
             Motion::Across(d) => a - *d * d.dot(&a),
             Motion::AcrossTwo(d, e) => {
                 let a = a - *d * d.dot(&a);
@@ -634,7 +466,7 @@ pub struct Model<S: Space, const FINITE: bool> {
     grounded_dashpots: Vec<Grounded<S>>,
     springs: Vec<TwoPoint<S>>,
     /// The springs that are [`LineSpring`]s, compact.
-    line_springs: Vec<LineSpring<S>>,
+    line_springs: Vec<LineSpring<S::V>>,
     /// Indices in `springs` of the others (body ends, or axial under finite rotation).
     other_springs: Vec<usize>,
     dashpots: Vec<TwoPoint<S>>,
@@ -645,11 +477,65 @@ pub struct Model<S: Space, const FINITE: bool> {
     /// Where the scene is particles, springs along fixed lines and loads only: the order of
     /// [`Model::step_by_blocks`].
     block_schedule: Option<BlockSchedule>,
+    /// Where such a scene's springs all lie along one coordinate axis: the scene on that axis
+    /// ([`Model::step_axial`]).
+    axial: Option<Axial>,
     /// Penalty stiffness.
     pub penalty: f64,
     /// Node → point.
     pub points: Vec<Point<S>>,
     _space: PhantomData<S>,
+}
+
+/// The [`Axial`] form of a scene that steps by blocks, where every line spring and every
+/// grounded spring on a particle lies along one coordinate axis (the first spring's); the
+/// loads on particles keep their component along it.
+fn axial<S: Space>(
+    line_springs: &[LineSpring<S::V>],
+    grounded: &[Grounded<S>],
+    loads: &[Load<S>],
+) -> Option<Axial> {
+    let grounded: Vec<(usize, S::V, f64)> = grounded
+        .iter()
+        .filter_map(|g| match (g.point, g.direction) {
+            (Point::Particle(i), Some(d)) => Some((i, d, g.c)),
+            _ => None,
+        })
+        .collect();
+    let axis = line_springs
+        .first()
+        .map(|s| s.direction)
+        .or(grounded.first().map(|g| g.1))
+        .and_then(|d| axis_of::<S>(&d))?;
+    let along = |d: &S::V| (axis_of::<S>(d) == Some(axis)).then(|| S::v3(d)[axis]);
+    let springs = line_springs
+        .iter()
+        .map(|s| {
+            Some(LineSpring {
+                a: s.a,
+                b: s.b,
+                direction: along(&s.direction)?,
+                c: s.c,
+            })
+        })
+        .collect::<Option<Vec<_>>>()?;
+    let grounded = grounded
+        .iter()
+        .map(|(i, d, c)| Some((*i, along(d)?, *c)))
+        .collect::<Option<Vec<_>>>()?;
+    let on_particles = loads.iter().filter_map(|l| match l.point {
+        Point::Particle(i) => Some((i, S::v3(&l.force))),
+        _ => None,
+    });
+    Some(Axial {
+        axis,
+        springs,
+        grounded,
+        loads: on_particles.clone().map(|(i, f)| (i, f[axis])).collect(),
+        loads_on_axis: on_particles
+            .clone()
+            .all(|(_, f)| (0..3).all(|j| j == axis || f[j] == 0.0)),
+    })
 }
 
 /// The contact dashpot of a pair: c = 2ζ√(k_p m), with ζ the damping ratio whose linear
@@ -901,6 +787,9 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                         .all(|g| g.rotation.is_none() && !matches!(g.point, Point::Body { .. }))
             })
             .map(|loaded| BlockSchedule::of(particles.len(), &line_springs, &loaded));
+        let axial = block_schedule
+            .as_ref()
+            .and_then(|_| axial(&line_springs, &grounded_springs, &loads));
         Model {
             inverse_masses: particles.iter().map(|p| p.inverse_mass).collect(),
             particles,
@@ -914,6 +803,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             contacts,
             loads,
             block_schedule,
+            axial,
             penalty,
             points,
             _space: PhantomData,
@@ -1168,7 +1058,8 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         out.clear();
         counters.force_evaluations += 1;
         let mut elastic = self.grounded_spring_forces::<ENERGY>(cfg, out);
-        elastic = line_spring_forces::<S, ENERGY>(&self.line_springs, &cfg.u, &mut out.p, elastic);
+        elastic =
+            line_spring_forces::<S::V, ENERGY>(&self.line_springs, &cfg.u, &mut out.p, elastic);
         for s in self.other_springs.iter().map(|k| &self.springs[*k]) {
             let stretch = self.displacement(cfg, &s.b) - self.displacement(cfg, &s.a);
             let (e, dir) = if s.axial && FINITE {
@@ -1299,30 +1190,61 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             motions: &held.motions,
             h,
         };
-        let mut springs = 0;
-        let mut runs = 0;
-        for (block, (springs_end, runs_end)) in schedule.blocks.iter().enumerate() {
-            let (springs_end, runs_end) = (*springs_end as usize, *runs_end as usize);
-            line_spring_forces::<S, false>(
-                &self.line_springs[springs..springs_end],
-                advance.u,
-                advance.f,
-                0.0,
-            );
-            if block + 1 == schedule.blocks.len() {
-                // Loads act on particles or the ground only here (see `BlockSchedule`): the
-                // sum of `Model::apply`, in the same order.
-                for l in &self.loads {
-                    if let Point::Particle(i) = l.point {
-                        advance.f[i] += l.force;
-                    }
+        // Loads act on particles or the ground only in the last block (see `BlockSchedule`):
+        // the sum of `Model::apply`, in the same order.
+        let loads = |f: &mut [S::V]| {
+            for l in &self.loads {
+                if let Point::Particle(i) = l.point {
+                    f[i] += l.force;
                 }
             }
-            for (start, end) in &schedule.runs[runs..runs_end] {
-                advance.particles(*start as usize, *end as usize);
-            }
-            (springs, runs) = (springs_end, runs_end);
+        };
+        step_blocks(schedule, &self.line_springs, loads, &mut advance);
+    }
+
+    /// The store [`Model::step_axial`] steps for one step under `held`: where the scene steps
+    /// by blocks, its springs lie along one coordinate axis, and every particle either moves
+    /// along that axis only or is held (see [`AxialStore::of`]).
+    pub fn axial_store(&self, held: &Constraints<S>) -> Option<AxialStore> {
+        AxialStore::of(self.axial.as_ref()?, held, self.particles.len())
+    }
+
+    /// [`Model::step_by_blocks`] on the one-dimensional `store` (loaded from `cfg`, `carry` and
+    /// `vel` at its first increment, written back by [`AxialStore::write_back`]): the same
+    /// sums in the same order on the axis components, so the same result to the bit (up to
+    /// the sign of a zero), at a quarter of the bytes per particle in 2D. False, and nothing
+    /// done, where a particle's velocity or rounding carry lies off the axis (it would move
+    /// off it).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(never)]
+    pub fn step_axial(
+        &self,
+        store: &mut AxialStore,
+        cfg: &Config<S>,
+        carry: &Rates<S>,
+        h: f64,
+        vel: &Rates<S>,
+        held: &Constraints<S>,
+        counters: &mut Counters,
+    ) -> bool {
+        let (Some(axial), Some(schedule)) = (&self.axial, &self.block_schedule) else {
+            return false;
+        };
+        let n = self.particles.len();
+        if !store.load::<S>(&cfg.u[..n], &carry.p[..n], &vel.p[..n]) {
+            return false;
         }
+        counters.block_increments += 1;
+        counters.axial_increments += 1;
+        counters.force_evaluations += 1;
+        store.step(
+            axial,
+            schedule,
+            &self.inverse_masses[..n],
+            &held.motion_runs,
+            h,
+        );
+        true
     }
 
     /// Add dashpot forces at velocities `vel` to `out`, and their dissipation power.
@@ -1841,7 +1763,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 u32::try_from(last).expect("fewer than 2^32 distinct projections")
             })
             .collect();
-        c.motions = distinct.iter().map(|h| Motion::of(h)).collect();
+        c.motions = distinct.iter().map(|h| Motion::of(h, S::DIM)).collect();
         for (i, m) in c.particle_motion.iter().enumerate() {
             let end = u32::try_from(i + 1).expect("fewer than 2^32 particles");
             match c.motion_runs.last_mut() {

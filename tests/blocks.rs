@@ -3,11 +3,13 @@
 //! same sums in the same order per particle, so the same state bit for bit, on scenes whose
 //! springs are scattered over many blocks, with loads, grounded springs, ground ends,
 //! particles no spring touches and particles under different held directions, in 2D and 3D
-//! and under both rotation models.
+//! and under both rotation models; and the same increments on the one-dimensional store of a
+//! scene on one axis (`Model::step_axial`) against them.
 mod common;
 use common::*;
 use crosscheck::case::chain::Chain;
-use crosscheck::engines::explicit::model::{ContactMode, Counters, Model};
+use crosscheck::engines::explicit::blocks::AxialStore;
+use crosscheck::engines::explicit::model::{ContactMode, Counters, Model, Point};
 use crosscheck::engines::explicit::space::{Lin, Planar, Space, Spatial};
 use crosscheck::scene::{BoundaryCondition, Connection, Dof, Element, PointLoad, Scene, StepKind};
 use nalgebra::{Rotation3, Vector3};
@@ -212,9 +214,9 @@ fn blocks_apply_to_particles_and_springs_only() {
 
 /// `scattered_chain` without what takes a particle off the x axis: the spring to the ground
 /// along (0.6, 0.8) and the tilted held directions are gone, and the loads act along x. What
-/// remains of it: scrambled springs over many blocks, grounded springs along x, loads, a
-/// spring to the ground mid-chain along x, nodes no spring touches, a node held in x as well
-/// (held) and one free in y (which only loads off the axis could move off it).
+/// remains of it: scrambled springs over many blocks, grounded springs along x (two on node
+/// 7), loads, a spring to the ground mid-chain along −x, nodes no spring touches, a node held
+/// in x as well (held) and one free in y (which only loads off the axis could move off it).
 fn axial_chain(n: usize) -> Scene {
     let mut scene = scattered_chain(n);
     scene.springs.retain(|e| e.name != "to-ground");
@@ -226,6 +228,14 @@ fn axial_chain(n: usize) -> Scene {
         },
         coefficient: 3.0e3,
     });
+    scene.springs.push(Element {
+        name: "grounded-7-again".into(),
+        connection: Connection::Grounded {
+            node: 7,
+            dof: Dof::Translation(0),
+        },
+        coefficient: 5.0e2,
+    });
     for node in &mut scene.nodes {
         node.frame = nalgebra::Matrix3::identity();
     }
@@ -235,12 +245,71 @@ fn axial_chain(n: usize) -> Scene {
     scene
 }
 
+/// `axial_chain_3d` with nodes 40 and 41 changed: 40 held off the axis in y and z (no
+/// particle is free off it), 41 held in y only (free along x and z).
+fn axial_chain_3d_across(n: usize) -> Scene {
+    let mut scene = axial_chain_3d(n);
+    let dynamic = scene
+        .steps
+        .iter_mut()
+        .find(|s| matches!(s.kind, StepKind::Dynamic { .. }))
+        .unwrap();
+    dynamic
+        .conditions
+        .retain(|c| c.node != 41 || c.dof != Dof::Translation(2));
+    for dof in [1, 2] {
+        dynamic.conditions.push(BoundaryCondition {
+            node: 40,
+            dof: Dof::Translation(dof),
+            value: None,
+        });
+    }
+    scene
+}
+
+/// The scene with coordinates `a` and `b` swapped: positions, spring directions, loads and
+/// the translation DOFs of boundary conditions and grounded springs (frames are the identity).
+fn swapped(mut scene: Scene, a: usize, b: usize) -> Scene {
+    let swap = |v: &mut Vector3<f64>| v.swap_rows(a, b);
+    let dof = |d: &mut Dof| {
+        if let Dof::Translation(k) = d {
+            *k = if *k == a {
+                b
+            } else if *k == b {
+                a
+            } else {
+                *k
+            };
+        }
+    };
+    for node in &mut scene.nodes {
+        swap(&mut node.position);
+    }
+    for spring in &mut scene.springs {
+        match &mut spring.connection {
+            Connection::FixedDirection { direction, .. } => swap(direction),
+            Connection::Grounded { dof: d, .. } => dof(d),
+            Connection::Axial { .. } => {}
+        }
+    }
+    for load in &mut scene.loads {
+        swap(&mut load.force);
+    }
+    for step in &mut scene.steps {
+        for c in &mut step.conditions {
+            dof(&mut c.dof);
+        }
+    }
+    scene
+}
+
 /// The state after `increments` increments by blocks on the 2D or 3D store, and on the
-/// one-dimensional one (written back twice on the way, with an increment by blocks on the
-/// written-back state between, as a row's increment takes one): equal, to the bit but for
-/// the sign of a zero (`==`). Off the axis, the displacements keep a value of their own.
-fn axial_equals_blocks<S: Space, const FINITE: bool>(scene: &Scene, increments: usize) {
-    let model = Model::<S, FINITE>::compile(scene, 0.0);
+/// one-dimensional one along `axis` (written back twice on the way, with an increment by
+/// blocks on the written-back state between, as a row's increment takes one): equal, to the
+/// bit but for the sign of a zero (`==`). Off the axis, the displacements keep a value of
+/// their own.
+fn axial_equals_blocks<S: Space>(scene: &Scene, increments: usize, axis: usize) {
+    let model = Model::<S, true>::compile(scene, 0.0);
     let step = scene
         .steps
         .iter()
@@ -249,13 +318,16 @@ fn axial_equals_blocks<S: Space, const FINITE: bool>(scene: &Scene, increments: 
     let held = model.constraints(scene, step);
     let mut store = model
         .axial_store(&held)
-        .unwrap_or_else(|| panic!("{}: every particle moves along x", scene.id));
+        .unwrap_or_else(|| panic!("{}: every particle moves along axis {axis}", scene.id));
     let mut cfg = model.initial_config();
     let mut vel = model.zero_rates();
     for (i, (u, v)) in cfg.u.iter_mut().zip(vel.p.iter_mut()).enumerate() {
         let x = i as f64;
-        *u = S::v(&Vector3::new(1e-3 * (0.1 * x).sin(), 2e-4, -3e-4));
-        *v = S::v(&Vector3::new(1e-2 * (0.2 * x).cos(), 0.0, 0.0));
+        let mut u3 = Vector3::new(2e-4, -3e-4, 4e-4);
+        u3[axis] = 1e-3 * (0.1 * x).sin();
+        let mut v3 = Vector3::zeros();
+        v3[axis] = 1e-2 * (0.2 * x).cos();
+        (*u, *v) = (S::v(&u3), S::v(&v3));
     }
     model.enforce(&mut vel, &held);
     let start = cfg.u.clone();
@@ -317,10 +389,13 @@ fn axial_equals_blocks<S: Space, const FINITE: bool>(scene: &Scene, increments: 
             );
         }
     }
-    // Off the axis, the displacements are as they started (y = 2e-4; z = −3e-4 in 3D).
+    // Off the axis, the displacements are as they started.
     for (u, u0) in cfg_b.u.iter().zip(&start) {
         let (u, u0) = (S::v3(u), S::v3(u0));
-        assert_eq!((u.y, u.z), (u0.y, u0.z));
+        assert!(
+            (0..3).all(|j| j == axis || u[j] == u0[j]),
+            "{u:?} from {u0:?}"
+        );
     }
 }
 
@@ -347,48 +422,60 @@ fn axial_chain_3d(n: usize) -> Scene {
 
 #[test]
 fn the_axis_store_gives_the_blocks_bit_for_bit_in_2d() {
-    axial_equals_blocks::<Planar, true>(&axial_chain(700), 50);
+    axial_equals_blocks::<Planar>(&axial_chain(700), 50, 0);
+    axial_equals_blocks::<Planar>(&swapped(axial_chain(700), 0, 1), 50, 1);
 }
 
 #[test]
 fn the_axis_store_gives_the_blocks_bit_for_bit_in_3d() {
-    axial_equals_blocks::<Spatial, true>(&axial_chain_3d(700), 50);
+    axial_equals_blocks::<Spatial>(&axial_chain_3d(700), 50, 0);
+    axial_equals_blocks::<Spatial>(&swapped(axial_chain_3d(700), 0, 2), 50, 2);
+    axial_equals_blocks::<Spatial>(&swapped(axial_chain_3d_across(700), 0, 1), 50, 1);
 }
 
-#[test]
-fn the_axis_store_gives_the_blocks_bit_for_bit_under_small_rotation() {
-    axial_equals_blocks::<Planar, false>(&axial_chain(700), 50);
-}
-
-/// What would take a particle off the axis keeps the scene on its 2D store: a spring or a
-/// held direction off the axis (no store), a load off it on a particle free off it (no
-/// store), a velocity off it (the store does not load, and the increment is not taken).
+/// What would take a particle off the axis keeps the scene on its 2D or 3D store: a spring,
+/// a grounded spring or a held direction off the axis (no store), a load off it on a particle
+/// free off it (no store), a velocity or rounding carry off it (the store does not load, and
+/// the increment is not taken).
 #[test]
 fn the_axis_store_is_refused_where_a_particle_could_leave_the_axis() {
-    let dynamic = |scene: &Scene| {
-        scene
+    fn store<S: Space>(scene: &Scene) -> Option<AxialStore> {
+        let model = Model::<S, true>::compile(scene, 0.0);
+        let step = scene
             .steps
             .iter()
             .find(|s| matches!(s.kind, StepKind::Dynamic { .. }))
-            .unwrap()
-            .clone()
-    };
-    let store = |scene: &Scene| {
-        let model = Model::<Planar, true>::compile(scene, 0.0);
-        model.axial_store(&model.constraints(scene, &dynamic(scene)))
-    };
-    assert!(store(&axial_chain(700)).is_some());
+            .unwrap();
+        model.axial_store(&model.constraints(scene, step))
+    }
+    assert!(store::<Planar>(&axial_chain(700)).is_some());
     assert!(
-        store(&scattered_chain(700)).is_none(),
+        store::<Planar>(&scattered_chain(700)).is_none(),
         "a spring off the axis"
     );
     let mut tilted = axial_chain(700);
     tilted.nodes[60].frame = *Rotation3::from_axis_angle(&Vector3::z_axis(), 0.5).matrix();
-    assert!(store(&tilted).is_none(), "a held direction off the axis");
+    assert!(
+        store::<Planar>(&tilted).is_none(),
+        "a held direction off the axis"
+    );
+    let mut grounded_y = axial_chain(700);
+    grounded_y.springs.push(Element {
+        name: "grounded-in-y".into(),
+        connection: Connection::Grounded {
+            node: 7,
+            dof: Dof::Translation(1),
+        },
+        coefficient: 1.0,
+    });
+    assert!(
+        store::<Planar>(&grounded_y).is_none(),
+        "a grounded spring off the axis"
+    );
     let mut pushed = axial_chain(700);
     pushed.loads[0].force.y = 1.0;
     assert!(
-        store(&pushed).is_none(),
+        store::<Planar>(&pushed).is_none(),
         "a load off the axis, node 40 free in y"
     );
     // Held in y, node 40 may carry a load off the axis: the projection removes it.
@@ -401,27 +488,52 @@ fn the_axis_store_is_refused_where_a_particle_could_leave_the_axis() {
         });
     }
     assert!(
-        store(&pushed_held).is_some(),
+        store::<Planar>(&pushed_held).is_some(),
         "every particle held off the axis"
+    );
+    // In 3D, node 41 held in y only is free in z. A load off the axis anywhere refuses the
+    // store then, in z as in y: the check is one per scene, not per particle (a load in y on
+    // node 150, held in y and z, could not move it off the axis; the store is refused anyway).
+    let across = axial_chain_3d_across(700);
+    assert!(store::<Spatial>(&across).is_some());
+    let mut pushed_z = across.clone();
+    pushed_z.loads[0].force.z = 1.0;
+    assert!(
+        store::<Spatial>(&pushed_z).is_none(),
+        "a load in z, node 41 free in z"
+    );
+    let mut pushed_y = across;
+    pushed_y.loads[0].force.y = 1.0;
+    assert!(
+        store::<Spatial>(&pushed_y).is_none(),
+        "a load in y, node 41 free in z"
     );
 
     let scene = axial_chain(700);
     let model = Model::<Planar, true>::compile(&scene, 0.0);
-    let held = model.constraints(&scene, &dynamic(&scene));
+    let step = scene
+        .steps
+        .iter()
+        .find(|s| matches!(s.kind, StepKind::Dynamic { .. }))
+        .unwrap();
+    let held = model.constraints(&scene, step);
     let mut store = model.axial_store(&held).unwrap();
-    let (cfg, carry, mut vel) = (
+    let (cfg, mut carry, mut vel) = (
         model.initial_config(),
         model.zero_rates(),
         model.zero_rates(),
     );
-    let crosscheck::engines::explicit::model::Point::Particle(i) = model.points[40] else {
+    let Point::Particle(i) = model.points[40] else {
         panic!("node 40 is a particle");
     };
-    vel.p[i].y = 1e-3;
     let mut counters = Counters::default();
+    vel.p[i].y = 1e-3;
+    assert!(!model.step_axial(&mut store, &cfg, &carry, 1e-3, &vel, &held, &mut counters));
+    vel.p[i].y = 0.0;
+    carry.p[i].y = 1e-20;
     assert!(!model.step_axial(&mut store, &cfg, &carry, 1e-3, &vel, &held, &mut counters));
     assert_eq!(counters, Counters::default());
-    vel.p[i].y = 0.0;
+    carry.p[i].y = 0.0;
     assert!(model.step_axial(&mut store, &cfg, &carry, 1e-3, &vel, &held, &mut counters));
     assert_eq!(counters.axial_increments, 1);
 }

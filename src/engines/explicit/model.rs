@@ -488,8 +488,9 @@ pub struct Model<S: Space, const FINITE: bool> {
 }
 
 /// The [`Axial`] form of a scene that steps by blocks, where every line spring and every
-/// grounded spring on a particle lies along one coordinate axis (the first spring's); the
-/// loads on particles keep their component along it.
+/// grounded spring on a particle lies along one coordinate axis (the first line spring's, or
+/// without line springs the first grounded spring's); the loads on particles keep their
+/// component along it.
 fn axial<S: Space>(
     line_springs: &[LineSpring<S::V>],
     grounded: &[Grounded<S>],
@@ -1210,9 +1211,9 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     }
 
     /// [`Model::step_by_blocks`] on the one-dimensional `store` (loaded from `cfg`, `carry` and
-    /// `vel` at its first increment, written back by [`AxialStore::write_back`]): the same
+    /// `vel` at its first increment after each [`AxialStore::write_back`]): the same
     /// sums in the same order on the axis components, so the same result to the bit (up to
-    /// the sign of a zero), at a quarter of the bytes per particle in 2D. False, and nothing
+    /// the sign of a zero), at half the bytes per particle and spring in 2D. False, and nothing
     /// done, where a particle's velocity or rounding carry lies off the axis (it would move
     /// off it).
     #[allow(clippy::too_many_arguments)]

@@ -401,9 +401,10 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 past_limit = PastLimit::new(&model, &cfg, &held, h, settings.damping);
             }
         }
-        // A large scene whose particles all move along one axis steps its block increments on
-        // a one-dimensional store, written back before any other increment reads the state.
-        let mut axial = if by_blocks {
+        // A scene of particles and springs that all lie along one axis, of any size, takes its
+        // one-pass increments by blocks on a one-dimensional store, written back before any
+        // other increment reads the state (faster than the two passes even in cache).
+        let mut axial = if model.can_step_by_blocks() {
             model.axial_store(&held)
         } else {
             None
@@ -460,16 +461,18 @@ pub fn integrate<S: Space, const FINITE: bool>(
             // starts the next step) needs no acceleration kept: it runs in one pass.
             let one_pass =
                 !restart && !velocity_pass && n % stride != 0 && n + 1 < first + steps_here;
-            // A large scene of particles, springs along fixed lines and loads: forces and
-            // update block by block of springs, each particle's data touched while in cache.
-            if one_pass && by_blocks {
-                if let Some(store) = axial.as_mut() {
-                    if model.step_axial(store, &cfg, &carry, h, &v_half, &held, &mut counters) {
-                        last_power = 0.0;
-                        continue;
-                    }
-                    axial = None;
+            // A scene of particles, springs along fixed lines and loads: forces and update block
+            // by block of springs, each particle's data touched while in cache; on one number
+            // per particle where they all lie on one axis (any size), on the 2D or 3D store
+            // where the scene is large.
+            if one_pass && let Some(store) = axial.as_mut() {
+                if model.step_axial(store, &cfg, &carry, h, &v_half, &held, &mut counters) {
+                    last_power = 0.0;
+                    continue;
                 }
+                axial = None;
+            }
+            if one_pass && by_blocks {
                 model.step_by_blocks(
                     &mut cfg,
                     &mut carry,

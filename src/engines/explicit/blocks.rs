@@ -260,13 +260,13 @@ pub(super) struct Axial {
 }
 
 /// The particles' displacements, rounding carries, velocities and pending forces of one step
-/// along an [`Axial`] scene's axis, for the increments [`Model::step_axial`] takes.
+/// along an `Axial` scene's axis, for the increments [`Model::step_axial`] takes.
 ///
 /// The store is loaded from the configuration at the first such increment (and again after
 /// each write-back) and written back ([`AxialStore::write_back`]) before anything else reads
 /// the configuration. Only the axis's components are kept and written, since nothing changes
 /// the others: every spring force lies on the axis; a load off it acts only where the
-/// particle's projection removes what lies off the axis ([`AxialStore::of`]); and the store
+/// particle's projection removes what lies off the axis (`AxialStore::of`); and the store
 /// loads only where no velocity or carry lies off the axis.
 #[derive(Debug, Clone)]
 pub struct AxialStore {

@@ -13,7 +13,8 @@
 //! form ([`Model::centred_single_axis`]). A large scene of particles, springs along fixed
 //! lines and loads takes its one-pass increments block by block of springs
 //! ([`Model::step_by_blocks`]): one trip through memory instead of a force pass and an
-//! update.
+//! update. Such a scene on one coordinate axis, of any size, takes them on one number per
+//! particle and quantity ([`Model::step_axial`]).
 
 use super::blocks::BLOCKS_FROM;
 use super::centred::ParticleDashpots;

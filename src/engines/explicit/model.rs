@@ -1205,7 +1205,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
 
     /// The store [`Model::step_axial`] steps for one step under `held`: where the scene steps
     /// by blocks, its springs lie along one coordinate axis, and every particle either moves
-    /// along that axis only or is held (see [`AxialStore::of`]).
+    /// along that axis only or is held (see `AxialStore::of`).
     pub fn axial_store(&self, held: &Constraints<S>) -> Option<AxialStore> {
         AxialStore::of(self.axial.as_ref()?, held, self.particles.len())
     }

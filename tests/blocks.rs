@@ -11,7 +11,9 @@ use crosscheck::case::chain::Chain;
 use crosscheck::engines::explicit::blocks::AxialStore;
 use crosscheck::engines::explicit::model::{ContactMode, Counters, Model, Point};
 use crosscheck::engines::explicit::space::{Lin, Planar, Space, Spatial};
-use crosscheck::scene::{BoundaryCondition, Connection, Dof, Element, PointLoad, Scene, StepKind};
+use crosscheck::scene::{
+    BoundaryCondition, Connection, Dof, Element, PointLoad, Scene, Step, StepKind,
+};
 use nalgebra::{Rotation3, Vector3};
 
 /// A chain of `n` masses with its springs in a scrambled order (so that a particle's last
@@ -77,16 +79,41 @@ fn scattered_chain(n: usize) -> Scene {
     scene
 }
 
+/// The scene's dynamic step.
+fn dynamic(scene: &Scene) -> &Step {
+    scene
+        .steps
+        .iter()
+        .find(|s| matches!(s.kind, StepKind::Dynamic { .. }))
+        .expect("the chain has a dynamic step")
+}
+
+/// Two runs' positions, rounding carries and velocities are equal (`==`: bit for bit but for
+/// the sign of a zero), finite, and moved from `start` (the comparison is not of two untouched
+/// copies); `how` names the two runs in the message.
+fn assert_same_state<S: Space>(start: &[S::V], a: [&[S::V]; 3], b: [&[S::V]; 3], how: [&str; 2]) {
+    let moved = a[0].iter().zip(start).filter(|(u, u0)| u != u0).count();
+    assert!(moved > a[0].len() / 2, "{moved} of {} moved", a[0].len());
+    for (what, (a, b)) in ["position", "rounding carry", "velocity"]
+        .iter()
+        .zip(a.iter().zip(b))
+    {
+        assert!(a.iter().all(|x| x.dot(x).is_finite()), "{what}: not finite");
+        if let Some(i) = (0..a.len()).find(|i| a[*i] != b[*i]) {
+            panic!(
+                "{what} of particle {i}: {:?} {}, {:?} {}",
+                a[i], how[0], b[i], how[1]
+            );
+        }
+    }
+}
+
 /// Run `increments` increments from a displaced, moving state both ways; the states must
 /// agree bit for bit, and the pending forces must be zero again.
 fn fused_equals_unfused<S: Space, const FINITE: bool>(scene: &Scene, increments: usize) {
     let model = Model::<S, FINITE>::compile(scene, 0.0);
     assert!(model.can_step_by_blocks(), "{}", scene.id);
-    let step = scene
-        .steps
-        .iter()
-        .find(|s| matches!(s.kind, StepKind::Dynamic { .. }))
-        .unwrap();
+    let step = dynamic(scene);
     let held = model.constraints(scene, step);
     let mut cfg = model.initial_config();
     let mut vel = model.zero_rates();
@@ -129,23 +156,13 @@ fn fused_equals_unfused<S: Space, const FINITE: bool>(scene: &Scene, increments:
             &mut counters,
         );
     }
-    // The state moved (the comparison is not of two untouched copies).
-    let moved = cfg.u.iter().zip(&start).filter(|(u, u0)| u != u0).count();
-    assert!(moved > cfg.u.len() / 2, "{moved} of {} moved", cfg.u.len());
     // Same operations in the same order: equal bit for bit, not merely to round-off.
-    for (what, a, b) in [
-        ("position", &cfg.u, &cfg_b.u),
-        ("rounding carry", &carry.p, &carry_b.p),
-        ("velocity", &vel.p, &vel_b.p),
-    ] {
-        assert!(a.iter().all(|x| x.dot(x).is_finite()), "{what}: not finite");
-        if let Some(i) = (0..a.len()).find(|i| a[*i] != b[*i]) {
-            panic!(
-                "{what} of particle {i}: {:?} by passes, {:?} by blocks",
-                a[i], b[i]
-            );
-        }
-    }
+    assert_same_state::<S>(
+        &start,
+        [&cfg.u, &carry.p, &vel.p],
+        [&cfg_b.u, &carry_b.p, &vel_b.p],
+        ["by passes", "by blocks"],
+    );
     assert!(
         pending.p.iter().all(|f| *f == S::v(&Vector3::zeros())),
         "pending forces left non-zero"
@@ -310,11 +327,7 @@ fn swapped(mut scene: Scene, a: usize, b: usize) -> Scene {
 /// their own.
 fn axial_equals_blocks<S: Space>(scene: &Scene, increments: usize, axis: usize) {
     let model = Model::<S, true>::compile(scene, 0.0);
-    let step = scene
-        .steps
-        .iter()
-        .find(|s| matches!(s.kind, StepKind::Dynamic { .. }))
-        .unwrap();
+    let step = dynamic(scene);
     let held = model.constraints(scene, step);
     let mut store = model
         .axial_store(&held)
@@ -374,21 +387,12 @@ fn axial_equals_blocks<S: Space>(scene: &Scene, increments: usize, axis: usize) 
     store.write_back::<S>(&mut cfg_b.u, &mut carry_b.p, &mut vel_b.p);
     assert_eq!(counters_b.block_increments, increments as u64);
     assert_eq!(counters_b.axial_increments, increments as u64 - 2);
-    let moved = cfg.u.iter().zip(&start).filter(|(u, u0)| u != u0).count();
-    assert!(moved > cfg.u.len() / 2, "{moved} of {} moved", cfg.u.len());
-    for (what, a, b) in [
-        ("position", &cfg.u, &cfg_b.u),
-        ("rounding carry", &carry.p, &carry_b.p),
-        ("velocity", &vel.p, &vel_b.p),
-    ] {
-        assert!(a.iter().all(|x| x.dot(x).is_finite()), "{what}: not finite");
-        if let Some(i) = (0..a.len()).find(|i| a[*i] != b[*i]) {
-            panic!(
-                "{what} of particle {i}: {:?} on the 2D or 3D store, {:?} on the axis",
-                a[i], b[i]
-            );
-        }
-    }
+    assert_same_state::<S>(
+        &start,
+        [&cfg.u, &carry.p, &vel.p],
+        [&cfg_b.u, &carry_b.p, &vel_b.p],
+        ["on the 2D or 3D store", "on the axis"],
+    );
     // Off the axis, the displacements are as they started.
     for (u, u0) in cfg_b.u.iter().zip(&start) {
         let (u, u0) = (S::v3(u), S::v3(u0));
@@ -441,11 +445,7 @@ fn the_axis_store_gives_the_blocks_bit_for_bit_in_3d() {
 fn the_axis_store_is_refused_where_a_particle_could_leave_the_axis() {
     fn store<S: Space>(scene: &Scene) -> Option<AxialStore> {
         let model = Model::<S, true>::compile(scene, 0.0);
-        let step = scene
-            .steps
-            .iter()
-            .find(|s| matches!(s.kind, StepKind::Dynamic { .. }))
-            .unwrap();
+        let step = dynamic(scene);
         model.axial_store(&model.constraints(scene, step))
     }
     assert!(store::<Planar>(&axial_chain(700)).is_some());
@@ -511,11 +511,7 @@ fn the_axis_store_is_refused_where_a_particle_could_leave_the_axis() {
 
     let scene = axial_chain(700);
     let model = Model::<Planar, true>::compile(&scene, 0.0);
-    let step = scene
-        .steps
-        .iter()
-        .find(|s| matches!(s.kind, StepKind::Dynamic { .. }))
-        .unwrap();
+    let step = dynamic(&scene);
     let held = model.constraints(&scene, step);
     let mut store = model.axial_store(&held).unwrap();
     let (cfg, mut carry, mut vel) = (

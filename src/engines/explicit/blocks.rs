@@ -31,7 +31,7 @@ pub(super) const GROUND: u32 = u32::MAX;
 /// cache and the blocks only add bookkeeping; 22 % faster at 10^6, where the second pass
 /// over memory is what they save. A scene on one axis takes its blocks on the one-dimensional
 /// store ([`AxialStore`]) at every size: there the blocks were faster than the two passes from
-/// 10 particles up (1.7–1.9 ns per particle against 3.1–3.3 from 10^3 to 10^5).
+/// 10 particles up (1.7–1.9 ns per particle against 3.1 from 10^3 to 10^5, one session).
 pub const BLOCKS_FROM: usize = 1 << 18;
 
 /// Line springs per block of [`Model::step_by_blocks`]: in a chain, a block's springs and the

@@ -1160,7 +1160,8 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     ///
     /// Never inlined: inlined into the time loop, it changed how the loop keeps its other
     /// paths' values on the stack, and the 2D rigid cases, which never come here, took twice
-    /// as long (`BENCHMARKS.md`, code layout).
+    /// as long (`BENCHMARKS.md`, code layout; measured before the tenth round found byte-equal
+    /// copies of one binary at twice each other's time, which may explain it instead).
     #[allow(clippy::too_many_arguments)]
     #[inline(never)]
     pub fn step_by_blocks(

@@ -302,10 +302,8 @@ impl AxialStore {
                 Motion::Across(d) => {
                     (across(d) && (S::DIM == 2 || axial.loads_on_axis)).then_some(Motion::Free)
                 }
-                Motion::AcrossTwo(d, e) => {
-                    (across(d) && across(e) && axis_of::<S>(d) != axis_of::<S>(e))
-                        .then_some(Motion::Free)
-                }
+                // Held directions are orthonormal: two off the axis are its two others.
+                Motion::AcrossTwo(d, e) => (across(d) && across(e)).then_some(Motion::Free),
             })
             .collect::<Option<Vec<_>>>()?;
         Some(AxialStore {

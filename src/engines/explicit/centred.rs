@@ -20,7 +20,9 @@
 //! formed from the unnormalised `e_j`; `S + (h/2)·K` is non-singular while every |l_j| > 0.
 //! The force on the ends is `−c_j σ_j e_j` and the power `Σ c_j |l_j|² σ_j²`. No square root
 //! or normalising division is on the increment's chain. Where no line turns, `I + (h/2)·K` is
-//! the same at every increment of a step, and its inverse is formed once per step.
+//! the same at every increment of a step, and its inverse is formed once per step. A single
+//! turning dashpot (the axial dashpots of the springs cases) solves its 1×1 system in
+//! registers.
 
 use super::model::{
     Config, Constraints, Counters, DashpotLine, Forces, Model, ParticleDashpot, Rates, fill_zero,
@@ -180,6 +182,38 @@ impl<S: Space> ParticleDashpots<S> {
         let k = self.list.len();
         // The centred velocity before the dashpots act, as `Rates::set_plus` forms it.
         let centred = |p: usize| v_half.p[p] + acc.p[p] * (0.5 * h);
+        if self.steady.is_none()
+            && let [dashpot] = self.list.as_slice()
+            && let DashpotLine::TwoPoint {
+                dashpot: line,
+                scale,
+            } = dashpot.line
+        {
+            // One turning line: the 1×1 system of `fill_ends` and `fill_matrix`, with the same
+            // sums in the same order, kept in registers instead of `self.ends` and
+            // `self.system` (whose stores and reloads sat on the increment's chain).
+            let l = model.dashpot_span(cfg, line) * scale;
+            let span_square = l.dot(&l);
+            let mut diagonal = span_square;
+            let mut rhs = 0.0;
+            let mut ends = [None; 2];
+            for (slot, (end, e)) in [(dashpot.a, -l), (dashpot.b, l)].into_iter().enumerate() {
+                if let Some(p) = end {
+                    let g = model.particle_response(held, p, e);
+                    diagonal += 0.5 * h * dashpot.c * e.dot(&g);
+                    rhs += e.dot(&centred(p));
+                    ends[slot] = Some((p, g));
+                }
+            }
+            let sigma = rhs * (1.0 / diagonal);
+            for (p, g) in ends.into_iter().flatten() {
+                acc.p[p] -= g * (dashpot.c * sigma);
+                if let Some(v_n) = v_n.as_deref_mut() {
+                    v_n.p[p] = v_half.p[p] + acc.p[p] * (0.5 * h);
+                }
+            }
+            return dashpot.c * span_square * sigma * sigma;
+        }
         // σ_j: the rates over |l_j| (the rates themselves on fixed unit lines).
         let mut sigma = [0.0; MAX_DASHPOTS];
         if let Some(inverse) = &self.steady {

@@ -883,7 +883,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     fn apply(&self, cfg: &Config<S>, p: &Point<S>, f: S::V, out: &mut Forces<S>) {
         match p {
             Point::Ground(_) => {}
@@ -1065,8 +1065,11 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             let stretch = self.displacement(cfg, &s.b) - self.displacement(cfg, &s.a);
             let (e, dir) = if s.axial && FINITE {
                 let l = s.span0 + stretch;
-                let len = l.dot(&l).sqrt();
-                (len - s.length0, l * (1.0 / len))
+                let square = l.dot(&l);
+                // 1/|l| as |l|·(1/|l|²): the square root and the division run side by side
+                // instead of one after the other on the increment's chain.
+                let len = square.sqrt();
+                (len - s.length0, l * (len * (1.0 / square)))
             } else {
                 (s.direction.dot(&stretch), s.direction)
             };
@@ -1279,7 +1282,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
 
     /// The vector from end a to end b of two-point dashpot `k` at `cfg`: its line of action,
     /// not normalised.
-    #[inline]
+    #[inline(always)]
     pub fn dashpot_span(&self, cfg: &Config<S>, k: usize) -> S::V {
         let s = &self.dashpots[k];
         s.span0 + (self.displacement(cfg, &s.b) - self.displacement(cfg, &s.a))

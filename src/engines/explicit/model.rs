@@ -905,7 +905,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     }
 
     /// Signed gap of a contact pair (negative: penetration) and the current outward normal.
-    #[inline]
+    #[inline(always)]
     pub fn gap(&self, cfg: &Config<S>, k: usize) -> (f64, S::V) {
         let c = &self.contacts[k];
         let relative = cfg.u[c.particle] - cfg.bu[c.body];
@@ -1026,7 +1026,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// From the contact pair's face point to its node (finite rotation), summed from small
     /// parts (the offset at t = 0, the displacements, the face point's turn) so that a
     /// penalty stiffness does not multiply the cancellation of body-sized positions.
-    #[inline]
+    #[inline(always)]
     fn face_to_node(&self, cfg: &Config<S>, k: usize) -> S::V {
         let c = &self.contacts[k];
         (c.arm0 - c.face) + (cfg.u[c.particle] - cfg.bu[c.body])

@@ -410,6 +410,7 @@ impl Space for Planar {
     fn inertia_apply(i: &Self::Inertia, w: &Self::W) -> Self::W {
         i * w
     }
+    #[inline(always)]
     fn advance_compensated(r: &Self::R, carry: &mut [f64; 2], dtheta: &f64) -> Self::R {
         let (s, c) = (r.sin_angle(), r.cos_angle());
         let x = *dtheta;

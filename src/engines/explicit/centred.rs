@@ -20,8 +20,8 @@
 //! formed from the unnormalised `e_j`; `S + (h/2)·K` is non-singular while every |l_j| > 0.
 //! The force on the ends is `−c_j σ_j e_j` and the power `Σ c_j |l_j|² σ_j²`. No square root
 //! or normalising division is on the increment's chain. Where no line turns, `I + (h/2)·K` is
-//! the same at every increment of a step, and its inverse is formed once per step. A single
-//! turning dashpot (the axial dashpots of the springs cases) solves its 1×1 system in
+//! the same at every increment of a step, and its inverse is formed once per step. A scene with
+//! a single dashpot (every springs seed case), turning or not, keeps its 1×1 solve in
 //! registers.
 
 use super::model::{
@@ -40,6 +40,8 @@ type End<S> = (usize, usize, <S as Space>::V, <S as Space>::V);
 pub struct ParticleDashpots<S: Space> {
     list: Vec<ParticleDashpot<S>>,
     /// Each dashpot's moving ends at this increment (for the whole step where no line turns).
+    /// A single turning dashpot keeps its ends in registers and leaves this, `span_squares`
+    /// and `system` unused.
     ends: Vec<End<S>>,
     /// Each dashpot's |l|² at this increment (1 for a fixed unit line).
     span_squares: [f64; MAX_DASHPOTS],
@@ -214,6 +216,22 @@ impl<S: Space> ParticleDashpots<S> {
             }
             return dashpot.c * span_square * sigma * sigma;
         }
+        if let (Some(inverse), [dashpot]) = (&self.steady, self.list.as_slice()) {
+            // One steady line: E w and σ in registers, the same sums in the same order as
+            // below (whose arrays on the stack sat on the increment's chain).
+            let mut rhs = 0.0;
+            for &(_, p, e, _) in &self.ends {
+                rhs += e.dot(&centred(p));
+            }
+            let sigma = inverse[0] * rhs;
+            for &(_, p, _, g) in &self.ends {
+                acc.p[p] -= g * (dashpot.c * sigma);
+                if let Some(v_n) = v_n.as_deref_mut() {
+                    v_n.p[p] = v_half.p[p] + acc.p[p] * (0.5 * h);
+                }
+            }
+            return dashpot.c * self.span_squares[0] * sigma * sigma;
+        }
         // σ_j: the rates over |l_j| (the rates themselves on fixed unit lines).
         let mut sigma = [0.0; MAX_DASHPOTS];
         if let Some(inverse) = &self.steady {
@@ -222,16 +240,13 @@ impl<S: Space> ParticleDashpots<S> {
             for &(i, p, e, _) in &self.ends {
                 rhs[i] += e.dot(&centred(p));
             }
-            if k == 1 {
-                sigma[0] = inverse[0] * rhs[0];
-            } else {
-                for (j, s) in sigma[..k].iter_mut().enumerate() {
-                    *s = inverse[j * k..(j + 1) * k]
-                        .iter()
-                        .zip(&rhs)
-                        .map(|(a, b)| a * b)
-                        .sum();
-                }
+            // k ≥ 2 here (one dashpot is solved above).
+            for (j, s) in sigma[..k].iter_mut().enumerate() {
+                *s = inverse[j * k..(j + 1) * k]
+                    .iter()
+                    .zip(&rhs)
+                    .map(|(a, b)| a * b)
+                    .sum();
             }
         } else {
             self.fill_ends(model, cfg, held);
@@ -240,13 +255,8 @@ impl<S: Space> ParticleDashpots<S> {
             for &(i, p, e, _) in &self.ends {
                 self.system[i * width + k] += e.dot(&centred(p));
             }
-            if k == 1 {
-                // The reciprocal depends on the configuration alone: formed beside the
-                // force pass, it leaves one product after E w instead of a division.
-                sigma[0] = self.system[1] * (1.0 / self.system[0]);
-            } else {
-                eliminate(&mut self.system, k, &mut sigma);
-            }
+            // k ≥ 2 here: a single dashpot is either steady or turning (above).
+            eliminate(&mut self.system, k, &mut sigma);
         }
         let mut power = 0.0;
         for (j, dashpot) in self.list.iter().enumerate() {

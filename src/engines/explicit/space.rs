@@ -644,6 +644,7 @@ impl Space for Spatial {
     fn inertia_apply(i: &Self::Inertia, w: &Self::W) -> Self::W {
         i * w
     }
+    #[inline(always)]
     fn advance_compensated(r: &Self::R, carry: &mut [f64; 4], dtheta: &Vector3<f64>) -> Self::R {
         // exp(dθ/2) − 1 = (cos(|dθ|/2) − 1, sin(|dθ|/2)/|dθ| · dθ) = (w, (½ + t) dθ).
         let angle2 = dtheta.norm_squared();

@@ -205,6 +205,74 @@ proptest! {
         prop_assert!((alpha - alpha_dense.z).abs() <= TOLERANCE * scale);
     }
 
+    /// A 3D body that turns about one free axis g, pinned at its reference node or with its
+    /// mass centre there (0–2 translations held), with an anisotropic inertia in tilted axes:
+    /// its solve with the operator formed at the orientation R₀ where a step starts gives,
+    /// after any turn φ about g (R = Rot(g, φ)·R₀), the turned body's accelerations, as the
+    /// dense system at R solves them. The explicit engine forms such a body's operator once
+    /// per dynamic step (`Model::fix_single_axis_operators`) on this ground: the operator is
+    /// g·R I Rᵀg, and Rᵀg = R₀ᵀg. A turn about any other axis changes it (checked below, so
+    /// that the test can fail).
+    #[test]
+    fn spatial_operator_at_the_start_serves_every_turn_about_its_axis(
+        mass in 0.5..50.0f64,
+        centre in vector(),
+        principal in [0.1..10.0f64, 0.1..10.0f64, 0.1..10.0f64],
+        axes in vector(),
+        start in vector(),
+        frame_r in vector(),
+        frame_t in vector(),
+        turn in -3.2..3.2f64,
+        pinned in any::<bool>(),
+        count_t in 0usize..=2,
+        force in vector(),
+        moment in vector(),
+    ) {
+        let principal = Matrix3::from_diagonal(&Vector3::from(principal));
+        let tilt = Rotation3::new(scaled(axes, 3.0));
+        let centre = if pinned { scaled(centre, 2.0) } else { Vector3::zeros() };
+        let inertia = tilt.matrix() * principal * tilt.matrix().transpose()
+            + (Matrix3::identity() * centre.norm_squared() - centre * centre.transpose()) * mass;
+        let held_r = held(&Rotation3::new(scaled(frame_r, 3.0)), 2);
+        let free_r = Spatial::free_rotations(&held_r);
+        let g = free_r[0];
+        let held_t = held(&Rotation3::new(scaled(frame_t, 3.0)), if pinned { 3 } else { count_t });
+        let oriented = |q: UnitQuaternion<f64>| BodyInertia::<Spatial> {
+            mass,
+            centre: q * centre,
+            inertia,
+            orientation: Some(Orientation::new(q)),
+        };
+        let q0 = UnitQuaternion::new(scaled(start, 3.0));
+        let at_start = BodyOperator::of(&oriented(q0), &held_t, &free_r);
+        let (force, moment) = (scaled(force, 100.0), scaled(moment, 100.0));
+
+        let turned = oriented(UnitQuaternion::from_scaled_axis(g * turn) * q0);
+        let (a, alpha) = BodySolve::with(&turned, &held_t, &free_r, at_start).solve(&force, &moment);
+        let (a_dense, alpha_dense) = dense_3d(&turned, &held_t, &held_r, &force, &moment);
+        let scale = a_dense.norm().max(alpha_dense.norm()).max(1.0);
+        prop_assert!((a - a_dense).norm() <= TOLERANCE * scale, "a {a} against {a_dense}");
+        prop_assert!(
+            (alpha - alpha_dense).norm() <= TOLERANCE * scale,
+            "alpha {alpha} against {alpha_dense}"
+        );
+
+        // Turned as far about a held axis instead, the body's inertia about g changes (unless
+        // the turn or the anisotropy is small), and the operator at the start no longer serves.
+        let wrong = oriented(UnitQuaternion::from_scaled_axis(held_r[0] * turn) * q0);
+        let axial_change = (wrong.axial(&g) - turned.axial(&g)).abs();
+        if axial_change > 1e-3 * turned.axial(&g) {
+            let (_, alpha_wrong) =
+                BodySolve::with(&wrong, &held_t, &free_r, at_start).solve(&force, &moment);
+            let (_, alpha_wrong_dense) = dense_3d(&wrong, &held_t, &held_r, &force, &moment);
+            let relative = (alpha_wrong - alpha_wrong_dense).norm() / alpha_wrong_dense.norm();
+            prop_assert!(
+                relative > 1e-6 || alpha_wrong_dense.norm() < 1e-3,
+                "a turn about a held axis left the operator serving: {relative:e}"
+            );
+        }
+    }
+
     /// A planar body pinned at its reference node, or with its mass centre there, turned to
     /// any orientation: its solve with the operator formed at rest gives the turned body's
     /// accelerations bit for bit. The explicit engine forms such a body's operator once per

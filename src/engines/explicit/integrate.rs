@@ -350,7 +350,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
     }
 
     for (si, step) in scene.steps.iter().enumerate() {
-        let held = model.constraints(scene, step);
+        let mut held = model.constraints(scene, step);
         let StepKind::Dynamic {
             duration: step_duration,
         } = step.kind
@@ -402,6 +402,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 past_limit = PastLimit::new(&model, &cfg, &held, h, settings.damping);
             }
         }
+        model.fix_single_axis_operators(&cfg, &mut held);
         // A scene of particles and springs that all lie along one axis, of any size, takes its
         // one-pass increments by blocks on a one-dimensional store, written back before any
         // other increment reads the state (faster than the two passes even in cache).

@@ -351,7 +351,9 @@ pub struct Constraints<S: Space> {
     /// axis, which turning leaves as it is). `None` for every other body under finite
     /// rotation (formed at every increment from the configuration's mass properties), among
     /// them some whose operator happens not to change either, such as a 3D body with every
-    /// rotation held.
+    /// rotation held. A dynamic step sets those of the 3D bodies that turn about one axis,
+    /// pinned or with their mass centre at the reference node, at the orientation where it
+    /// starts ([`Model::fix_single_axis_operators`]).
     pub body_operators: Vec<Option<BodyOperator<S>>>,
 }
 
@@ -1799,6 +1801,34 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             }
         }
         c
+    }
+
+    /// For a dynamic step that starts at `cfg`: the operator of every 3D body under finite
+    /// rotation that turns about one free axis g and is pinned at its reference node or has its
+    /// mass centre there, formed once at `cfg` instead of at every increment.
+    ///
+    /// Such a body's angular velocity stays along g (its solve returns α along g, and the step
+    /// starts with the held components removed), so its orientation over the step is
+    /// R = Rot(g, φ)·R₀, and Rᵀg = R₀ᵀg: its operator, g·R I Rᵀg (the drag terms are zero when
+    /// pinned, and with the centre at O), does not change. Formed at each increment it would
+    /// differ from this one only by the rounding of the orientation's update
+    /// (`tests/body_solve.rs`). In the plane [`Model::constraints`] already forms it; a static
+    /// step keeps forming it from its configuration.
+    pub fn fix_single_axis_operators(&self, cfg: &Config<S>, held: &mut Constraints<S>) {
+        if !FINITE || S::ROT != 3 {
+            return;
+        }
+        for b in 0..self.bodies.len() {
+            let pinned = held.body_held_t[b].len() == S::DIM;
+            let centred = self.bodies[b].inertia.centre == S::V::zero();
+            if held.body_free_r[b].len() == 1 && (pinned || centred) {
+                held.body_operators[b] = Some(BodyOperator::of(
+                    self.body_inertia(cfg, b),
+                    &held.body_held_t[b],
+                    &held.body_free_r[b],
+                ));
+            }
+        }
     }
 
     /// Move a configuration along a generalised DOF by `delta`.

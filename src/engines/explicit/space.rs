@@ -786,7 +786,7 @@ impl<'a, S: Space> BodySolve<'a, S> {
 
 impl<S: Space> BodyOperator<S> {
     /// Factorise the reduced rotational operator of body `b` under its constraints.
-    #[inline]
+    #[inline(always)]
     pub fn of(b: &BodyInertia<S>, held_translations: &[S::V], free_rotations: &[S::W]) -> Self {
         let mut drag = [S::V::zero(); 3];
         let pinned = held_translations.len() == S::DIM;
@@ -827,7 +827,7 @@ impl<S: Space> BodyOperator<S> {
 
 impl<S: Space> BodySolve<'_, S> {
     /// The accelerations `(a, α)` of the reference node under `force` and `moment`.
-    #[inline]
+    #[inline(always)]
     pub fn solve(&self, force: &S::V, moment: &S::W) -> (S::V, S::W) {
         let n = self.free_rotations.len();
         let pinned = self.held_translations.len() == S::DIM;

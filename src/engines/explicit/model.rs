@@ -365,7 +365,7 @@ impl<S: Space> Constraints<S> {
 
     /// The solve of body `b` at mass properties `inertia` under this step's constraints, with
     /// the step's operator where it has one ([`Constraints::body_operators`]).
-    #[inline]
+    #[inline(always)]
     pub fn body_solve<'a>(&'a self, inertia: &'a BodyInertia<S>, b: usize) -> BodySolve<'a, S> {
         let (held_t, free_r) = (&self.body_held_t[b], &self.body_free_r[b]);
         match self.body_operators[b] {

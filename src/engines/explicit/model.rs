@@ -1491,27 +1491,28 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             let inertia = self.body_inertia(cfg, b);
             let solve = held.body_solve(inertia, b);
             counters.body_solves += 1;
-            let (a0, alpha0) = solve.solve(&forces.b[b], &forces.m[b]);
             if !(FINITE && held.velocity_terms[b]) {
-                out.b[b] = a0;
-                out.w[b] = alpha0;
+                (out.b[b], out.w[b]) = solve.solve(&forces.b[b], &forces.m[b]);
                 continue;
             }
+            // On the one axis g the solves give α = s·g: s read directly, not as g·α (in 3D
+            // two dependent steps fewer on the increment's chain).
+            let (a0, p) = solve.solve_on_axis(&forces.b[b], &forces.m[b]);
             let g = held.body_free_r[b][0];
             let unit_force = S::cross(&g, &S::cross(&g, &inertia.centre)) * (-inertia.mass);
             // The gyroscopic moment at ω = g, g × I g, is perpendicular to g, and the solve on
             // the one axis g reads only the moment along it: left out, as in
             // `accelerate_bodies`.
             counters.body_solves += 1;
-            let (a1, alpha1) = solve.solve(&unit_force, &S::W::zero());
-            let beta = 0.5 * h * g.dot(&alpha1);
-            let gamma = g.dot(&v_half.w[b]) + 0.5 * h * g.dot(&alpha0);
+            let (a1, q) = solve.solve_on_axis(&unit_force, &S::W::zero());
+            let beta = 0.5 * h * q;
+            let gamma = g.dot(&v_half.w[b]) + 0.5 * h * p;
             let Some(rate) = centred_rate(beta, gamma) else {
                 return false;
             };
             let squared = rate * rate;
             out.b[b] = a0 + a1 * squared;
-            out.w[b] = alpha0 + alpha1 * squared;
+            out.w[b] = g * (p + q * squared);
         }
         true
     }

@@ -564,9 +564,18 @@ fn solve(
         let mut t = t0;
         let check = interval / EVENT_CHECKS_PER_ROW as f64;
         // This step reports the output times up to its end (the last step: all the rest);
-        // a time on a boundary belongs to the later step.
-        while next < times.len() && (dynamic_index == dynamic_count || times[next] < end - tol) {
-            let target = times[next];
+        // a time on a boundary belongs to the later step. A step that another dynamic step
+        // follows is integrated past its last row to its end, where the next one starts.
+        loop {
+            let output =
+                next < times.len() && (dynamic_index == dynamic_count || times[next] < end - tol);
+            let target = if output {
+                times[next]
+            } else if dynamic_index < dynamic_count && t < end - tol {
+                end
+            } else {
+                break;
+            };
             while target > t + tol {
                 let to = if target - t > 1.5 * check {
                     t + check
@@ -671,6 +680,9 @@ fn solve(
                 if t >= target - tol {
                     t = target;
                 }
+            }
+            if !output {
+                continue;
             }
             at = mechanism.unpack(y.as_slice());
             w = DVector::from_column_slice(&y.as_slice()[np..]);

@@ -344,16 +344,20 @@ pub struct Constraints<S: Space> {
     pub rotating: Vec<bool>,
     /// Bodies whose centripetal or gyroscopic terms act on a free DOF in this step.
     pub velocity_terms: Vec<bool>,
-    /// Per body, its solve's operator where it cannot change during the step, formed here once
-    /// instead of at every increment: under small rotations (a body keeps its reference mass
-    /// properties), and under finite rotation in the plane for a body pinned at its reference
-    /// node or with its mass centre there (the operator is then the inertia about the one
-    /// axis, which turning leaves as it is). `None` for every other body under finite
-    /// rotation (formed at every increment from the configuration's mass properties), among
-    /// them some whose operator happens not to change either, such as a 3D body with every
-    /// rotation held. A dynamic step sets those of the 3D bodies that turn about one axis,
-    /// pinned or with their mass centre at the reference node, at the orientation where it
-    /// starts ([`Model::fix_single_axis_operators`]).
+    /// Per body, its solve's operator where it does not change during the step, formed once
+    /// instead of at every increment:
+    /// - here, under small rotations (a body keeps its reference mass properties), and under
+    ///   finite rotation in the plane for a body pinned at its reference node or with its mass
+    ///   centre there (the operator is then the inertia about the one axis, which turning
+    ///   leaves as it is);
+    /// - at the start of each dynamic step, at the orientation the step starts from, for a 3D
+    ///   body under finite rotation that turns about one free axis, pinned or with its mass
+    ///   centre at the node ([`Model::fix_single_axis_operators`]; the same up to the rounding
+    ///   of the orientation's update).
+    ///
+    /// `None` for every other body under finite rotation (formed at every increment from the
+    /// configuration's mass properties), among them some whose operator happens not to change
+    /// either, such as a 3D body with every rotation held.
     pub body_operators: Vec<Option<BodyOperator<S>>>,
 }
 
@@ -1811,10 +1815,12 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// Such a body's angular velocity stays along g (its solve returns α along g, and the step
     /// starts with the held components removed), so its orientation over the step is
     /// R = Rot(g, φ)·R₀, and Rᵀg = R₀ᵀg: its operator, g·R I Rᵀg (the drag terms are zero when
-    /// pinned, and with the centre at O), does not change. Formed at each increment it would
-    /// differ from this one only by the rounding of the orientation's update
-    /// (`tests/body_solve.rs`). In the plane [`Model::constraints`] already forms it; a static
-    /// step keeps forming it from its configuration.
+    /// pinned, and with the centre at O), does not change (`tests/body_solve.rs` checks the
+    /// operator at R₀ against the dense system at any such R; `tests/spin.rs`, a whole run
+    /// against `reference`). Formed at each increment it would differ from this one only by
+    /// rounding: the orientation's update, and the round-off of ω off g that the step's start
+    /// leaves. In the plane [`Model::constraints`] already forms it. Called after the step's
+    /// configuration is final (the consistent start forms its own operators before).
     pub fn fix_single_axis_operators(&self, cfg: &Config<S>, held: &mut Constraints<S>) {
         if !FINITE || S::ROT != 3 {
             return;

@@ -736,9 +736,9 @@ pub struct BodySolve<'a, S: Space> {
 }
 
 /// The part of a [`BodySolve`] that depends on the body's mass properties and constraints
-/// only, not on the loads: formed once per step where it cannot change over the step (every
-/// body under small rotations; under finite rotation a planar body pinned at its reference
-/// node or with its mass centre there; `Constraints::body_operators`).
+/// only, not on the loads: formed once per step where it does not change over the step (every
+/// body under small rotations; under finite rotation a body that turns about one axis, pinned
+/// at its reference node or with its mass centre there; `Constraints::body_operators`).
 #[derive(Debug, Clone, Copy)]
 pub struct BodyOperator<S: Space> {
     /// `w_i = Q(g_i × c)`, the translation each unit rotation rate drags through the held
@@ -831,6 +831,7 @@ impl<S: Space> BodySolve<'_, S> {
     /// caller that needs only s then reads without forming α and projecting it back.
     #[inline(always)]
     pub fn solve_on_axis(&self, force: &S::V, moment: &S::W) -> (S::V, f64) {
+        debug_assert_eq!(self.free_rotations.len(), 1, "one free rotation axis");
         // As in `BodyOperator::of`, written out (the reciprocal pivot is NaN where the
         // factorisation failed).
         let (g, inverse) = (&self.free_rotations[0], self.operator.factor[0][0]);

@@ -358,7 +358,12 @@ macro_rules! backend {
                         world.impulse_joints.remove(h, true);
                     }
                     for j in &step.joints {
-                        let data = joint(j)?;
+                        // Held again after a step that left it free: held where it is.
+                        let data = if j.refit.iter().any(|&r| r) {
+                            joint(&j.fitted(&state(&world.bodies[handles[j.body2]])))?
+                        } else {
+                            joint(j)?
+                        };
                         step_joints.push(world.impulse_joints.insert(
                             handles[j.body1],
                             handles[j.body2],

@@ -155,6 +155,50 @@ pub struct JointSpec {
     pub frame2: Frame,
     /// Kind.
     pub kind: JointKind,
+    /// The DOFs this joint locks that an earlier dynamic step left free (a ground joint of a
+    /// later step only): fitted to the body's pose where the step starts
+    /// ([`JointSpec::fitted`]), so that they are held where they are.
+    pub refit: [bool; 6],
+}
+
+impl JointSpec {
+    /// This ground joint fitted to body 2's state `s` where its step starts, for the DOFs in
+    /// [`JointSpec::refit`] (body 1 is the ground, at the identity pose, and `frame1`'s axes
+    /// are the node's frame R_t).
+    ///
+    /// - A translation held again: the ground frame's origin moved along that axis to the
+    ///   node's position now (along the free axes it stays where a grounded motor measures
+    ///   from).
+    /// - A rotation held again: the body's frame set to q_s⁻¹·T·R_t, with q_s the body's
+    ///   orientation now, so that at the start the joint reads T: no rotation about a held axis.
+    ///   With one rotation left free, about the world axis a, T is the body's twist about a
+    ///   since t = 0, so that a grounded motor on it goes on reading the total twist (the body
+    ///   then turns about a only: q = R_a(Δ)·q_s); with more, T is the identity, and the plan
+    ///   refuses a rotational motor there.
+    pub fn fitted(&self, s: &BodyState) -> JointSpec {
+        let JointKind::Generic { locked, .. } = &self.kind else {
+            return self.clone();
+        };
+        let mut out = self.clone();
+        let axes = self.frame1.rotation;
+        let x = s.point(&self.frame2.origin);
+        for i in (0..3).filter(|&i| self.refit[i]) {
+            let e = axes * Vector3::ith(i, 1.0);
+            out.frame1.origin += e * e.dot(&(x - self.frame1.origin));
+        }
+        if self.refit[3..].iter().any(|&r| r) {
+            let free: Vec<usize> = (0..3).filter(|&i| !locked[3 + i]).collect();
+            let turn = match free[..] {
+                [f] => {
+                    let a = axes * Vector3::ith(f, 1.0);
+                    UnitQuaternion::from_scaled_axis(a * twist(&s.rotation, &a))
+                }
+                _ => UnitQuaternion::identity(),
+            };
+            out.frame2.rotation = s.rotation.inverse() * turn * axes;
+        }
+        out
+    }
 }
 
 /// A velocity component a dynamic step holds (zeroed at its start).
@@ -299,18 +343,25 @@ impl BodyState {
         }
     }
 
-    /// Zero the velocity components a step holds (for this body).
+    /// Zero the velocity components a step holds (for this body), as the scene defines them:
+    /// on the generalised velocities of the body's reference node O, its origin (v_O, ω).
+    /// The held rotations are taken out of ω with v_O kept, so the centre of mass's velocity
+    /// changes by Δω × (G − O); then the held translations are taken out of their nodes'
+    /// velocities.
     pub fn hold(&mut self, com: &Vector3<f64>, held: &[HeldVelocity], me: usize) {
         let g = self.position + self.rotation * com;
+        let before = self.angvel;
         for h in held {
             match *h {
                 HeldVelocity::Rotation { body, axis } if body == me => {
-                    // Keep the velocity of the centre of mass: a held rotation of a body whose
-                    // translations are held too is handled by the translation terms below.
                     self.angvel -= axis * axis.dot(&self.angvel);
                 }
                 _ => {}
             }
+        }
+        let removed = self.angvel - before;
+        if removed != Vector3::zeros() {
+            self.linvel += removed.cross(&(g - self.position));
         }
         for h in held {
             if let HeldVelocity::Translation {
@@ -682,6 +733,7 @@ pub fn plan(scene: &Scene) -> Result<Plan, EngineError> {
                             damping: g.damping,
                         }],
                     },
+                    refit: [false; 6],
                 });
             }
             Connection::Axial { nodes: pair } => {
@@ -716,6 +768,7 @@ pub fn plan(scene: &Scene) -> Result<Plan, EngineError> {
                         stiffness: g.stiffness,
                         damping: g.damping,
                     },
+                    refit: [false; 6],
                 });
             }
         }
@@ -723,6 +776,8 @@ pub fn plan(scene: &Scene) -> Result<Plan, EngineError> {
 
     // Dynamic steps: ground joints (holds + grounded motors) and held velocities.
     let mut steps = Vec::new();
+    // Per node, the joint axes some earlier dynamic step left free.
+    let mut was_free = vec![[false; 6]; scene.nodes.len()];
     for step in &scene.steps[first_dynamic..] {
         let StepKind::Dynamic { duration } = step.kind else {
             unreachable!("checked above")
@@ -753,6 +808,10 @@ pub fn plan(scene: &Scene) -> Result<Plan, EngineError> {
             if bodies[r.body].kind == BodyKind::Particle {
                 locked[3..].fill(false);
             }
+            let refit: [bool; 6] = std::array::from_fn(|i| locked[i] && was_free[id][i]);
+            for (free, l) in was_free[id].iter_mut().zip(locked) {
+                *free |= !l;
+            }
             let motors: Vec<Motor> = element_groups
                 .iter()
                 .filter_map(|g| match g.connection {
@@ -767,6 +826,16 @@ pub fn plan(scene: &Scene) -> Result<Plan, EngineError> {
                 .collect();
             if !locked.iter().any(|&l| l) && motors.is_empty() {
                 continue;
+            }
+            let free_rotations = locked[3..].iter().filter(|l| !**l).count();
+            if refit[3..].iter().any(|&r| r)
+                && free_rotations > 1
+                && motors.iter().any(|m| m.axis >= 3)
+            {
+                return unsupported(format!(
+                    "node `{}`: a rotation held again after a dynamic step left it free, with a grounded rotational spring or dashpot on one of two rotations still free",
+                    node.name
+                ));
             }
             // Held where the static steps left it; motors measured from t = 0.
             let x0 = node.position;
@@ -798,6 +867,7 @@ pub fn plan(scene: &Scene) -> Result<Plan, EngineError> {
                     rotation,
                 },
                 kind: JointKind::Generic { locked, motors },
+                refit,
             });
         }
         steps.push(StepSpec {

@@ -24,7 +24,10 @@
 //! force-based motor on each free DOF with grounded elements (target 0 at the undeformed
 //! geometry: the ground frame's origin is the node's position at t = 0, moved along the held
 //! axes by whatever displacement the static steps left there, so a held DOF is held where it
-//! is).
+//! is). A DOF held again after an earlier dynamic step left it free is held where that step
+//! left it: the joint is fitted to the body's pose when its step starts
+//! ([`JointSpec::fitted`]); beside a rotational motor on two free rotations it cannot be, and
+//! the scene is unsupported.
 //!
 //! Fixed-direction elements become a motor on a joint whose first frame is fixed to the ground
 //! (or to a particle, which never rotates) with its x axis along the direction and its origin at
@@ -50,8 +53,9 @@
 //! Static steps (before the first dynamic one) apply their prescribed displacements to the
 //! initial positions; a DOF they leave free must carry no force there, or the scene is
 //! unsupported (rapier has no static solve). At the start of every dynamic step the velocity
-//! components along the DOFs it holds are zeroed (the first one after the scene's initial
-//! velocities are applied, converted to centre-of-mass velocities v_G = v_O + ω × (R c)).
+//! components along the DOFs it holds are zeroed, on the reference node's velocities as the
+//! scene defines them (the first one after the scene's initial velocities are applied,
+//! converted to centre-of-mass velocities v_G = v_O + ω × (R c); [`BodyState::hold`]).
 
 use crate::engines::EngineError;
 use crate::scene::{

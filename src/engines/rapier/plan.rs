@@ -174,7 +174,8 @@ impl JointSpec {
     ///   node's position now (along the free axes it stays where a grounded motor measures
     ///   from).
     /// - A rotation held again: the body's frame set to q_s⁻¹·T·R_t, with q_s the body's
-    ///   orientation now, so that at the start the joint reads T: no rotation about a held axis.
+    ///   orientation now, so that at the start the joint reads R_t⁻¹·T·R_t, a rotation about
+    ///   its free axis only: none about a held one.
     ///   With one rotation left free, about the world axis a, T is the body's twist about a
     ///   since t = 0, so that a grounded motor on it goes on reading the total twist (the body
     ///   then turns about a only: q = R_a(Δ)·q_s); with more, T is the identity, and the plan
@@ -191,6 +192,7 @@ impl JointSpec {
             out.frame1.origin += e * e.dot(&(x - self.frame1.origin));
         }
         if self.refit[3..].iter().any(|&r| r) {
+            // In 2D only rz is ever locked, so holding it again leaves rx and ry "free": T = 1.
             let free: Vec<usize> = (0..3).filter(|&i| !locked[3 + i]).collect();
             let turn = match free[..] {
                 [f] => {

@@ -316,7 +316,8 @@ fn a_turn_about_a_tilted_axis_after_a_free_one_follows_the_reference() {
         // step's joints were fitted to the pose the step starts from, the held rotations
         // snapped the pinned body back towards its orientation at t = 0 (1.4 of the peak);
         // before the held rotations were taken out with the node's velocity kept (not the
-        // centre of mass's), the sliding body's node started the step moving (2.0).
+        // centre of mass's), the sliding body's node started the step moving (2.0). Without
+        // the translation's fit, O held again is pulled back to where it started (1.3, tried).
         // With a grounded spring on the tilted axis, rapier's motor reads the angle as
         // 2·asin of the relative rotation's component on its axis, not the twist the scene
         // defines; the two part while the body also swings (the first step, every rotation

@@ -324,8 +324,15 @@ fn a_turn_about_a_tilted_axis_after_a_free_one_follows_the_reference() {
         // free): 1.6e-4 of the peak by the first step's end, 3.0e-3 at worst after, with no
         // jump at the boundary. 1e-2 bounds it; a motor that read 0 instead of the twist since
         // t = 0 when the second step starts fails it (tried: 0.37).
+        // rapier_f32, the same plan in single precision: measured 3.3e-3 to 2.6e-2 of the
+        // peak (its f32 solver and integration, as on the seed cases); 5e-2 bounds it, far
+        // below a snap at the step's start.
         let rapier = if extra.is_empty() { 1e-3 } else { 1e-2 };
-        for (engine, bound) in [("explicit", 1e-6), ("rapier_f64", rapier)] {
+        for (engine, bound) in [
+            ("explicit", 1e-6),
+            ("rapier_f64", rapier),
+            ("rapier_f32", 5e-2),
+        ] {
             let history = run(engine);
             for name in ["ux_P", "uy_P", "uz_P", "ux"] {
                 let column = |h: &History| -> Vec<f64> {
@@ -345,8 +352,12 @@ fn a_turn_about_a_tilted_axis_after_a_free_one_follows_the_reference() {
                 );
                 if name == "ux" && first_hold == PINNED && hold == TURNING {
                     // O is pinned: exactly under explicit; rapier's joint holds it to its
-                    // solver's residual (measured 8.9e-10 m).
-                    let held = if engine == "explicit" { 0.0 } else { 1e-8 };
+                    // solver's residual (measured 8.9e-10 m in f64, 3.0e-7 m in f32).
+                    let held = match engine {
+                        "explicit" => 0.0,
+                        "rapier_f64" => 1e-8,
+                        _ => 1e-6,
+                    };
                     assert!(worst <= held, "{what}: {engine}: O is pinned: {worst:e}");
                     continue;
                 }

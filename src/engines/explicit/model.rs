@@ -1796,8 +1796,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             // operator reads only the inertia about the axis (g·I g with g unturned, see
             // `BodyInertia::axial`) and, unless pinned, the centre, which stays zero where it
             // starts there (`Model::oriented`): the same operator, bit for bit.
-            let (pinned, centred) = (free_t == 0, centre == S::V::zero());
-            if !FINITE || (S::ROT == 1 && (pinned || centred)) {
+            if !FINITE || (S::ROT == 1 && self.turns_in_place(&c, b)) {
                 c.body_operators[b] = Some(BodyOperator::of(
                     &self.bodies[b].inertia,
                     &c.body_held_t[b],
@@ -1806,6 +1805,13 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             }
         }
         c
+    }
+
+    /// Whether body `b` turns in place under `held`: pinned at its reference node, or with its
+    /// mass centre there (which turning leaves there, `Model::oriented`), so that its solve
+    /// has no drag terms and, about one free axis, an operator that turning leaves as it is.
+    fn turns_in_place(&self, held: &Constraints<S>, b: usize) -> bool {
+        held.body_held_t[b].len() == S::DIM || self.bodies[b].inertia.centre == S::V::zero()
     }
 
     /// For a dynamic step that starts at `cfg`: the operator of every 3D body under finite
@@ -1826,9 +1832,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             return;
         }
         for b in 0..self.bodies.len() {
-            let pinned = held.body_held_t[b].len() == S::DIM;
-            let centred = self.bodies[b].inertia.centre == S::V::zero();
-            if held.body_free_r[b].len() == 1 && (pinned || centred) {
+            if held.body_free_r[b].len() == 1 && self.turns_in_place(held, b) {
                 held.body_operators[b] = Some(BodyOperator::of(
                     self.body_inertia(cfg, b),
                     &held.body_held_t[b],

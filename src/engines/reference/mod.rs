@@ -7,8 +7,8 @@
 //! as a constraint solved with its multiplier at every evaluation, independently of the
 //! explicit engine's force assembly, and integrated by Dormand–Prince 8(5,3) with error control
 //! (`ode_solvers::Dop853`) at a relative tolerance of [`TOLERANCE`], restarted at every output
-//! time so no row is interpolated, and at the end of every dynamic step another follows. The whole solution is computed twice, the second time at
-//! half the tolerance and with steps of at most half an output interval (so it takes another
+//! time so no row is interpolated, and at the end of every dynamic step another follows. The
+//! whole solution is computed twice, the second time at half the tolerance and with steps of at most half an output interval (so it takes another
 //! path even where one step per row meets both tolerances); the largest change of any column
 //! over its peak is reported as the measure `tolerance_halving_change` (summary.json), with
 //! `constraint_drift` (the largest departure of a closed contact's gap from zero, in length

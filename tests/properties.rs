@@ -14,6 +14,8 @@ use proptest::sample::Index;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+mod common;
+
 // ---------------------------------------------------------------------------------------------
 // Random spring/dashpot/mass scenes.
 // ---------------------------------------------------------------------------------------------
@@ -433,17 +435,12 @@ fn run(engine: &ExplicitEngine, scene: &Scene, settings: &RunSettings, text: &st
 
 const CONTRACT: [&str; 4] = ["u_end", "u_mid", "v_end", "v_mid"];
 
-/// `cases` cases, or `PROPTEST_CASES` when set (for a deeper run); no regression files (this
+/// `cases` cases from a fixed seed (`common::proptest_config`); no regression files (this
 /// test keeps none on disk).
 fn config(cases: u32) -> ProptestConfig {
-    let cases = std::env::var("PROPTEST_CASES")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(cases);
     ProptestConfig {
-        cases,
         failure_persistence: None,
-        ..ProptestConfig::default()
+        ..common::proptest_config(cases)
     }
 }
 

@@ -98,3 +98,16 @@ pub fn variant(id: &str, edits: &[(&str, &str)]) -> Scene {
     }
     case::parse(&text, &path).unwrap_or_else(|e| panic!("{e}"))
 }
+
+/// Proptest's configuration for `cases` cases drawn from a fixed seed, so that every run (CI's
+/// included) draws the same inputs and a test either always passes or always fails.
+/// `PROPTEST_CASES` and `PROPTEST_RNG_SEED` in the environment draw more or other inputs (a
+/// deeper run, as the bounds' margins were checked with).
+pub fn proptest_config(cases: u32) -> proptest::test_runner::Config {
+    let env = |name| std::env::var(name).ok().and_then(|v| v.parse::<u64>().ok());
+    proptest::test_runner::Config {
+        cases: env("PROPTEST_CASES").map_or(cases, |c| c as u32),
+        rng_seed: proptest::test_runner::RngSeed::Fixed(env("PROPTEST_RNG_SEED").unwrap_or(11)),
+        ..proptest::test_runner::Config::default()
+    }
+}

@@ -517,20 +517,34 @@ impl Orientation {
     }
 }
 
-/// An orthonormal basis whose leading vectors are the given orthonormal ones.
+/// An orthonormal basis whose leading vectors are the given orthonormal ones, completed by
+/// Gram–Schmidt from the coordinate axis that keeps the most after projecting out the columns
+/// so far. That residual is at least 1/√3 long (the squared residuals of the three axes sum to
+/// the number of columns still missing), so each new column is orthogonal to the others to
+/// round-off. Completing from the first axis whose residual merely exceeds a threshold lost
+/// up to the threshold's reciprocal in relative precision: a held frame tilted 1e-5 off an
+/// axis gave a free axis orthogonal to it only to 1e-11.
 fn basis_with(leading: &[Vector3<f64>]) -> Matrix3<f64> {
     let mut cols: Vec<Vector3<f64>> = leading.to_vec();
-    for e in [Vector3::x(), Vector3::y(), Vector3::z()] {
-        if cols.len() == 3 {
-            break;
-        }
-        let mut v = e;
-        for c in &cols {
-            v -= c * c.dot(&v);
-        }
-        if v.norm() > 1e-6 {
-            cols.push(v.normalize());
-        }
+    while cols.len() < 3 {
+        let residual = |e: Vector3<f64>| {
+            let mut v = e;
+            for c in &cols {
+                v -= c * c.dot(&v);
+            }
+            v
+        };
+        let v = [Vector3::x(), Vector3::y(), Vector3::z()]
+            .map(residual)
+            .into_iter()
+            .fold(Vector3::zeros(), |best, v| {
+                if v.norm_squared() > best.norm_squared() {
+                    v
+                } else {
+                    best
+                }
+            });
+        cols.push(v.normalize());
     }
     Matrix3::from_columns(&cols)
 }

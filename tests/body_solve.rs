@@ -5,7 +5,7 @@
 //! equations they solve.
 
 use crosscheck::engines::explicit::space::{
-    BodyInertia, BodyOperator, BodySolve, Orientation, Planar, Space, Spatial,
+    BodyInertia, BodyOperator, BodySolve, Heading, Orientation, Planar, Space, Spatial,
 };
 use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, UnitQuaternion, Vector2, Vector3};
 use proptest::prelude::*;
@@ -339,7 +339,7 @@ proptest! {
             inertia: polar + mass * centre.norm_squared(),
             orientation: None,
         };
-        let r = nalgebra::UnitComplex::new(turn);
+        let r = Heading::new(turn);
         // As the engine turns a body's mass properties: a centre at the node stays there.
         let turned = BodyInertia::<Planar> {
             centre: if centre == Vector2::zeros() { centre } else { Planar::rotate(&r, &centre) },

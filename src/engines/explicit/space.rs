@@ -2,7 +2,7 @@
 //! compiles to 2D arithmetic only (no 3D rotation, no 6×6 solve).
 
 use crate::scene::Solid;
-use nalgebra::{Matrix3, UnitComplex, UnitQuaternion, Vector2, Vector3};
+use nalgebra::{Matrix3, UnitQuaternion, Vector2, Vector3};
 use std::fmt::Debug;
 use std::marker::PhantomData;
 use std::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
@@ -309,7 +309,8 @@ pub struct Spatial;
 
 impl Space for Planar {
     fn unrotate(r: &Self::R, x: &Self::V) -> Self::V {
-        r.inverse_transform_vector(x)
+        let (c, s) = (r.cos(), r.sine);
+        Vector2::new(c * x.x + s * x.y, c * x.y - s * x.x)
     }
     fn solid(solid: &Solid) -> SharedSolid<Self> {
         use parry2d_f64::shape::SharedShape;
@@ -370,7 +371,7 @@ impl Space for Planar {
     }
     type V = Vector2<f64>;
     type W = f64;
-    type R = UnitComplex<f64>;
+    type R = Heading;
     type Carry = [f64; 2];
     type Inertia = f64;
     const DIM: usize = 2;
@@ -392,17 +393,15 @@ impl Space for Planar {
         i[(2, 2)]
     }
     fn identity() -> Self::R {
-        UnitComplex::identity()
+        Heading::IDENTITY
     }
     fn rotate(r: &Self::R, x: &Self::V) -> Self::V {
-        r * x
+        let (c, s) = (r.cos(), r.sine);
+        Vector2::new(c * x.x - s * x.y, s * x.x + c * x.y)
     }
     fn turned(r: &Self::R, x: &Self::V) -> Self::V {
-        let (c, s) = (r.cos_angle(), r.sin_angle());
-        // cos − 1 = −sin²/(1 + cos) on a unit circle: the sine's relative precision instead
-        // of the cosine's absolute one, wherever the denominator keeps it (cos > 0).
-        let versine = if c > 0.0 { -s * s / (1.0 + c) } else { c - 1.0 };
-        Vector2::new(versine * x.x - s * x.y, s * x.x + versine * x.y)
+        let (v, s) = (r.versine, r.sine);
+        Vector2::new(v * x.x - s * x.y, s * x.x + v * x.y)
     }
     fn rotate_inertia(_: &Self::R, i: &Self::Inertia) -> Self::Inertia {
         *i
@@ -412,38 +411,52 @@ impl Space for Planar {
     }
     #[inline(always)]
     fn advance_compensated(r: &Self::R, carry: &mut [f64; 2], dtheta: &f64) -> Self::R {
-        let (s, c) = (r.sin_angle(), r.cos_angle());
+        // The versine v = c − 1 is what is summed (with its carry), so that it keeps its
+        // relative precision; c = 1 + v enters only products with small factors (x, y, the
+        // excess), where its absolute precision serves.
+        let (v, s) = (r.versine, r.sine);
+        let c = 1.0 + v;
         let x = *dtheta;
-        // The carried value (c, s) − carry misses unit norm by `excess` (a few ulps); the
+        // The carried value (1 + v, s) − carry misses unit norm by `excess` (a few ulps); the
         // factor 1 − excess/2 restores it (a Newton step for 1/|z|) within the increment.
-        let excess = (c * c + s * s - 1.0) - 2.0 * (c * carry[0] + s * carry[1]);
+        // c² + s² − 1 = 2v + v² + s², formed without the 1: near θ = 0, where 2v ≈ −s², its
+        // rounding is of the size of s², not of 1, so the correction does not spread an ulp
+        // of 1 into the versine.
+        let excess = ((2.0 * v + s * s) + v * v) - 2.0 * (c * carry[0] + s * carry[1]);
         let y = x * x;
         if y < TWO_TERMS {
             // The common case (|x| < 2.2e-4): ds = x − x·y/6 and dc = −y/2 + y²/24, as
             // `sin_cos_minus_one` keeps them there, multiplied out into
-            //   c·dc − s·ds − c·excess/2 = −s·x + (c·C₀)·y − ((s·S₀)·x)·y + (c·C₁)·y² − c·excess/2
+            //   δv = c·dc − s·ds − c·excess/2
+            //      = −s·x + (c·C₀)·y − ((s·S₀)·x)·y + (c·C₁)·y² − c·excess/2
             // (and likewise for s), so that what depends only on the orientation and its
             // carry is formed before x arrives, and the chain of dependent operations from x
             // to the new orientation is 6 steps (x·x, ·y, three sums, the compensated sum)
             // instead of 9. Each bracket is less the carry (Kahan's y in `compensated_add`).
             let y2 = y * y;
-            let rest_c = -0.5 * excess * c - carry[0];
+            let rest_v = -0.5 * excess * c - carry[0];
             let rest_s = -0.5 * excess * s - carry[1];
-            let delta_c = ((rest_c - s * x) + ((c * COS[0]) * y - ((s * SINC[0]) * x) * y))
+            let delta_v = ((rest_v - s * x) + ((c * COS[0]) * y - ((s * SINC[0]) * x) * y))
                 + (c * COS[1]) * y2;
             let delta_s = ((rest_s + c * x) + ((s * COS[0]) * y + ((c * SINC[0]) * x) * y))
                 + (s * COS[1]) * y2;
-            let (c1, s1) = (c + delta_c, s + delta_s);
-            carry[0] = (c1 - c) - delta_c;
+            let (v1, s1) = (v + delta_v, s + delta_s);
+            carry[0] = (v1 - v) - delta_v;
             carry[1] = (s1 - s) - delta_s;
-            return UnitComplex::from_cos_sin_unchecked(c1, s1);
+            return Heading {
+                versine: v1,
+                sine: s1,
+            };
         }
         let (ds, dc) = sin_cos_minus_one(x);
         let radial = dc - 0.5 * excess;
-        let (mut c1, mut s1) = (c, s);
-        compensated_add(&mut c1, &mut carry[0], c * radial - s * ds);
+        let (mut v1, mut s1) = (v, s);
+        compensated_add(&mut v1, &mut carry[0], c * radial - s * ds);
         compensated_add(&mut s1, &mut carry[1], s * radial + c * ds);
-        UnitComplex::from_cos_sin_unchecked(c1, s1)
+        Heading {
+            versine: v1,
+            sine: s1,
+        }
     }
     fn twist(r: &Self::R, axis: &Self::W) -> f64 {
         r.angle() * axis
@@ -469,6 +482,60 @@ impl Space for Planar {
         } else {
             Vec::new()
         }
+    }
+}
+
+/// A 2D orientation about z by its versine cos θ − 1 and its sine, the two small parts of the
+/// rotation near θ = 0, each kept to its own relative precision. A body point is displaced by
+/// the rotation as (R − 1) x = (v x − s y, s x + v y) ([`Space::turned`]), without forming
+/// cos θ − 1 from cos θ (which cancels to an ulp of 1) or from −sin²θ/(1 + cos θ) (a division
+/// on the time loop's chain at every increment): the time loop sums the versine itself.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Heading {
+    versine: f64,
+    sine: f64,
+}
+
+impl Heading {
+    /// No turn.
+    pub const IDENTITY: Heading = Heading {
+        versine: 0.0,
+        sine: 0.0,
+    };
+
+    /// The orientation turned by `angle` (rad) from the x axis.
+    pub fn new(angle: f64) -> Self {
+        let half = (0.5 * angle).sin();
+        Self::from_versine_sine(-2.0 * half * half, angle.sin())
+    }
+
+    /// The orientation of versine `versine` (cos θ − 1) and sine `sine`, taken as given (a
+    /// point on the unit circle to round-off).
+    pub fn from_versine_sine(versine: f64, sine: f64) -> Self {
+        Heading { versine, sine }
+    }
+
+    /// cos θ − 1.
+    #[inline]
+    pub fn versine(&self) -> f64 {
+        self.versine
+    }
+
+    /// sin θ.
+    #[inline]
+    pub fn sin(&self) -> f64 {
+        self.sine
+    }
+
+    /// cos θ, 1 + (cos θ − 1) (to an ulp of 1).
+    #[inline]
+    pub fn cos(&self) -> f64 {
+        1.0 + self.versine
+    }
+
+    /// θ in (−π, π].
+    pub fn angle(&self) -> f64 {
+        self.sine.atan2(self.cos())
     }
 }
 

@@ -489,7 +489,8 @@ impl Space for Planar {
 /// rotation near θ = 0, each kept to its own relative precision. A body point is displaced by
 /// the rotation as (R − 1) x = (v x − s y, s x + v y) ([`Space::turned`]), without forming
 /// cos θ − 1 from cos θ (which cancels to an ulp of 1) or from −sin²θ/(1 + cos θ) (a division
-/// on the time loop's chain at every increment): the time loop sums the versine itself.
+/// on the time loop's chain at every increment): the time loop sums the versine itself. Past a
+/// quarter turn the versine's size is that of the cosine (up to 2), and so is its precision.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Heading {
     versine: f64,

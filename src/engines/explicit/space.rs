@@ -589,9 +589,9 @@ impl Orientation {
 /// Gram–Schmidt from the coordinate axis that keeps the most after projecting out the columns
 /// so far. That residual is at least 1/√3 long (the squared residuals of the three axes sum to
 /// the number of columns still missing), so each new column is orthogonal to the others to
-/// round-off. Completing from the first axis whose residual merely exceeds a threshold lost
-/// up to the threshold's reciprocal in relative precision: a held frame tilted 1e-5 off an
-/// axis gave a free axis orthogonal to it only to 1e-11.
+/// round-off. Completing from the first axis whose residual merely exceeded a threshold (1e-6)
+/// lost precision by that residual's reciprocal: two held axes whose free axis lies 2.2e-5 off
+/// a coordinate plane gave one orthogonal to them only to 4e-11.
 fn basis_with(leading: &[Vector3<f64>]) -> Matrix3<f64> {
     let mut cols: Vec<Vector3<f64>> = leading.to_vec();
     while cols.len() < 3 {

@@ -332,8 +332,9 @@ pub fn integrate<S: Space, const FINITE: bool>(
     let mut v_next = model.zero_rates();
     let mut carry = model.zero_rates();
     let mut directions = Vec::new();
-    // Dashpots between particles only: the centred velocity is solved directly.
-    let mut particle_dashpots = ParticleDashpots::of(&model);
+    // Dashpots between particles only: the centred velocity is solved directly (formed per
+    // step, from the step's model).
+    let mut particle_dashpots;
     let mut sampler = RowSampler::new(&times, interval, interval);
     // Solid contacts are watched for a node going through its solid.
     let solids = model.has_solids();
@@ -402,6 +403,12 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 past_limit = PastLimit::new(&model, &cfg, &held, h, settings.damping);
             }
         }
+        // An axial element that cannot turn in this step acts along its fixed line: no square
+        // root or division per increment (`Model::with_lines_held`; the same to round-off).
+        let lines_held = model.with_lines_held(&cfg, &held);
+        let model = lines_held.as_ref().unwrap_or(&model);
+        counters.held_lines += model.held_lines() as u64;
+        particle_dashpots = ParticleDashpots::of(model);
         model.fix_single_axis_operators(&cfg, &mut held);
         // A scene of particles and springs that all lie along one axis, of any size, takes its
         // one-pass increments by blocks on a one-dimensional store, written back before any
@@ -422,7 +429,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
         let direct =
             particle_dashpots.is_some() && model.has_dashpots() && !held.any_velocity_terms();
         if direct && let Some(dashpots) = particle_dashpots.as_mut() {
-            dashpots.prepare(&model, &cfg, &held, h);
+            dashpots.prepare(model, &cfg, &held, h);
         }
         // Without dashpots and with every turning body on one free axis, the centred velocity
         // has a closed form (`Model::centred_single_axis`).
@@ -544,7 +551,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 && n + 1 < first + steps_here
             {
                 let power = centred_directly(
-                    &model,
+                    model,
                     &cfg,
                     &forces,
                     &v_half,
@@ -606,7 +613,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
                         }
                         DampingTreatment::Centred if direct || single_axis => {
                             power = centred_directly(
-                                &model,
+                                model,
                                 &cfg,
                                 &forces,
                                 &v_half,
@@ -687,7 +694,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
                             }
                             if affine_solve {
                                 centred_affine(
-                                    &model,
+                                    model,
                                     &cfg,
                                     &forces,
                                     &directions,
@@ -755,7 +762,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
                     // The modes of a scene above the dense limit are not computed.
                     let mode = if v_next.is_finite() && dofs.len() <= DENSE_LIMIT {
                         growing_mode(
-                            &model,
+                            model,
                             scene,
                             &cfg_start,
                             &held,
@@ -786,7 +793,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 // Above the stable increment: the modes past their limit may not grow, even
                 // where a nonlinearity keeps the total energy under the guard.
                 if let Some(watch) = past_limit.as_mut()
-                    && let Some(growth) = watch.grown(&model, &v_next, 1e-12 * budget)
+                    && let Some(growth) = watch.grown(model, &v_next, 1e-12 * budget)
                 {
                     return Err(unstable(&format!(
                         "the modes past their stability limit grew {growth:.3e}-fold in kinetic energy (over {PAST_LIMIT_GROWTH}×)"

@@ -134,6 +134,9 @@ impl Engine for ExplicitEngine {
         if c.axial_increments > 0 {
             counters.insert("axial_increments".to_string(), c.axial_increments);
         }
+        if c.held_lines > 0 {
+            counters.insert("held_lines".to_string(), c.held_lines);
+        }
         if let Some(n) = pilot_increments {
             counters.insert("pilot_increments".to_string(), n);
         }

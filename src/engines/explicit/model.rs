@@ -222,6 +222,9 @@ pub struct Counters {
     pub block_increments: u64,
     /// Of those, the increments stepped on the one-dimensional store ([`Model::step_axial`]).
     pub axial_increments: u64,
+    /// Axial elements that could not turn in a dynamic step and acted along fixed lines
+    /// ([`Model::with_lines_held`]), summed over the dynamic steps.
+    pub held_lines: u64,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -241,6 +244,10 @@ struct TwoPoint<S: Space> {
     /// Fixed direction, or for axial elements the initial unit direction.
     direction: S::V,
     axial: bool,
+    /// An axial element whose line cannot turn in the current step
+    /// ([`Model::with_lines_held`]): a spring acts along `direction` while its ends keep their
+    /// order along it; a dashpot is then no longer `axial`.
+    line_held: bool,
     /// From end a to end b at t = 0.
     span0: S::V,
     length0: f64,
@@ -702,6 +709,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                         b: points[nodes[1]],
                         direction,
                         axial,
+                        line_held: false,
                         span0,
                         length0: span0.dot(&span0).sqrt(),
                         c: e.coefficient,
@@ -1069,7 +1077,11 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             line_spring_forces::<S::V, ENERGY>(&self.line_springs, &cfg.u, &mut out.p, elastic);
         for s in self.other_springs.iter().map(|k| &self.springs[*k]) {
             let stretch = self.displacement(cfg, &s.b) - self.displacement(cfg, &s.a);
-            let (e, dir) = if s.axial && FINITE {
+            let along = s.direction.dot(&stretch);
+            // A spring held to its line takes the line's force while its span along the line,
+            // length0 + along, stays positive: there it is the turning force to round-off.
+            let turns = s.axial && FINITE && !(s.line_held && along > -s.length0);
+            let (e, dir) = if turns {
                 let l = s.span0 + stretch;
                 let square = l.dot(&l);
                 // 1/|l| as |l|·(1/|l|²): the square root and the division run side by side
@@ -1077,7 +1089,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 let len = square.sqrt();
                 (len - s.length0, l * (len * (1.0 / square)))
             } else {
-                (s.direction.dot(&stretch), s.direction)
+                (along, s.direction)
             };
             if ENERGY {
                 elastic += 0.5 * s.c * e * e;
@@ -1271,6 +1283,77 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         self.damping_along(cfg, &directions, vel, out, counters);
     }
 
+    /// This model for a dynamic step under `held` that starts from `cfg`, where every axial
+    /// element whose line cannot turn in the step ([`Model::line_cannot_turn`]) acts along
+    /// that fixed line: a dashpot always (its force, c (d·Δv) d for a unit d along its span,
+    /// does not change when d reverses), a spring while its ends keep their order along the
+    /// line (once they pass each other its turning force differs, and it takes that).
+    /// There the fixed line is the turning line to round-off, and the increment needs no
+    /// square root or division for it. None where no element is held to its line, and
+    /// always under small rotations, where no element turns.
+    pub fn with_lines_held(&self, cfg: &Config<S>, held: &Constraints<S>) -> Option<Self> {
+        if !FINITE {
+            return None;
+        }
+        let held_to_line = |list: &[TwoPoint<S>]| -> Vec<bool> {
+            list.iter()
+                .map(|s| s.axial && self.line_cannot_turn(s, self.span(cfg, s), held))
+                .collect()
+        };
+        let (springs, dashpots) = (held_to_line(&self.springs), held_to_line(&self.dashpots));
+        if !springs.iter().chain(&dashpots).any(|h| *h) {
+            return None;
+        }
+        let mut model = self.clone();
+        for (s, h) in model.springs.iter_mut().zip(springs) {
+            s.line_held = h;
+        }
+        for (s, h) in model.dashpots.iter_mut().zip(dashpots) {
+            s.line_held = h;
+            s.axial &= !h;
+        }
+        Some(model)
+    }
+
+    /// How many axial elements act along fixed lines in this model (none but in a step's
+    /// [`Model::with_lines_held`]).
+    pub fn held_lines(&self) -> usize {
+        self.springs
+            .iter()
+            .chain(&self.dashpots)
+            .filter(|s| s.line_held)
+            .count()
+    }
+
+    /// Whether two-point element `s`, whose span from end a to end b is `span` where a step
+    /// under `held` starts, keeps its line of action through the step: each end is the
+    /// ground or a particle free to move only along the element's line at t = 0, and the
+    /// span lies along that line, pointing the same way, to round-off. Then the span stays on
+    /// the line; the rounding of the projections moves it off by ulps of the displacements.
+    fn line_cannot_turn(&self, s: &TwoPoint<S>, span: S::V, held: &Constraints<S>) -> bool {
+        // Orthogonality of unit directions formed by the scene's frames, to round-off.
+        const ACROSS: f64 = 4.0 * f64::EPSILON;
+        let line = s.direction;
+        let on_line = |p: &Point<S>| match *p {
+            Point::Ground(_) => true,
+            Point::Body { .. } => false,
+            Point::Particle(i) => match held.motions[held.particle_motion[i] as usize] {
+                Motion::Held => true,
+                Motion::Free => false,
+                Motion::Across(d) => S::DIM == 2 && d.dot(&line).abs() <= ACROSS,
+                Motion::AcrossTwo(d, e) => {
+                    d.dot(&line).abs() <= ACROSS && e.dot(&line).abs() <= ACROSS
+                }
+            },
+        };
+        let along = line.dot(&span);
+        let off = span - line * along;
+        on_line(&s.a)
+            && on_line(&s.b)
+            && along > 0.0
+            && off.dot(&off) <= (8.0 * f64::EPSILON * along).powi(2)
+    }
+
     /// The line of action of every two-point dashpot at `cfg` (axial ones turn with their
     /// nodes under finite rotation), for [`Model::damping_along`]: a configuration's
     /// directions serve every velocity iterate of an increment.
@@ -1290,7 +1373,12 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// not normalised.
     #[inline(always)]
     pub fn dashpot_span(&self, cfg: &Config<S>, k: usize) -> S::V {
-        let s = &self.dashpots[k];
+        self.span(cfg, &self.dashpots[k])
+    }
+
+    /// The vector from end a to end b of two-point element `s` at `cfg`.
+    #[inline(always)]
+    fn span(&self, cfg: &Config<S>, s: &TwoPoint<S>) -> S::V {
         s.span0 + (self.displacement(cfg, &s.b) - self.displacement(cfg, &s.a))
     }
 

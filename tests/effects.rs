@@ -105,8 +105,11 @@ fn centred_damping_follows_the_schemes_own_recurrence() {
 /// of the kind given on each link that has one (`kinds`, link by link), started from their
 /// reference positions with initial velocities. With a dashpot on every link they share
 /// nodes and have unequal rates per mass, so the direct solve's k×k system (k = 3) is full
-/// and unsymmetric.
-fn dashpot_chain(kinds: [Option<&str>; 3]) -> crosscheck::scene::Scene {
+/// and unsymmetric. `on_axis`: the masses are held across the line (their `uy`), so that an
+/// axial dashpot's line cannot turn and acts along it (`Model::with_lines_held`); otherwise
+/// they are free across it and only nothing pushing them off it keeps them there, so an
+/// axial dashpot's line is taken as turning.
+fn dashpot_chain(kinds: [Option<&str>; 3], on_axis: bool) -> crosscheck::scene::Scene {
     let mut text = String::from(
         "id = \"dashpot_chain\"\ntitle = \"a chain of three masses with dashpots\"\nfamily = \"springs\"\ndimension = 2\n\n[time]\nincrement = 1.0e-3\n\n[output]\nrows = 201\n\n",
     );
@@ -156,7 +159,7 @@ fn dashpot_chain(kinds: [Option<&str>; 3]) -> crosscheck::scene::Scene {
         );
     }
     text += "[[steps]]\nkind = \"dynamic\"\nduration = 2.0\nhold = [\n";
-    for i in 1..=3 {
+    for i in (1..=3).filter(|_| on_axis) {
         text += &format!("    {{ node = \"{i}\", dofs = [\"uy\"] }},\n");
     }
     text += "]\n";
@@ -206,18 +209,21 @@ fn chain_recurrence(h: f64, dashpots: [f64; 3]) -> Vec<nalgebra::Vector3<f64>> {
     x
 }
 
-/// The largest departure of `engine`'s run of the chain with dashpots `kinds` from the
-/// recurrence `x`, over the peak of the contract columns.
+/// The largest departure of `engine`'s run of the chain with dashpots `kinds` (`on_axis`,
+/// see [`dashpot_chain`]) from the recurrence `x`, over the peak of the contract columns; and
+/// how many axial dashpots acted along fixed lines.
 fn departure_from_chain(
     engine: ExplicitEngine,
     kinds: [Option<&str>; 3],
+    on_axis: bool,
     x: &[nalgebra::Vector3<f64>],
     h: f64,
-) -> f64 {
+) -> (f64, u64) {
     let out = engine
-        .run(&dashpot_chain(kinds), &RunSettings::default())
+        .run(&dashpot_chain(kinds, on_axis), &RunSettings::default())
         .unwrap();
     assert_eq!(out.info.steps, 2000);
+    let held_lines = out.info.counters.get("held_lines").copied().unwrap_or(0);
     let (mut worst, mut scale): (f64, f64) = (0.0, 0.0);
     for (name, node) in [("u_end", 2), ("u_mid", 1), ("v_end", 2), ("v_mid", 1)] {
         for (row, got) in col(&out.history, name).iter().enumerate().skip(1) {
@@ -231,35 +237,45 @@ fn departure_from_chain(
             scale = scale.max(expected.abs());
         }
     }
-    worst / scale
+    (worst / scale, held_lines)
 }
 
 #[test]
 fn several_dashpots_follow_the_schemes_own_recurrence() {
     // `explicit_small` solves the dashpots' rates with the step's inverse of I + (h/2)·K
-    // (formed once: no line turns); `explicit`, with the outer two dashpots axial (their lines
-    // turn: taken along their spans, re-formed at every increment) and the middle one along a
-    // fixed direction, by elimination. Both must follow the recurrence (`chain_recurrence`)
-    // to round-off: 2000 increments of ε-sized roundings, carried forward by modes with
-    // ω·h ≤ 0.03 (measured 1.0e-14 of the peak, both engines); 1e-13 bounds it. A wrong entry
-    // of the 3×3 solve (its inverse transposed, say) changes the damping force by O(h·c/m)
-    // and the answer far above round-off (measured: 6.6e-5 of the peak with the inverse
-    // transposed, which only the steady path uses; 9.3e-5 with the coupling between dashpots
-    // that share a node dropped; 2.1e-2 with the spans' |l|² left out of the diagonal). The
-    // dissipated power is checked by the energy balance (`tests/energy.rs`).
+    // (formed once: no line turns); `explicit`, with the outer two dashpots axial and the
+    // middle one along a fixed direction: with the masses free across the line, the axial
+    // lines are taken as turning (along their spans, re-formed at every increment) and the
+    // system is solved by elimination; with the masses held on the line, those lines cannot
+    // turn and the step's inverse serves (`Model::with_lines_held`). All must follow the
+    // recurrence (`chain_recurrence`) to round-off: 2000 increments of ε-sized roundings,
+    // carried forward by modes with ω·h ≤ 0.03 (measured 1.0e-14 of the peak, every run);
+    // 1e-13 bounds it. A wrong entry of the 3×3 solve (its inverse transposed, say) changes
+    // the damping force by O(h·c/m) and the answer far above round-off (measured: 6.6e-5 of
+    // the peak with the inverse transposed, which only the steady path uses; 9.3e-5 with the
+    // coupling between dashpots that share a node dropped; 2.1e-2 with the spans' |l|² left
+    // out of the diagonal, turning). The dissipated power is checked by the energy balance
+    // (`tests/energy.rs`).
     let h = 1.0e-3;
     let x = chain_recurrence(h, CHAIN_DASHPOTS);
-    for (engine, kinds) in [
-        (ExplicitEngine::small(), [Some("fixed_direction"); 3]),
+    let axial = [Some("axial"), Some("fixed_direction"), Some("axial")];
+    for (engine, kinds, on_axis, held) in [
         (
-            ExplicitEngine::finite(),
-            [Some("axial"), Some("fixed_direction"), Some("axial")],
+            ExplicitEngine::small(),
+            [Some("fixed_direction"); 3],
+            true,
+            0,
         ),
+        (ExplicitEngine::finite(), axial, false, 0),
+        (ExplicitEngine::finite(), axial, true, 2),
     ] {
         let kind = kinds[0].unwrap();
-        let departure = departure_from_chain(engine, kinds, &x, h);
-        println!("{kind}: largest departure from the recurrence {departure:.3e} of the peak");
-        assert!(departure < 1e-13, "{kind}: {departure:e}");
+        let (departure, held_lines) = departure_from_chain(engine, kinds, on_axis, &x, h);
+        println!(
+            "{kind}, on the axis {on_axis}: largest departure from the recurrence {departure:.3e} of the peak"
+        );
+        assert!(departure < 1e-13, "{kind}, {on_axis}: {departure:e}");
+        assert_eq!(held_lines, held, "{kind}, {on_axis}");
     }
 }
 
@@ -267,32 +283,41 @@ fn several_dashpots_follow_the_schemes_own_recurrence() {
 fn one_dashpot_follows_the_schemes_own_recurrence() {
     // One dashpot takes its own 1×1 solve, kept in registers, at every increment but the
     // first (`ParticleDashpots::solve`; the first restarts the half-step sequence through
-    // `Model::damping`): axial under `explicit` (its line turns: the system is formed at
-    // every increment), along a fixed direction under `explicit_small` (the step's inverse).
-    // The chain with a dashpot on one link only: on the first link (one end on the ground)
-    // and on the last (both ends particles, of unequal mass). Same recurrence and the same
-    // round-off bound as above (measured: 4.2e-14 and 1.1e-14 of the peak, turning; 4.2e-14
-    // and 1.1e-14, steady). A wrong term of either solve changes the damping force by
-    // O(h·c/m) or more, far above it. Measured on the first link, turning: 2.7e-5 of the peak
-    // with the moving end's coupling to itself dropped from the diagonal; 1.1e-3 with the
-    // right-hand side taken from v(n−½) without the half step of the accelerations; 1.6 with
-    // |l|² left out of the diagonal. Steady: 2.7e-5 with the step's inverse left out; 1.1e-3
-    // with the same right-hand side from v(n−½); 0.43 on the last link with the force put on
-    // its first end only.
+    // `Model::damping`): axial under `explicit` with the masses free across the line (its
+    // line is taken as turning: the system is formed at every increment), along a fixed line
+    // under `explicit_small`, and axial under `explicit` with the masses held on the line
+    // (the line cannot turn: the step's inverse, as for `explicit_small`). The chain with a
+    // dashpot on one link only: on the first link (one end on the ground) and on the last
+    // (both ends particles, of unequal mass). Same recurrence and the same round-off bound as
+    // above (measured: 4.2e-14 and 1.1e-14 of the peak, turning; 4.2e-14 and 1.1e-14,
+    // steady). A wrong term of either solve changes the damping force by O(h·c/m) or more,
+    // far above it. Measured on the first link, turning: 2.7e-5 of the peak with the moving
+    // end's coupling to itself dropped from the diagonal; 1.1e-3 with the right-hand side
+    // taken from v(n−½) without the half step of the accelerations; 1.6 with |l|² left out
+    // of the diagonal. Steady: 2.7e-5 with the step's inverse left out; 1.1e-3 with the same
+    // right-hand side from v(n−½); 0.43 on the last link with the force put on its first end
+    // only.
     let h = 1.0e-3;
     for link in [0, 2] {
         let mut rates = [0.0; 3];
         rates[link] = CHAIN_DASHPOTS[link];
         let x = chain_recurrence(h, rates);
-        for (engine, kind) in [
-            (ExplicitEngine::finite(), "axial"),
-            (ExplicitEngine::small(), "fixed_direction"),
+        for (engine, kind, on_axis, held) in [
+            (ExplicitEngine::finite(), "axial", false, 0),
+            (ExplicitEngine::finite(), "axial", true, 1),
+            (ExplicitEngine::small(), "fixed_direction", true, 0),
         ] {
             let mut kinds = [None; 3];
             kinds[link] = Some(kind);
-            let departure = departure_from_chain(engine, kinds, &x, h);
-            println!("{kind} dashpot on link {link}: departure {departure:.3e} of the peak");
-            assert!(departure < 1e-13, "{kind}, link {link}: {departure:e}");
+            let (departure, held_lines) = departure_from_chain(engine, kinds, on_axis, &x, h);
+            println!(
+                "{kind} dashpot on link {link}, on the axis {on_axis}: departure {departure:.3e} of the peak"
+            );
+            assert!(
+                departure < 1e-13,
+                "{kind}, link {link}, {on_axis}: {departure:e}"
+            );
+            assert_eq!(held_lines, held, "{kind}, link {link}, {on_axis}");
         }
     }
 }

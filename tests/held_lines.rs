@@ -39,10 +39,13 @@ fn a_held_line_takes_the_turning_force_to_round_off() {
         cfg.u[1] = line * x;
         model.forces(&cfg, ContactMode::Unilateral, &mut turning, &mut counters);
         lines.forces(&cfg, ContactMode::Unilateral, &mut fixed, &mut counters);
-        // The turning force forms the stretch as |l| − L0, rounded to an ulp of |l|, and its
-        // direction l/|l| to a few ulps; the fixed line's stretch is exact to an ulp of x.
-        // So the two differ by a few ulps of k·(L0 + |x|).
-        let bound = 8.0 * f64::EPSILON * STIFFNESS * (LENGTH + x.abs());
+        // The turning force forms the span l = L0 + x rounded to an ulp of L0 + |x|, the
+        // stretch |l| − L0 from it, and its direction l/|l| to that ulp over |l|; the fixed
+        // line's stretch is exact to an ulp of x. So the two differ by a few ulps of
+        // k (L0 + |x|) (1 + |x|/|l|). (On this 45° line the span's components stay equal and
+        // its direction is exact, but the bound holds at any angle.)
+        let span = LENGTH + x;
+        let bound = 8.0 * f64::EPSILON * STIFFNESS * (LENGTH + x.abs()) * (1.0 + x.abs() / span);
         for (a, b) in turning.p.iter().zip(&fixed.p) {
             assert!(
                 (a - b).norm() <= bound,
@@ -188,4 +191,104 @@ fn ends_that_pass_each_other_take_the_turning_force() {
         let d = relative_difference(&turning, &held, name);
         assert!(d <= 1e-12, "{name}: {d:e}");
     }
+}
+
+/// A 3D chain ground 0 – 1 – 2 along x with axial springs on both links and an axial dashpot
+/// on the second, its particles held as `holds` says in its one dynamic step (node, dofs),
+/// particle 1 in frame `frame_x` (its x axis; y_axis [0, 1, 0]); particle 2 starts at 1 m/s
+/// along x unless a particle is held in every DOF.
+fn chain_3d(holds: &[(&str, &str)], frame_x: [f64; 3]) -> Scene {
+    let mut text = String::from(
+        "id = \"line3d\"\ntitle = \"a 3D chain on x\"\nfamily = \"springs\"\ndimension = 3\n\n[time]\nincrement = 1.0e-3\n\n[output]\nrows = 201\n\n",
+    );
+    for (name, probe, node) in [
+        ("u_end", "displacement", "2"),
+        ("u_mid", "displacement", "1"),
+        ("v_end", "velocity", "2"),
+        ("v_mid", "velocity", "1"),
+    ] {
+        text += &format!(
+            "[[output.columns]]\nname = \"{name}\"\n{probe} = \"{node}\"\ndirection = [1.0, 0.0, 0.0]\n\n"
+        );
+    }
+    text += &format!(
+        "[[frames]]\nid = \"f\"\nx_axis = [{:e}, {:e}, {:e}]\ny_axis = [0.0, 1.0, 0.0]\n\n",
+        frame_x[0], frame_x[1], frame_x[2]
+    );
+    text += "[[nodes]]\nid = \"0\"\nat = [0.0, 0.0, 0.0]\nfixed = true\n\n";
+    text += "[[nodes]]\nid = \"1\"\nat = [1.0, 0.0, 0.0]\nframe = \"f\"\n\n";
+    text += "[[nodes]]\nid = \"2\"\nat = [2.0, 0.0, 0.0]\n\n";
+    for node in ["1", "2"] {
+        text += &format!("[[masses]]\nnode = \"{node}\"\nmass = 1.0\n\n");
+    }
+    for (id, nodes) in [("s01", "[\"0\", \"1\"]"), ("s12", "[\"1\", \"2\"]")] {
+        text += &format!(
+            "[[springs]]\nid = \"{id}\"\nkind = \"axial\"\nnodes = {nodes}\nstiffness = 100.0\n\n"
+        );
+    }
+    text +=
+        "[[dashpots]]\nid = \"d12\"\nkind = \"axial\"\nnodes = [\"1\", \"2\"]\ndamping = 0.5\n\n";
+    if !holds.iter().any(|(_, dofs)| dofs.contains("all")) {
+        text += "[[initial_velocities]]\nnode = \"2\"\nvelocity = [1.0, 0.0, 0.0]\n\n";
+    }
+    text += "[[steps]]\nkind = \"dynamic\"\nduration = 0.2\nhold = [\n";
+    for (node, dofs) in holds {
+        text += &format!("    {{ node = \"{node}\", dofs = [{dofs}] }},\n");
+    }
+    text += "]\n";
+    case::parse(&text, std::path::Path::new("line3d.toml"))
+        .unwrap_or_else(|e| panic!("{e}\n{text}"))
+}
+
+#[test]
+fn in_space_a_line_is_held_only_where_both_ends_keep_to_it() {
+    use crosscheck::engines::explicit::space::Spatial;
+    let held_lines = |scene: &Scene| {
+        let model = Model::<Spatial, true>::compile(scene, 0.0);
+        let held = model.constraints(scene, &scene.steps[0]);
+        model
+            .with_lines_held(&model.initial_config(), &held)
+            .map_or(0, |m| m.held_lines())
+    };
+    let across = "\"uy\", \"uz\"";
+    let x = [1.0, 0.0, 0.0];
+    // Both particles held across the line in y and z: all three elements.
+    assert_eq!(held_lines(&chain_3d(&[("1", across), ("2", across)], x)), 3);
+    // Particle 2 held in y only: in space it moves in a plane, so 1–2 (spring and dashpot)
+    // can turn; 0–1 cannot.
+    assert_eq!(
+        held_lines(&chain_3d(&[("1", across), ("2", "\"uy\"")], x)),
+        1
+    );
+    // Particle 1's frame tilted by 1e-12 rad off the line: it moves along the tilted axis,
+    // off every element's line by far more than round-off.
+    let tilted = [1.0, 1e-12, 0.0];
+    assert_eq!(
+        held_lines(&chain_3d(&[("1", across), ("2", across)], tilted)),
+        0
+    );
+    // Both held in every DOF: nothing moves, and no line can turn.
+    let all = "\"all\"";
+    assert_eq!(held_lines(&chain_3d(&[("1", all), ("2", all)], x)), 3);
+    // The engine runs it stepped on the held lines, and counts them.
+    let out = ExplicitEngine::finite()
+        .run(
+            &chain_3d(&[("1", across), ("2", across)], x),
+            &RunSettings::default(),
+        )
+        .unwrap();
+    assert_eq!(out.info.counters.get("held_lines"), Some(&3));
+}
+
+#[test]
+fn a_line_to_a_body_is_never_held() {
+    // stress_inertia_ratio's axial spring joins two rigid bodies, which turn: its line turns
+    // with them.
+    let out = ExplicitEngine::finite()
+        .run(
+            &scene("stress/stress_inertia_ratio"),
+            &RunSettings::default(),
+        )
+        .unwrap();
+    assert_eq!(out.info.counters.get("held_lines"), None);
 }

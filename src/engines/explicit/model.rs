@@ -222,8 +222,9 @@ pub struct Counters {
     pub block_increments: u64,
     /// Of those, the increments stepped on the one-dimensional store ([`Model::step_axial`]).
     pub axial_increments: u64,
-    /// Axial elements that could not turn in a dynamic step and acted along fixed lines
-    /// ([`Model::with_lines_held`]), summed over the dynamic steps.
+    /// Axial elements held on their lines in a dynamic step ([`Model::with_lines_held`]: they
+    /// act along fixed lines, a spring while its ends keep their order), summed over the
+    /// dynamic steps.
     pub held_lines: u64,
 }
 
@@ -1327,8 +1328,8 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
 
     /// Whether two-point element `s`, whose span from end a to end b is `span` where a step
     /// under `held` starts, keeps its line of action through the step: each end is the
-    /// ground or a particle free to move only along the element's line at t = 0, and the
-    /// span lies along that line, pointing the same way, to round-off. Then the span stays on
+    /// ground or a particle free to move only along the element's initial direction, and the
+    /// span lies along that direction, pointing the same way, to round-off. Then the span stays on
     /// the line; the rounding of the projections moves it off by ulps of the displacements.
     fn line_cannot_turn(&self, s: &TwoPoint<S>, span: S::V, held: &Constraints<S>) -> bool {
         // Orthogonality of unit directions formed by the scene's frames, to round-off.

@@ -113,16 +113,7 @@ fn dashpot_chain(kinds: [Option<&str>; 3], on_axis: bool) -> crosscheck::scene::
     let mut text = String::from(
         "id = \"dashpot_chain\"\ntitle = \"a chain of three masses with dashpots\"\nfamily = \"springs\"\ndimension = 2\n\n[time]\nincrement = 1.0e-3\n\n[output]\nrows = 201\n\n",
     );
-    for (name, probe, node) in [
-        ("u_end", "displacement", "3"),
-        ("u_mid", "displacement", "2"),
-        ("v_end", "velocity", "3"),
-        ("v_mid", "velocity", "2"),
-    ] {
-        text += &format!(
-            "[[output.columns]]\nname = \"{name}\"\n{probe} = \"{node}\"\ndirection = [1.0, 0.0]\n\n"
-        );
-    }
+    text += &springs_columns("3", "2", "[1.0, 0.0]");
     text += "[[nodes]]\nid = \"0\"\nat = [0.0, 0.0]\nfixed = true\n\n";
     for (i, m) in CHAIN_MASSES.iter().enumerate() {
         text += &format!(

@@ -201,16 +201,7 @@ fn chain_3d(holds: &[(&str, &str)], frame_x: [f64; 3]) -> Scene {
     let mut text = String::from(
         "id = \"line3d\"\ntitle = \"a 3D chain on x\"\nfamily = \"springs\"\ndimension = 3\n\n[time]\nincrement = 1.0e-3\n\n[output]\nrows = 201\n\n",
     );
-    for (name, probe, node) in [
-        ("u_end", "displacement", "2"),
-        ("u_mid", "displacement", "1"),
-        ("v_end", "velocity", "2"),
-        ("v_mid", "velocity", "1"),
-    ] {
-        text += &format!(
-            "[[output.columns]]\nname = \"{name}\"\n{probe} = \"{node}\"\ndirection = [1.0, 0.0, 0.0]\n\n"
-        );
-    }
+    text += &springs_columns("2", "1", "[1.0, 0.0, 0.0]");
     text += &format!(
         "[[frames]]\nid = \"f\"\nx_axis = [{:e}, {:e}, {:e}]\ny_axis = [0.0, 1.0, 0.0]\n\n",
         frame_x[0], frame_x[1], frame_x[2]

@@ -111,3 +111,22 @@ pub fn proptest_config(cases: u32) -> proptest::test_runner::Config {
         ..proptest::test_runner::Config::default()
     }
 }
+
+/// The springs family's contract columns as case text: `u_end`, `u_mid`, `v_end`, `v_mid`,
+/// the displacements and velocities of nodes `end` and `mid` along `direction` (TOML array
+/// text, such as `[1.0, 0.0]`).
+pub fn springs_columns(end: &str, mid: &str, direction: &str) -> String {
+    [
+        ("u_end", "displacement", end),
+        ("u_mid", "displacement", mid),
+        ("v_end", "velocity", end),
+        ("v_mid", "velocity", mid),
+    ]
+    .iter()
+    .map(|(name, probe, node)| {
+        format!(
+            "[[output.columns]]\nname = \"{name}\"\n{probe} = \"{node}\"\ndirection = {direction}\n\n"
+        )
+    })
+    .collect()
+}

@@ -1772,9 +1772,11 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             }
             counters.rotation_updates += 1;
             if FINITE {
-                cfg.br[b] =
-                    S::advance_compensated(&cfg.br[b], &mut cfg.br_carry[b], &(vel.w[b] * h));
-                cfg.inertia[b] = self.oriented(b, &cfg.br[b]);
+                // The mass properties from the new orientation while it is still in
+                // registers, not read back from the configuration just written.
+                let r = S::advance_compensated(&cfg.br[b], &mut cfg.br_carry[b], &(vel.w[b] * h));
+                cfg.inertia[b] = self.oriented(b, &r);
+                cfg.br[b] = r;
             } else {
                 compensated_add(&mut cfg.bth[b], &mut carry.w[b], vel.w[b] * h);
             }

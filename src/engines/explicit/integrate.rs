@@ -16,6 +16,7 @@
 //! update. Such a scene on one coordinate axis, of any size, takes them on one number per
 //! particle and quantity ([`Model::step_axial`]).
 
+use super::affine::AffineStep;
 use super::blocks::BLOCKS_FROM;
 use super::centred::ParticleDashpots;
 use super::diagnosis::{PAST_LIMIT_GROWTH, PastLimit, growing_mode};
@@ -285,10 +286,12 @@ fn through_solid(scene: &Scene, k: usize, speed: f64, h: f64, t: f64) -> EngineE
     ))
 }
 
-/// Run a scene through all its steps.
+/// Run a scene through all its steps; a small step with affine forces as an [`AffineStep`]
+/// where `affine_steps`.
 pub fn integrate<S: Space, const FINITE: bool>(
     scene: &Scene,
     settings: &SceneSettings,
+    affine_steps: bool,
 ) -> Result<Integration, EngineError> {
     let penalty = if scene.contacts.is_empty() {
         0.0
@@ -431,6 +434,19 @@ pub fn integrate<S: Space, const FINITE: bool>(
         if direct && let Some(dashpots) = particle_dashpots.as_mut() {
             dashpots.prepare(model, &cfg, &held, h);
         }
+        // A small step whose forces are affine runs its increments between output rows as a
+        // recurrence in its free DOFs, the state in registers (`AffineStep`; the same to
+        // round-off).
+        let affine_step = if affine_steps {
+            AffineStep::of(
+                model,
+                &held,
+                particle_dashpots.as_ref().filter(|_| direct),
+                settings.damping,
+            )
+        } else {
+            None
+        };
         // Without dashpots and with every turning body on one free axis, the centred velocity
         // has a closed form (`Model::centred_single_axis`).
         let single_axis = settings.damping == DampingTreatment::Centred
@@ -457,19 +473,59 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 .iter()
                 .all(|s| !matches!(s.kind, StepKind::Dynamic { .. }));
 
-        for n in first..=first + steps_here {
+        let mut next = first;
+        while next <= first + steps_here {
+            let n = next;
+            next += 1;
             if n == first + steps_here && !last_step {
                 break; // the next step starts from this configuration
             }
-            if n % INTERRUPT_STRIDE == 0 && crate::interrupt::requested() {
+            if n.is_multiple_of(INTERRUPT_STRIDE) && crate::interrupt::requested() {
                 return Err(EngineError::Failed(format!("interrupted at increment {n}")));
             }
             let restart = !started || n == first;
+            // The affine step takes every increment up to the next that restarts, writes a row,
+            // is one of the step's last two or checks for an interrupt.
+            if let Some(recurrence) = affine_step.as_ref()
+                && !restart
+                && !n.is_multiple_of(stride)
+                && n + 1 < first + steps_here
+                && recurrence.on_lines(&cfg)
+            {
+                let end = (n / stride + 1) * stride;
+                let end = end
+                    .min(first + steps_here - 1)
+                    .min((n / INTERRUPT_STRIDE + 1) * INTERRUPT_STRIDE);
+                if let Some(store) = axial.as_mut() {
+                    store.write_back::<S>(&mut cfg.u, &mut carry.p, &mut v_half.p);
+                }
+                model.forces_with::<false>(
+                    &cfg,
+                    ContactMode::Unilateral,
+                    &mut forces,
+                    &mut counters,
+                );
+                let taken = recurrence.advance(
+                    &mut cfg,
+                    &mut carry,
+                    &mut v_half,
+                    &forces,
+                    h,
+                    end - n,
+                    &mut dissipated,
+                    &mut last_power,
+                    &mut counters,
+                );
+                if taken > 0 {
+                    next = n + taken;
+                    continue;
+                }
+            }
             // An increment that restarts nothing, has no velocity-dependent force, writes no
             // row and is neither the step's last nor the one before it (whose acceleration
             // starts the next step) needs no acceleration kept: it runs in one pass.
             let one_pass =
-                !restart && !velocity_pass && n % stride != 0 && n + 1 < first + steps_here;
+                !restart && !velocity_pass && !n.is_multiple_of(stride) && n + 1 < first + steps_here;
             // A scene of particles, springs along fixed lines and loads: forces and update block
             // by block of springs, each particle's data touched while in cache; on one number
             // per particle where they all lie on one axis (any size), on the 2D or 3D store
@@ -498,7 +554,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 store.write_back::<S>(&mut cfg.u, &mut carry.p, &mut v_half.p);
             }
             // Only an increment that writes a row reads the elastic energy.
-            if n % stride == 0 {
+            if n.is_multiple_of(stride) {
                 model.forces(&cfg, ContactMode::Unilateral, &mut forces, &mut counters);
             } else {
                 model.forces_with::<false>(
@@ -547,7 +603,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
             if !restart
                 && (direct || single_axis)
                 && settings.damping == DampingTreatment::Centred
-                && n % stride != 0
+                && !n.is_multiple_of(stride)
                 && n + 1 < first + steps_here
             {
                 let power = centred_directly(
@@ -717,7 +773,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 dissipated += 0.5 * h * (last_power + power);
             }
             v_next.set_plus(&v_half, h, &acc);
-            if n % stride == 0 {
+            if n.is_multiple_of(stride) {
                 if !velocity_pass && n > 0 {
                     v_n.set_plus(&v_half, 0.5 * h, &acc);
                 }

@@ -1,5 +1,6 @@
 //! `explicit`: our central-difference explicit integrator with penalty contact.
 
+pub mod affine;
 pub mod blocks;
 pub mod centred;
 pub mod diagnosis;
@@ -29,6 +30,8 @@ pub enum Kinematics {
 #[derive(Debug, Clone, Copy)]
 pub struct ExplicitEngine {
     kinematics: Kinematics,
+    /// Whether a small step with affine forces runs as [`affine::AffineStep`].
+    affine: bool,
 }
 
 impl ExplicitEngine {
@@ -36,12 +39,22 @@ impl ExplicitEngine {
     pub fn finite() -> Self {
         Self {
             kinematics: Kinematics::Finite,
+            affine: true,
         }
     }
     /// Small rotation: engine `explicit_small`.
     pub fn small() -> Self {
         Self {
             kinematics: Kinematics::Small,
+            affine: true,
+        }
+    }
+    /// The same engine with every increment through the general path, never as an
+    /// [`affine::AffineStep`]: what the affine step is checked against.
+    pub fn general(self) -> Self {
+        Self {
+            affine: false,
+            ..self
         }
     }
 }
@@ -134,6 +147,9 @@ impl Engine for ExplicitEngine {
         if c.axial_increments > 0 {
             counters.insert("axial_increments".to_string(), c.axial_increments);
         }
+        if c.affine_increments > 0 {
+            counters.insert("affine_increments".to_string(), c.affine_increments);
+        }
         if c.held_lines > 0 {
             counters.insert("held_lines".to_string(), c.held_lines);
         }
@@ -187,10 +203,18 @@ impl ExplicitEngine {
     ) -> Result<Integration, EngineError> {
         let s = merged(scene, settings);
         match (scene.dimension, self.kinematics) {
-            (Dimension::Two, Kinematics::Finite) => integrate::<Planar, true>(scene, &s),
-            (Dimension::Two, Kinematics::Small) => integrate::<Planar, false>(scene, &s),
-            (Dimension::Three, Kinematics::Finite) => integrate::<Spatial, true>(scene, &s),
-            (Dimension::Three, Kinematics::Small) => integrate::<Spatial, false>(scene, &s),
+            (Dimension::Two, Kinematics::Finite) => {
+                integrate::<Planar, true>(scene, &s, self.affine)
+            }
+            (Dimension::Two, Kinematics::Small) => {
+                integrate::<Planar, false>(scene, &s, self.affine)
+            }
+            (Dimension::Three, Kinematics::Finite) => {
+                integrate::<Spatial, true>(scene, &s, self.affine)
+            }
+            (Dimension::Three, Kinematics::Small) => {
+                integrate::<Spatial, false>(scene, &s, self.affine)
+            }
         }
     }
 

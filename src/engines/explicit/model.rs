@@ -222,6 +222,9 @@ pub struct Counters {
     pub block_increments: u64,
     /// Of those, the increments stepped on the one-dimensional store ([`Model::step_axial`]).
     pub axial_increments: u64,
+    /// Increments stepped as the recurrence of a small affine step
+    /// ([`AffineStep`](super::affine::AffineStep)).
+    pub affine_increments: u64,
     /// Axial elements held on their lines in a dynamic step ([`Model::with_lines_held`]: they
     /// act along fixed lines, a spring while its ends keep their order), summed over the
     /// dynamic steps.
@@ -467,6 +470,25 @@ pub enum DashpotLine<S: Space> {
         /// One over its length at t = 0.
         scale: f64,
     },
+}
+
+/// A spring whose force is affine in the displacements: it acts along a fixed line, between
+/// particles or a particle and the ground (what [`AffineStep`](super::affine::AffineStep)
+/// steps).
+#[derive(Debug, Clone, Copy)]
+pub struct AffineSpring<S: Space> {
+    /// Particle at end a (None: the ground).
+    pub a: Option<usize>,
+    /// Particle at end b (None: the ground).
+    pub b: Option<usize>,
+    /// Unit line: the stretch is `direction·(u_b − u_a)`, the force on end a
+    /// `c·stretch·direction` and on end b its opposite.
+    pub direction: S::V,
+    /// Stiffness.
+    pub c: f64,
+    /// An axial spring held on its line ([`Model::with_lines_held`]): its length at t = 0. It
+    /// takes the line's force only while that length plus its stretch stays positive.
+    pub held_length: Option<f64>,
 }
 
 /// The compiled scene.
@@ -824,6 +846,62 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             points,
             _space: PhantomData,
         }
+    }
+
+    /// Every spring as an [`AffineSpring`], when the scene has no body and no contact and every
+    /// spring acts along a fixed line between particles or a particle and the ground (an axial
+    /// spring under finite rotation only where its step holds it on its line); None otherwise.
+    /// Grounded springs on the ground alone are left out (they never act).
+    pub fn affine_springs(&self) -> Option<Vec<AffineSpring<S>>> {
+        if !self.bodies.is_empty() || !self.contacts.is_empty() {
+            return None;
+        }
+        let mut out = Vec::new();
+        for s in &self.grounded_springs {
+            if s.rotation.is_some() {
+                return None;
+            }
+            match (s.point, s.direction) {
+                (Point::Particle(i), Some(direction)) => out.push(AffineSpring {
+                    a: None,
+                    b: Some(i),
+                    direction,
+                    c: s.c,
+                    held_length: None,
+                }),
+                (Point::Body { .. }, _) => return None,
+                _ => {}
+            }
+        }
+        let at = |i: u32| (i != GROUND).then_some(i as usize);
+        for s in &self.line_springs {
+            out.push(AffineSpring {
+                a: at(s.a),
+                b: at(s.b),
+                direction: s.direction,
+                c: s.c,
+                held_length: None,
+            });
+        }
+        let end = |p: &Point<S>| match p {
+            Point::Particle(i) => Some(Some(*i)),
+            Point::Ground(_) => Some(None),
+            Point::Body { .. } => None,
+        };
+        for s in self.other_springs.iter().map(|k| &self.springs[*k]) {
+            let turning = s.axial && FINITE;
+            if turning && !s.line_held {
+                return None;
+            }
+            out.push(AffineSpring {
+                a: end(&s.a)?,
+                b: end(&s.b)?,
+                direction: s.direction,
+                c: s.c,
+                held_length: turning.then_some(s.length0),
+            });
+        }
+        Some(out)
     }
 
     /// Whether the scene has dashpots.

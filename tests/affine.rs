@@ -1,0 +1,175 @@
+//! The affine step (`engines::explicit::affine`): a small step whose forces are affine in the
+//! displacements runs its increments between output rows as a recurrence in its free DOFs, and
+//! must give what the general path gives, increment by increment, to round-off.
+mod common;
+use common::*;
+use crosscheck::engines::explicit::ExplicitEngine;
+use crosscheck::engines::{Engine, RunOutput, RunSettings};
+use crosscheck::scene::{DampingTreatment, Scene};
+
+fn run(engine: ExplicitEngine, scene: &Scene, settings: &RunSettings) -> RunOutput {
+    engine
+        .run(scene, settings)
+        .unwrap_or_else(|e| panic!("{}: {e}", scene.id))
+}
+
+fn affine_increments(out: &RunOutput) -> u64 {
+    out.info
+        .counters
+        .get("affine_increments")
+        .copied()
+        .unwrap_or(0)
+}
+
+/// The increments of a single dynamic step of `steps` increments, with a row every `stride`,
+/// that the affine step may take: every one but the first (which starts the half-step
+/// velocity), the rows and the step's last two (the last one's acceleration would start a
+/// next step).
+fn eligible(steps: u64, stride: u64) -> u64 {
+    (1..=steps - 2).filter(|n| n % stride != 0).count() as u64
+}
+
+/// The largest difference between the two runs over every column, each over its own peak
+/// (the energy balance, a difference of energies near zero, over the peak of the kinetic and
+/// elastic energy).
+fn largest_difference(a: &RunOutput, b: &RunOutput) -> (f64, String) {
+    let energy: Vec<f64> = col(&a.history, "e_kinetic")
+        .iter()
+        .zip(col(&a.history, "e_elastic"))
+        .map(|(k, e)| k + e)
+        .collect();
+    let mut worst = (0.0, String::new());
+    for name in a.history.columns.iter().skip(1) {
+        let (x, y) = (col(&a.history, name), col(&b.history, name));
+        let scale = if name == "e_balance" {
+            peak(&energy)
+        } else {
+            peak(&x)
+        };
+        let d = if scale == 0.0 {
+            max_diff(&x, &y)
+        } else {
+            max_diff(&x, &y) / scale
+        };
+        if d > worst.0 {
+            worst = (d, name.clone());
+        }
+    }
+    worst
+}
+
+// Each increment sums the forces in another order, so the two runs differ by a few ulps per
+// increment; over the 2·10^4 increments of a springs case, summed with random signs, that is
+// about √(2·10^4)·4ε ≈ 1e-13 of the peak. The bound allows ten times that.
+const ROUND_OFF: f64 = 1e-12;
+
+#[test]
+fn the_springs_cases_step_as_the_general_path_to_round_off() {
+    for id in [
+        "springs_grounded_a",
+        "springs_grounded_b",
+        "springs_grounded_c",
+        "springs_n2n_b",
+        "springs_n2n_c",
+    ] {
+        let scene = scene(id);
+        for engine in [ExplicitEngine::finite(), ExplicitEngine::small()] {
+            let settings = RunSettings::default();
+            let affine = run(engine, &scene, &settings);
+            let general = run(engine.general(), &scene, &settings);
+            let (steps, rows) = (affine.info.steps, scene.output_rows as u64 - 1);
+            assert_eq!(steps, 20_000, "{id}");
+            // Every increment it may take, and none in the general run.
+            assert_eq!(
+                affine_increments(&affine),
+                eligible(steps, steps / rows),
+                "{id}"
+            );
+            assert_eq!(affine_increments(&general), 0, "{id}");
+            // Measured: at most 6.2e-15 (springs_n2n_c, e_kinetic).
+            let (d, name) = largest_difference(&affine, &general);
+            println!("{id} {}: {d:.1e} ({name})", engine.name());
+            assert!(d <= ROUND_OFF, "{id} {}: {name} {d:e}", engine.name());
+            // The counters tell the same work: a force pass and a dashpot solve per increment.
+            for counter in ["force_evaluations", "damping_evaluations"] {
+                assert_eq!(
+                    affine.info.counters[counter], general.info.counters[counter],
+                    "{id} {counter}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn without_dashpots_the_step_is_the_one_pass_increment_to_round_off() {
+    // System B's node-to-node test without its dashpot: no velocity pass, so the general path
+    // takes the one-pass increments on the one-dimensional store.
+    let dashpot = "[[dashpots]]\nid = \"dashpot-12-13\"\nkind = \"fixed_direction\"\nnodes = [\"12\", \"13\"]\ndirection = [1.0, 0.0]\ndamping = 0.12\n";
+    let scene = variant("springs_n2n_b", &[(dashpot, "")]);
+    let settings = RunSettings::default();
+    let affine = run(ExplicitEngine::finite(), &scene, &settings);
+    let general = run(ExplicitEngine::finite().general(), &scene, &settings);
+    let rows = scene.output_rows as u64 - 1;
+    assert_eq!(
+        affine_increments(&affine),
+        eligible(affine.info.steps, affine.info.steps / rows)
+    );
+    assert!(general.info.counters["axial_increments"] > 0);
+    assert_eq!(affine.info.counters["damping_evaluations"], 0);
+    // Measured: 3.2e-15 (e_elastic).
+    let (d, name) = largest_difference(&affine, &general);
+    println!("without the dashpot: {d:.1e} ({name})");
+    assert!(d <= ROUND_OFF, "{name} {d:e}");
+    // Without a dashpot nothing is dissipated in either run.
+    assert!(col(&affine.history, "e_viscous").iter().all(|e| *e == 0.0));
+}
+
+#[test]
+fn ends_that_would_pass_each_other_stop_the_recurrence() {
+    // System C's grounded test with 103 thrown at 102 along the line: it passes 102 and the
+    // spring between them, held on its line, takes its turning force (tests/held_lines.rs). The
+    // recurrence stops before the increment where the ends would meet and resumes after.
+    let masses = "[[masses]]\nnode = \"102\"";
+    let thrown = format!(
+        "[[initial_velocities]]\nnode = \"103\"\nvelocity = [-42.42640687119285, -42.42640687119285]\n\n{masses}"
+    );
+    let scene = variant("springs_grounded_c", &[(masses, thrown.as_str())]);
+    let settings = RunSettings::default();
+    let affine = run(ExplicitEngine::finite(), &scene, &settings);
+    let general = run(ExplicitEngine::finite().general(), &scene, &settings);
+    let rows = scene.output_rows as u64 - 1;
+    let taken = affine_increments(&affine);
+    let all = eligible(affine.info.steps, affine.info.steps / rows);
+    println!("affine increments: {taken} of {all}");
+    assert!(taken > all / 2 && taken < all, "{taken} of {all}");
+    let u = col(&affine.history, "u_end");
+    assert!(u.iter().any(|x| *x < -2.0), "103 passes 102");
+    // Measured: 2.2e-15.
+    let (d, name) = largest_difference(&affine, &general);
+    println!("through the crossing: {d:.1e} ({name})");
+    assert!(d <= ROUND_OFF, "{name} {d:e}");
+    // Where the ends have passed, the general path alone evaluates the forces.
+    assert_eq!(
+        affine.info.counters["force_evaluations"],
+        general.info.counters["force_evaluations"]
+    );
+}
+
+#[test]
+fn the_recurrence_is_declined_where_the_forces_are_not_affine_or_damping_is_lagged() {
+    let lagged = RunSettings {
+        damping: Some(DampingTreatment::Lagged),
+        ..RunSettings::default()
+    };
+    let out = run(ExplicitEngine::finite(), &scene("springs_n2n_b"), &lagged);
+    assert_eq!(affine_increments(&out), 0, "lagged dashpots");
+    for id in ["rigid2d_pin_lumped", "rigid3d_slide_surface"] {
+        let out = run(
+            ExplicitEngine::finite(),
+            &scene(id),
+            &RunSettings::default(),
+        );
+        assert_eq!(affine_increments(&out), 0, "{id}: a body and a contact");
+    }
+}

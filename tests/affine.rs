@@ -126,6 +126,25 @@ fn without_dashpots_the_step_is_the_one_pass_increment_to_round_off() {
 }
 
 #[test]
+fn a_dashpot_that_never_acts_is_counted_as_the_general_path_counts_it() {
+    // System B's dashpot at zero damping: the direct solve has no dashpot to solve, yet the
+    // general path passes through it at every increment, and so counts the affine step.
+    let scene = variant("springs_n2n_b", &[("damping = 0.12", "damping = 0.0")]);
+    let settings = RunSettings::default();
+    let affine = run(ExplicitEngine::finite(), &scene, &settings);
+    let general = run(ExplicitEngine::finite().general(), &scene, &settings);
+    assert!(affine_increments(&affine) > 0);
+    for counter in ["force_evaluations", "damping_evaluations"] {
+        assert_eq!(
+            affine.info.counters[counter], general.info.counters[counter],
+            "{counter}"
+        );
+    }
+    let (d, name) = largest_difference(&affine, &general);
+    assert!(d <= ROUND_OFF, "{name} {d:e}");
+}
+
+#[test]
 fn ends_that_would_pass_each_other_stop_the_recurrence() {
     // System C's grounded test with 103 thrown at 102 along the line: it passes 102 and the
     // spring between them, held on its line, takes its turning force (tests/held_lines.rs). The

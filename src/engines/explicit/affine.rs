@@ -5,8 +5,8 @@
 //! fixed lines, no body and no contact: the force is `F(u) = F(u₀) − K (u − u₀)`, with K formed
 //! once per step from the springs. In the step's free DOFs q (the unit frame axes of each
 //! particle that the step does not hold) the general path's increment — the accelerations
-//! `a = M⁻¹ F`, the dashpots' centred rates `σ = (I + (h/2)·K_c)⁻¹ E (v(n−½) + (h/2)·a)`
-//! ([`ParticleDashpots`]), `a −= M⁻¹ Eᵀ c σ`, `v(n+½) = v(n−½) + h·a` and the compensated
+//! `a = P M⁻¹ F` (P the step's projection), the dashpots' centred rates
+//! `σ = (I + (h/2)·K_c)⁻¹ E (v(n−½) + (h/2)·a)` ([`ParticleDashpots`]), `a −= P M⁻¹ Eᵀ c σ`, `v(n+½) = v(n−½) + h·a` and the compensated
 //! `q += h·v(n+½)` — is a few products with matrices of at most [`MAX_DOFS`]² entries, on a
 //! state that stays in registers for the increments between two output rows. The general path
 //! reads that state from memory and sums the forces element by element at every increment.
@@ -15,8 +15,9 @@
 //! batch started, against each element's force at u), and the rounding of the
 //! displacement's compensated sum, which here runs from zero at each batch: a run is the
 //! general path's to round-off (`tests/affine.rs`). An axial spring held on its line is checked
-//! at every increment; where its ends would pass each other, the batch stops and the general
-//! path takes the spring's turning force.
+//! at every increment; where its ends would pass each other, or come within a rounding margin of
+//! it (where the two paths' roundings could take different sides), the batch stops and the
+//! general path decides, taking the spring's turning force once they have passed.
 
 use super::centred::ParticleDashpots;
 use super::model::{AffineSpring, Config, Constraints, Counters, Forces, Model, Rates, Target};
@@ -54,6 +55,9 @@ pub struct AffineStep<S: Space> {
     response: [[f64; MAX_DOFS]; MAX_DOFS],
     /// Number of dashpots.
     dashpots: usize,
+    /// Whether the scene has dashpots, whose solve the general path counts at every increment
+    /// (even where none acts between particles).
+    counts_dashpots: bool,
     /// Dashpot coefficients.
     coefficients: [f64; MAX_DASHPOTS],
     /// E: each dashpot's rate per unit velocity of each DOF.
@@ -70,7 +74,8 @@ pub struct AffineStep<S: Space> {
 struct Start {
     accelerations: [f64; MAX_DOFS],
     velocities: [f64; MAX_DOFS],
-    /// Per held line, the stretch since the batch started at which its ends would meet.
+    /// Per held line, the stretch since the batch started at which its ends would meet, plus
+    /// a rounding margin: at or below it the general path takes the increment.
     meet: [f64; MAX_HELD_LINES],
 }
 
@@ -182,6 +187,7 @@ impl<S: Space> AffineStep<S> {
             inverse_masses,
             response,
             dashpots: k,
+            counts_dashpots: model.has_dashpots(),
             coefficients: [0.0; MAX_DASHPOTS],
             rates: [[0.0; MAX_DOFS]; MAX_DASHPOTS],
             pushes: [[0.0; MAX_DOFS]; MAX_DASHPOTS],
@@ -207,17 +213,28 @@ impl<S: Space> AffineStep<S> {
 
     /// Whether every axial spring held on its line takes the line's force at `cfg` (its
     /// length at t = 0 plus its stretch along the line is positive, as `Model::forces_with`
-    /// asks): where one does not, the general path takes the increment.
+    /// asks), by more than [`AffineStep::margin`]: where one does not, the general path takes
+    /// the increment.
     pub fn on_lines(&self, cfg: &Config<S>) -> bool {
         self.held_lines
             .iter()
-            .all(|line| self.meet(line, cfg) < 0.0)
+            .all(|line| self.meet(line, cfg) + self.margin(line, cfg) < 0.0)
     }
 
     /// The stretch since `cfg` at which `line`'s ends would meet.
     fn meet(&self, line: &HeldLine<S>, cfg: &Config<S>) -> f64 {
         let at = |p: Option<usize>| p.map_or(S::V::zero(), |i| cfg.u[i]);
         -(line.length0 + line.direction.dot(&(at(line.b) - at(line.a))))
+    }
+
+    /// How close to [`AffineStep::meet`] a batch may come: the span along the line is formed
+    /// here from the batch's start plus the motion since, and by the general path from the
+    /// displacements, each rounded to a few ulps of the length and the displacements. Within
+    /// 10^-12 of their size (some 4,500 ulps) the two could fall on different sides of zero,
+    /// where the force jumps by 2·c·length0; there the general path takes the increment.
+    fn margin(&self, line: &HeldLine<S>, cfg: &Config<S>) -> f64 {
+        let size = |p: Option<usize>| p.map_or(0.0, |i| cfg.u[i].dot(&cfg.u[i]).sqrt());
+        1e-12 * (line.length0 + size(line.a) + size(line.b))
     }
 
     /// Step `count` increments (at most) from `cfg`, `carry` and the half-step velocities
@@ -245,7 +262,7 @@ impl<S: Space> AffineStep<S> {
             meet: [0.0; MAX_HELD_LINES],
         };
         for (meet, line) in start.meet.iter_mut().zip(&self.held_lines) {
-            *meet = self.meet(line, cfg);
+            *meet = self.meet(line, cfg) + self.margin(line, cfg);
             if *meet >= 0.0 {
                 return 0;
             }
@@ -301,7 +318,7 @@ impl<S: Space> AffineStep<S> {
         counters.affine_increments += batch.increments;
         // The caller's force pass served the first increment.
         counters.force_evaluations += batch.increments - 1;
-        if k > 0 {
+        if self.counts_dashpots {
             counters.damping_evaluations += batch.increments;
         }
         batch.increments

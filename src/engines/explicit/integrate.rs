@@ -490,15 +490,18 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 && !restart
                 && !n.is_multiple_of(stride)
                 && n + 1 < first + steps_here
-                && recurrence.on_lines(&cfg)
+                && {
+                    // The held lines are checked on the current state.
+                    if let Some(store) = axial.as_mut() {
+                        store.write_back::<S>(&mut cfg.u, &mut carry.p, &mut v_half.p);
+                    }
+                    recurrence.on_lines(&cfg)
+                }
             {
                 let end = (n / stride + 1) * stride;
                 let end = end
                     .min(first + steps_here - 1)
                     .min((n / INTERRUPT_STRIDE + 1) * INTERRUPT_STRIDE);
-                if let Some(store) = axial.as_mut() {
-                    store.write_back::<S>(&mut cfg.u, &mut carry.p, &mut v_half.p);
-                }
                 model.forces_with::<false>(
                     &cfg,
                     ContactMode::Unilateral,
@@ -524,8 +527,10 @@ pub fn integrate<S: Space, const FINITE: bool>(
             // An increment that restarts nothing, has no velocity-dependent force, writes no
             // row and is neither the step's last nor the one before it (whose acceleration
             // starts the next step) needs no acceleration kept: it runs in one pass.
-            let one_pass =
-                !restart && !velocity_pass && !n.is_multiple_of(stride) && n + 1 < first + steps_here;
+            let one_pass = !restart
+                && !velocity_pass
+                && !n.is_multiple_of(stride)
+                && n + 1 < first + steps_here;
             // A scene of particles, springs along fixed lines and loads: forces and update block
             // by block of springs, each particle's data touched while in cache; on one number
             // per particle where they all lie on one axis (any size), on the 2D or 3D store

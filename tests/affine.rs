@@ -65,13 +65,7 @@ const ROUND_OFF: f64 = 1e-12;
 
 #[test]
 fn the_springs_cases_step_as_the_general_path_to_round_off() {
-    for id in [
-        "springs_grounded_a",
-        "springs_grounded_b",
-        "springs_grounded_c",
-        "springs_n2n_b",
-        "springs_n2n_c",
-    ] {
+    for id in SPRINGS_CASES {
         let scene = scene(id);
         for engine in [ExplicitEngine::finite(), ExplicitEngine::small()] {
             let settings = RunSettings::default();
@@ -149,11 +143,7 @@ fn ends_that_would_pass_each_other_stop_the_recurrence() {
     // System C's grounded test with 103 thrown at 102 along the line: it passes 102 and the
     // spring between them, held on its line, takes its turning force (tests/held_lines.rs). The
     // recurrence stops before the increment where the ends would meet and resumes after.
-    let masses = "[[masses]]\nnode = \"102\"";
-    let thrown = format!(
-        "[[initial_velocities]]\nnode = \"103\"\nvelocity = [-42.42640687119285, -42.42640687119285]\n\n{masses}"
-    );
-    let scene = variant("springs_grounded_c", &[(masses, thrown.as_str())]);
+    let scene = grounded_c_thrown();
     let settings = RunSettings::default();
     let affine = run(ExplicitEngine::finite(), &scene, &settings);
     let general = run(ExplicitEngine::finite().general(), &scene, &settings);

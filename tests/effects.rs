@@ -14,13 +14,7 @@ fn counters(id: &str, engine: ExplicitEngine) -> std::collections::BTreeMap<Stri
 
 #[test]
 fn spring_only_scene_never_evaluates_contact() {
-    for id in [
-        "springs_grounded_a",
-        "springs_grounded_b",
-        "springs_grounded_c",
-        "springs_n2n_b",
-        "springs_n2n_c",
-    ] {
+    for id in SPRINGS_CASES {
         for engine in [ExplicitEngine::finite(), ExplicitEngine::small()] {
             let c = counters(id, engine);
             assert!(

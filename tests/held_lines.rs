@@ -168,15 +168,10 @@ fn the_seed_cases_step_on_held_lines_as_they_would_turning() {
 
 #[test]
 fn ends_that_pass_each_other_take_the_turning_force() {
-    // 103 thrown at 102 at 60 m/s along the line (½ m v² = 46.6 J, against the 15 J the spring
-    // holds at either side's unit stretch): it passes 102, the span reverses, and the spring,
+    // 103 thrown at 102 along the line: it passes 102, the span reverses, and the spring,
     // turning with it, pushes it on. The held-line run must follow it through as the run with
     // 103 free across the line does.
-    let masses = "[[masses]]\nnode = \"102\"";
-    let thrown = format!(
-        "[[initial_velocities]]\nnode = \"103\"\nvelocity = [-42.42640687119285, -42.42640687119285]\n\n{masses}"
-    );
-    let held_scene = variant("springs_grounded_c", &[(masses, thrown.as_str())]);
+    let held_scene = grounded_c_thrown();
     let (held, counters) = explicit(&held_scene);
     assert_eq!(counters.get("held_lines"), Some(&3));
     // The same bound as for the seed cases (measured: 3.3e-16), through the crossing.

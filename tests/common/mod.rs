@@ -8,6 +8,26 @@ use crosscheck::scene::{IncrementRule, Scene};
 use std::collections::BTreeMap;
 use std::path::Path;
 
+/// The five springs seed cases.
+pub const SPRINGS_CASES: [&str; 5] = [
+    "springs_grounded_a",
+    "springs_grounded_b",
+    "springs_grounded_c",
+    "springs_n2n_b",
+    "springs_n2n_c",
+];
+
+/// System C's grounded test with 103 thrown at 102 along the 45° line at 60 m/s (½ m v² =
+/// 46.6 J, against the 15 J the spring holds at either side's unit stretch): it passes 102, and
+/// the span of the spring between them, held on its line, reverses.
+pub fn grounded_c_thrown() -> Scene {
+    let masses = "[[masses]]\nnode = \"102\"";
+    let thrown = format!(
+        "[[initial_velocities]]\nnode = \"103\"\nvelocity = [-42.42640687119285, -42.42640687119285]\n\n{masses}"
+    );
+    variant("springs_grounded_c", &[(masses, thrown.as_str())])
+}
+
 /// Load a shipped case by id.
 pub fn scene(id: &str) -> Scene {
     case::load(&case::cases_dir().join(format!("{id}.toml"))).unwrap_or_else(|e| panic!("{e}"))

@@ -70,6 +70,9 @@ pub struct AffineStep<S: Space> {
     held_lines: Vec<HeldLine<S>>,
 }
 
+/// Per held line, the stretch at which a batch stops ([`AffineStep::meets`]).
+pub type Meets = [f64; MAX_HELD_LINES];
+
 /// The state a batch starts from (in the free DOFs).
 struct Start {
     accelerations: [f64; MAX_DOFS],
@@ -211,14 +214,20 @@ impl<S: Space> AffineStep<S> {
         Some(step)
     }
 
-    /// Whether every axial spring held on its line takes the line's force at `cfg` (its
-    /// length at t = 0 plus its stretch along the line is positive, as `Model::forces_with`
-    /// asks), by more than [`AffineStep::margin`]: where one does not, the general path takes
-    /// the increment.
-    pub fn on_lines(&self, cfg: &Config<S>) -> bool {
-        self.held_lines
-            .iter()
-            .all(|line| self.meet(line, cfg) + self.margin(line, cfg) < 0.0)
+    /// Per axial spring held on its line, the stretch from `cfg` at which a batch stops
+    /// ([`AffineStep::meet`] plus [`AffineStep::margin`]), where every one takes the line's
+    /// force at `cfg` (its length at t = 0 plus its stretch along the line is positive, as
+    /// `Model::forces_with` asks) by more than the margin; None where one does not: the
+    /// general path then takes the increment.
+    pub fn meets(&self, cfg: &Config<S>) -> Option<Meets> {
+        let mut meets = [0.0; MAX_HELD_LINES];
+        for (meet, line) in meets.iter_mut().zip(&self.held_lines) {
+            *meet = self.meet(line, cfg) + self.margin(line, cfg);
+            if *meet >= 0.0 {
+                return None;
+            }
+        }
+        Some(meets)
     }
 
     /// The stretch since `cfg` at which `line`'s ends would meet.
@@ -237,12 +246,12 @@ impl<S: Space> AffineStep<S> {
         1e-12 * (line.length0 + size(line.a) + size(line.b))
     }
 
-    /// Step `count` increments (at most) from `cfg`, `carry` and the half-step velocities
-    /// `v_half`, where `forces` are the forces at `cfg`; `dissipated` and `last_power` go on as
-    /// the time loop keeps them (the dashpots' work and the power of the last increment).
-    /// Returns the increments taken: fewer than `count` only where an axial spring held on
-    /// its line would take its turning force (its ends would pass each other), 0 if at once
-    /// (not where [`AffineStep::on_lines`]).
+    /// Step `count` (≥ 1) increments at most from `cfg`, `carry` and the half-step velocities
+    /// `v_half`, where `forces` are the forces at `cfg` and `meets` are
+    /// [`AffineStep::meets`] at `cfg`; `dissipated` and `last_power` go on as the time loop
+    /// keeps them (the dashpots' work and the power of the last increment). Returns the
+    /// increments taken, at least one: fewer than `count` only where an axial spring held on
+    /// its line would come within the margin of its ends meeting.
     #[allow(clippy::too_many_arguments)]
     pub fn advance(
         &self,
@@ -250,6 +259,7 @@ impl<S: Space> AffineStep<S> {
         carry: &mut Rates<S>,
         v_half: &mut Rates<S>,
         forces: &Forces<S>,
+        meets: &Meets,
         h: f64,
         count: u64,
         dissipated: &mut f64,
@@ -259,14 +269,8 @@ impl<S: Space> AffineStep<S> {
         let mut start = Start {
             accelerations: [0.0; MAX_DOFS],
             velocities: [0.0; MAX_DOFS],
-            meet: [0.0; MAX_HELD_LINES],
+            meet: *meets,
         };
-        for (meet, line) in start.meet.iter_mut().zip(&self.held_lines) {
-            *meet = self.meet(line, cfg) + self.margin(line, cfg);
-            if *meet >= 0.0 {
-                return 0;
-            }
-        }
         for (l, (p, d)) in self.dofs.iter().enumerate() {
             start.accelerations[l] = self.inverse_masses[l] * d.dot(&forces.p[*p]);
             start.velocities[l] = d.dot(&v_half.p[*p]);
@@ -294,9 +298,6 @@ impl<S: Space> AffineStep<S> {
             (4, 1),
             (4, 2)
         );
-        if batch.increments == 0 {
-            return 0;
-        }
         // Back into the configuration: each particle's motion along its free axes, added with
         // its rounding carry; its velocity along them replaced, the rest of it kept.
         let mut l = 0;

@@ -490,12 +490,12 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 && !restart
                 && !n.is_multiple_of(stride)
                 && n + 1 < first + steps_here
-                && {
+                && let Some(meets) = {
                     // The held lines are checked on the current state.
                     if let Some(store) = axial.as_mut() {
                         store.write_back::<S>(&mut cfg.u, &mut carry.p, &mut v_half.p);
                     }
-                    recurrence.on_lines(&cfg)
+                    recurrence.meets(&cfg)
                 }
             {
                 let end = (n / stride + 1) * stride;
@@ -513,16 +513,15 @@ pub fn integrate<S: Space, const FINITE: bool>(
                     &mut carry,
                     &mut v_half,
                     &forces,
+                    &meets,
                     h,
                     end - n,
                     &mut dissipated,
                     &mut last_power,
                     &mut counters,
                 );
-                if taken > 0 {
-                    next = n + taken;
-                    continue;
-                }
+                next = n + taken;
+                continue;
             }
             // An increment that restarts nothing, has no velocity-dependent force, writes no
             // row and is neither the step's last nor the one before it (whose acceleration

@@ -33,6 +33,18 @@ pub enum Point<S: Space> {
     },
 }
 
+impl<S: Space> Point<S> {
+    /// A particle's index (`Some(Some(i))`), the ground (`Some(None)`), or None for a body's
+    /// point: an element end as the particle-only paths see it.
+    fn particle_or_ground(&self) -> Option<Option<usize>> {
+        match self {
+            Point::Particle(i) => Some(Some(*i)),
+            Point::Ground(_) => Some(None),
+            Point::Body { .. } => None,
+        }
+    }
+}
+
 /// Configuration, as displacements from t = 0 (so round-off is relative to the motion, not to
 /// the coordinates: the penalty multiplies position errors by k_p).
 #[derive(Debug, Clone)]
@@ -883,19 +895,14 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 held_length: None,
             });
         }
-        let end = |p: &Point<S>| match p {
-            Point::Particle(i) => Some(Some(*i)),
-            Point::Ground(_) => Some(None),
-            Point::Body { .. } => None,
-        };
         for s in self.other_springs.iter().map(|k| &self.springs[*k]) {
             let turning = s.axial && FINITE;
             if turning && !s.line_held {
                 return None;
             }
             out.push(AffineSpring {
-                a: end(&s.a)?,
-                b: end(&s.b)?,
+                a: s.a.particle_or_ground()?,
+                b: s.b.particle_or_ground()?,
                 direction: s.direction,
                 c: s.c,
                 held_length: turning.then_some(s.length0),
@@ -1468,17 +1475,12 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         if self.contacts.iter().any(|c| c.damping != 0.0) {
             return None;
         }
-        let end = |p: &Point<S>| match p {
-            Point::Particle(i) => Some(Some(*i)),
-            Point::Ground(_) => Some(None),
-            Point::Body { .. } => None,
-        };
         let mut out = Vec::new();
         for s in &self.grounded_dashpots {
             let (Some(d), None) = (s.direction, s.rotation) else {
                 return None;
             };
-            if let Some(b) = end(&s.point)?
+            if let Some(b) = s.point.particle_or_ground()?
                 && s.c != 0.0
             {
                 out.push(ParticleDashpot {
@@ -1490,7 +1492,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             }
         }
         for (k, s) in self.dashpots.iter().enumerate() {
-            let (a, b) = (end(&s.a)?, end(&s.b)?);
+            let (a, b) = (s.a.particle_or_ground()?, s.b.particle_or_ground()?);
             if (a.is_some() || b.is_some()) && s.c != 0.0 {
                 // Only an axial dashpot under finite rotation turns with its nodes
                 // (`Model::dashpot_directions`); every other keeps its direction.

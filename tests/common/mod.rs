@@ -17,6 +17,18 @@ pub const SPRINGS_CASES: [&str; 5] = [
     "springs_n2n_c",
 ];
 
+/// The eight rigid-body seed cases.
+pub const RIGID_CASES: [&str; 8] = [
+    "rigid2d_pin_lumped",
+    "rigid2d_pin_surface",
+    "rigid2d_slide_lumped",
+    "rigid2d_slide_surface",
+    "rigid3d_pin_lumped",
+    "rigid3d_pin_surface",
+    "rigid3d_slide_lumped",
+    "rigid3d_slide_surface",
+];
+
 /// System C's grounded test with 103 thrown at 102 along the 45° line at 60 m/s (½ m v² =
 /// 46.6 J, against the 15 J the spring holds at either side's unit stretch): it passes 102, and
 /// the span of the spring between them, held on its line, reverses.
@@ -31,6 +43,12 @@ pub fn grounded_c_thrown() -> Scene {
 /// Load a shipped case by id.
 pub fn scene(id: &str) -> Scene {
     case::load(&case::cases_dir().join(format!("{id}.toml"))).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Load a shipped stress case by id.
+pub fn stress_scene(id: &str) -> Scene {
+    case::load(&case::stress_dir(&case::cases_dir()).join(format!("{id}.toml")))
+        .unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Every shipped case.

@@ -18,9 +18,20 @@
 //! at every increment; where its ends would pass each other, or come within a rounding margin of
 //! it (where the two paths' roundings could take different sides), the batch stops and the
 //! general path decides, taking the spring's turning force once they have passed.
+//!
+//! Under small rotation (`explicit_small`) a scene with rigid bodies and plane contacts is
+//! affine too, in the bodies' translations and rotation vectors, for as long as each contact
+//! stays on the side of its gap it started the batch on (pressed: the penalty acts; apart: no
+//! force). There the response, each contact's gap per unit motion and its push per unit normal
+//! force are formed once per step from the engine's own force pass and body solve (differences
+//! at two motions along each DOF, checked to agree), and a batch stops before an increment where
+//! a contact's gap would come within a rounding margin of zero: the general path takes that
+//! increment, and notes an impact there as it does.
 
 use super::centred::ParticleDashpots;
-use super::model::{AffineSpring, Config, Constraints, Counters, Forces, Model, Rates, Target};
+use super::model::{
+    AffineSpring, Config, Constraints, ContactMode, Counters, Forces, Model, Rates, Target,
+};
 use super::space::{Lin, Space, compensated_add};
 use crate::scene::DampingTreatment;
 
@@ -29,8 +40,17 @@ use crate::scene::DampingTreatment;
 pub const MAX_DOFS: usize = 4;
 /// At most this many dashpots.
 pub const MAX_DASHPOTS: usize = 2;
-/// At most this many axial springs held on their lines (each checked at every increment).
-pub const MAX_HELD_LINES: usize = 8;
+/// At most this many axial springs held on their lines and contact pairs, together (each
+/// checked at every increment).
+pub const MAX_SIDES: usize = 8;
+/// The motion along each DOF at which a step with bodies forms its response by differences
+/// (and its opposite, to check that the forces are affine): a power of two, so that the
+/// motion itself is exact, and large, so that the forces it makes outweigh the rounding of the
+/// loads and forces at rest that the difference removes.
+const PROBE: f64 = 1_048_576.0;
+/// How closely the differences at the two probes must agree (relative to the largest entry)
+/// for the forces to be taken as affine: they agree to round-off where they are.
+const AFFINE_AGREEMENT: f64 = 1e-9;
 
 /// An axial spring held on its line: its stretch along the line per unit motion of each free
 /// DOF, and what it needs to know where its ends are.
@@ -43,16 +63,46 @@ struct HeldLine<S: Space> {
     stretch: [f64; MAX_DOFS],
 }
 
+/// A plane contact pair under small rotation, in the free DOFs.
+#[derive(Debug, Clone, Copy)]
+struct PlaneContact {
+    /// The gap's change per unit motion of each DOF.
+    gap: [f64; MAX_DOFS],
+    /// The acceleration of each DOF per unit normal force (compressive positive).
+    push: [f64; MAX_DOFS],
+}
+
+/// Where the free DOFs' motion goes back into the state: the DOFs of one particle, one body's
+/// translation or one body's rotation, with their unit directions.
+#[derive(Debug, Clone)]
+enum Group<S: Space> {
+    Particle(usize, Vec<(usize, S::V)>),
+    Translation(usize, Vec<(usize, S::V)>),
+    Rotation(usize, Vec<(usize, S::W)>),
+}
+
 /// The recurrence of one dynamic step (see the module's documentation), formed by
 /// [`AffineStep::of`] at the step's start.
 #[derive(Debug, Clone)]
 pub struct AffineStep<S: Space> {
-    /// The free DOFs: particle and unit direction, grouped by particle.
-    dofs: Vec<(usize, S::V)>,
-    /// 1/mass of each DOF's particle.
-    inverse_masses: [f64; MAX_DOFS],
-    /// −M⁻¹K in the free DOFs: the acceleration of DOF j per unit motion of DOF l.
+    /// The free DOFs, grouped by particle, then by body (translations, then rotations).
+    dofs: Vec<Target<S>>,
+    /// The same DOFs as they go back into the state.
+    groups: Vec<Group<S>>,
+    /// 1/mass of each DOF's particle (a scene of particles: their accelerations at a batch's
+    /// start are formed here; with bodies the caller's body solve forms them).
+    inverse_masses: Option<[f64; MAX_DOFS]>,
+    /// −M⁻¹K in the free DOFs, every contact apart: the acceleration of DOF j per unit motion
+    /// of DOF l.
     response: [[f64; MAX_DOFS]; MAX_DOFS],
+    /// The plane contact pairs (bodies only), in the model's order.
+    contacts: Vec<PlaneContact>,
+    /// The penalty stiffness.
+    penalty: f64,
+    /// The bodies and the bodies that turn: the general path counts a solve and an
+    /// orientation update per increment for them.
+    bodies: u64,
+    rotating: u64,
     /// Number of dashpots.
     dashpots: usize,
     /// Whether the scene has dashpots, whose solve the general path counts at every increment
@@ -70,16 +120,29 @@ pub struct AffineStep<S: Space> {
     held_lines: Vec<HeldLine<S>>,
 }
 
-/// Per held line, the stretch at which a batch stops ([`AffineStep::meets`]).
-pub type Meets = [f64; MAX_HELD_LINES];
+/// A bound on a batch: it stops before an increment where `pattern · q ≤ meet`, with q the
+/// motion of the free DOFs since it started.
+#[derive(Debug, Clone, Copy, Default)]
+struct Side {
+    pattern: [f64; MAX_DOFS],
+    meet: f64,
+}
+
+/// Where a batch from a given state stops, and which contacts press in it
+/// ([`AffineStep::meets`]).
+#[derive(Debug, Clone, Copy)]
+pub struct Meets {
+    sides: [Side; MAX_SIDES],
+    count: usize,
+    pressing: [bool; MAX_SIDES],
+}
 
 /// The state a batch starts from (in the free DOFs).
 struct Start {
     accelerations: [f64; MAX_DOFS],
     velocities: [f64; MAX_DOFS],
-    /// Per held line, the stretch since the batch started at which its ends would meet, plus
-    /// a rounding margin: at or below it the general path takes the increment.
-    meet: [f64; MAX_HELD_LINES],
+    /// The response with the contacts that press in this batch.
+    response: [[f64; MAX_DOFS]; MAX_DOFS],
 }
 
 /// The state a batch ends at.
@@ -97,14 +160,19 @@ impl<S: Space> AffineStep<S> {
     /// for, when the step's forces are affine ([`Model::affine_springs`]), it has 1 to
     /// [`MAX_DOFS`] free DOFs, all of particles, whose projections keep exactly their free
     /// axes, at most [`MAX_DASHPOTS`] dashpots, all on fixed lines and solved with the
-    /// centred treatment (`dashpots`, prepared for the step), and at most [`MAX_HELD_LINES`]
+    /// centred treatment (`dashpots`, prepared for the step), and at most [`MAX_SIDES`]
     /// axial springs held on their lines. None otherwise.
+    ///
+    /// A scene with bodies or contacts takes [`AffineStep::with_bodies`] instead.
     pub fn of<const FINITE: bool>(
         model: &Model<S, FINITE>,
         held: &Constraints<S>,
         dashpots: Option<&ParticleDashpots<S>>,
         damping: DampingTreatment,
     ) -> Option<Self> {
+        if !model.bodies.is_empty() || model.contact_count() > 0 {
+            return Self::with_bodies(model, held);
+        }
         let springs: Vec<AffineSpring<S>> = model.affine_springs()?;
         let (list, ends, inverse) = if model.has_dashpots() {
             if damping != DampingTreatment::Centred {
@@ -176,7 +244,7 @@ impl<S: Space> AffineStep<S> {
                 });
             }
         }
-        if held_lines.len() > MAX_HELD_LINES {
+        if held_lines.len() > MAX_SIDES {
             return None;
         }
         let mut response = [[0.0; MAX_DOFS]; MAX_DOFS];
@@ -186,9 +254,19 @@ impl<S: Space> AffineStep<S> {
             }
         }
         let mut step = AffineStep {
-            dofs,
-            inverse_masses,
+            groups: groups(
+                &dofs
+                    .iter()
+                    .map(|(p, d)| Target::Particle(*p, *d))
+                    .collect::<Vec<_>>(),
+            ),
+            dofs: dofs.iter().map(|(p, d)| Target::Particle(*p, *d)).collect(),
+            inverse_masses: Some(inverse_masses),
             response,
+            contacts: Vec::new(),
+            penalty: 0.0,
+            bodies: 0,
+            rotating: 0,
             dashpots: k,
             counts_dashpots: model.has_dashpots(),
             coefficients: [0.0; MAX_DASHPOTS],
@@ -204,7 +282,7 @@ impl<S: Space> AffineStep<S> {
             }
         }
         for &(i, p, e, g) in ends {
-            for (l, (q, d)) in step.dofs.iter().enumerate() {
+            for (l, (q, d)) in dofs.iter().enumerate() {
                 if p == *q {
                     step.rates[i][l] += e.dot(d);
                     step.pushes[i][l] += g.dot(d);
@@ -214,18 +292,178 @@ impl<S: Space> AffineStep<S> {
         Some(step)
     }
 
-    /// Per axial spring held on its line, the stretch from `cfg` at which a batch stops
-    /// ([`AffineStep::meet`] plus [`AffineStep::margin`]), where every one takes the line's
-    /// force at `cfg` (its length at t = 0 plus its stretch along the line is positive, as
-    /// `Model::forces_with` asks) by more than the margin; None where one does not: the
-    /// general path then takes the increment.
-    pub fn meets(&self, cfg: &Config<S>) -> Option<Meets> {
-        let mut meets = [0.0; MAX_HELD_LINES];
-        for (meet, line) in meets.iter_mut().zip(&self.held_lines) {
-            *meet = self.meet(line, cfg) + self.margin(line, cfg);
-            if *meet >= 0.0 {
+    /// The recurrence of a dynamic step of a scene with bodies or contacts under small
+    /// rotation, where its forces are affine while each contact stays on its side: no
+    /// dashpot, no solid contact (only planes), 1 to [`MAX_DOFS`] free DOFs whose
+    /// accelerations the general path keeps within them, at most [`MAX_SIDES`] contact pairs,
+    /// and every body's operator formed once for the step. The response, each contact's gap
+    /// per unit motion and its push per unit normal force come from the engine's own force
+    /// pass and body solve, as differences at the motions ±[`PROBE`] along each DOF from rest;
+    /// where the two differ by more than round-off the forces are not affine and the step is
+    /// declined. None otherwise, and under finite rotation.
+    fn with_bodies<const FINITE: bool>(
+        model: &Model<S, FINITE>,
+        held: &Constraints<S>,
+    ) -> Option<Self> {
+        if FINITE
+            || model.has_dashpots()
+            || model.has_solids()
+            || held.any_velocity_terms()
+            || model.contact_count() > MAX_SIDES
+            || held.body_operators.iter().any(Option::is_none)
+        {
+            return None;
+        }
+        let dofs = model.free_dofs(held);
+        let n = dofs.len();
+        if n == 0 || n > MAX_DOFS {
+            return None;
+        }
+        // Scratch for the differences: none of this is the run's work.
+        let mut counters = Counters::default();
+        let rest = model.initial_config();
+        let still = model.zero_rates();
+        let mut forces = model.zero_forces();
+        let mut acc = model.zero_rates();
+        // The accelerations of the force difference `plus − minus` over `scale`, in the free
+        // DOFs; None where the general path's accelerations leave their span.
+        let mut response_to = |plus: &Forces<S>, minus: &Forces<S>, scale: f64| {
+            let mut f = model.zero_forces();
+            for (x, (a, b)) in f.p.iter_mut().zip(plus.p.iter().zip(&minus.p)) {
+                *x = (*a - *b) * scale;
+            }
+            for (x, (a, b)) in f.b.iter_mut().zip(plus.b.iter().zip(&minus.b)) {
+                *x = (*a - *b) * scale;
+            }
+            for (x, (a, b)) in f.m.iter_mut().zip(plus.m.iter().zip(&minus.m)) {
+                *x = (*a - *b) * scale;
+            }
+            model.accelerations(&rest, &f, &still, held, &mut acc, &mut counters);
+            let mut along = [0.0; MAX_DOFS];
+            let mut within = model.zero_rates();
+            for (x, t) in along.iter_mut().zip(&dofs) {
+                *x = model.rate_along(&acc, t);
+                within = within.plus(*x, &model.unit_rate(t));
+            }
+            let (off, size) = acc.max_difference(&within);
+            (off <= AFFINE_AGREEMENT * size).then_some(along)
+        };
+        let forces_at = |cfg: &Config<S>, mode: ContactMode, out: &mut Forces<S>| {
+            let mut scratch = Counters::default();
+            model.forces(cfg, mode, out, &mut scratch);
+        };
+        let agree = |a: &[f64; MAX_DOFS], b: &[f64; MAX_DOFS]| {
+            let size = a.iter().chain(b).fold(0.0_f64, |m, x| m.max(x.abs()));
+            a.iter()
+                .zip(b)
+                .all(|(x, y)| (x - y).abs() <= AFFINE_AGREEMENT * size)
+        };
+        forces_at(&rest, ContactMode::Off, &mut forces);
+        let at_rest = forces.clone();
+        let mut response = [[0.0; MAX_DOFS]; MAX_DOFS];
+        let mut gaps = vec![[0.0; MAX_DOFS]; model.contact_count()];
+        let (mut plus, mut minus) = (model.zero_forces(), model.zero_forces());
+        for (l, t) in dofs.iter().enumerate() {
+            let (mut up, mut down) = (rest.clone(), rest.clone());
+            model.perturb(&mut up, t, PROBE);
+            model.perturb(&mut down, t, -PROBE);
+            forces_at(&up, ContactMode::Off, &mut plus);
+            forces_at(&down, ContactMode::Off, &mut minus);
+            let column = response_to(&plus, &at_rest, 1.0 / PROBE)?;
+            if !agree(&column, &response_to(&at_rest, &minus, 1.0 / PROBE)?) {
                 return None;
             }
+            for (row, x) in response.iter_mut().zip(column) {
+                row[l] = x;
+            }
+            for (k, gap) in gaps.iter_mut().enumerate() {
+                let (at, above, below) = (
+                    model.gap(&rest, k).0,
+                    model.gap(&up, k).0,
+                    model.gap(&down, k).0,
+                );
+                gap[l] = (above - at) / PROBE;
+                let other = (at - below) / PROBE;
+                let size = gap[l].abs().max(other.abs());
+                if (gap[l] - other).abs() > AFFINE_AGREEMENT * size {
+                    return None;
+                }
+            }
+        }
+        let mut contacts = Vec::new();
+        let none = vec![0.0; model.contact_count()];
+        forces_at(&rest, ContactMode::Given(&none), &mut minus);
+        for (k, gap) in gaps.into_iter().enumerate() {
+            let mut unit = none.clone();
+            unit[k] = 1.0;
+            forces_at(&rest, ContactMode::Given(&unit), &mut plus);
+            let push = response_to(&plus, &minus, 1.0)?;
+            contacts.push(PlaneContact { gap, push });
+        }
+        let rotating = held.rotating.iter().filter(|r| **r).count() as u64;
+        Some(AffineStep {
+            groups: groups(&dofs),
+            dofs,
+            inverse_masses: None,
+            response,
+            contacts,
+            penalty: model.penalty,
+            bodies: model.bodies.len() as u64,
+            rotating,
+            dashpots: 0,
+            counts_dashpots: false,
+            coefficients: [0.0; MAX_DASHPOTS],
+            rates: [[0.0; MAX_DOFS]; MAX_DASHPOTS],
+            pushes: [[0.0; MAX_DOFS]; MAX_DASHPOTS],
+            inverse: [[0.0; MAX_DASHPOTS]; MAX_DASHPOTS],
+            held_lines: Vec::new(),
+        })
+    }
+
+    /// Whether the accelerations at a batch's start come from the caller's body solve
+    /// ([`AffineStep::advance`]'s `solved`).
+    pub fn solves_bodies(&self) -> bool {
+        self.inverse_masses.is_none()
+    }
+
+    /// Where a batch from `cfg` stops: per axial spring held on its line, the stretch at which
+    /// its ends would meet ([`AffineStep::meet`]) plus [`AffineStep::margin`]; per contact
+    /// pair, the motion at which its gap would come within its rounding margin
+    /// ([`Model::gap_size`]) of zero from the side it is on. None where a held line does not
+    /// take the line's force at `cfg` by more than the margin (its length at t = 0 plus its
+    /// stretch along the line is positive, as `Model::forces_with` asks) or a contact is
+    /// within its margin of zero: the general path then takes the increment.
+    pub fn meets<const FINITE: bool>(
+        &self,
+        model: &Model<S, FINITE>,
+        cfg: &Config<S>,
+    ) -> Option<Meets> {
+        let mut meets = Meets {
+            sides: [Side::default(); MAX_SIDES],
+            count: self.held_lines.len() + self.contacts.len(),
+            pressing: [false; MAX_SIDES],
+        };
+        for (side, line) in meets.sides.iter_mut().zip(&self.held_lines) {
+            side.pattern = line.stretch;
+            side.meet = self.meet(line, cfg) + self.margin(line, cfg);
+            if side.meet >= 0.0 {
+                return None;
+            }
+        }
+        let sides = meets.sides[self.held_lines.len()..].iter_mut();
+        for (k, (side, contact)) in sides.zip(&self.contacts).enumerate() {
+            let gap = model.gap(cfg, k).0;
+            let margin = 1e-12 * model.gap_size(cfg, k);
+            // Pressing, it stops where the gap rises to −margin; apart, where it falls to
+            // +margin.
+            let pressing = gap < 0.0;
+            let sign = if pressing { -1.0 } else { 1.0 };
+            side.pattern = contact.gap.map(|g| sign * g);
+            side.meet = -(sign * gap) + margin;
+            if side.meet >= 0.0 {
+                return None;
+            }
+            meets.pressing[k] = pressing;
         }
         Some(meets)
     }
@@ -247,11 +485,13 @@ impl<S: Space> AffineStep<S> {
     }
 
     /// Step `count` (≥ 1) increments at most from `cfg`, `carry` and the half-step velocities
-    /// `v_half`, where `forces` are the forces at `cfg` and `meets` are
-    /// [`AffineStep::meets`] at `cfg`; `dissipated` and `last_power` go on as the time loop
-    /// keeps them (the dashpots' work and the power of the last increment). Returns the
-    /// increments taken, at least one: fewer than `count` only where an axial spring held on
-    /// its line would come within the margin of its ends meeting.
+    /// `v_half`, where `forces` are the forces at `cfg`, `solved` the accelerations the
+    /// general path's body solve forms from them (read where [`AffineStep::solves_bodies`])
+    /// and `meets` are [`AffineStep::meets`] at `cfg`; `dissipated` and `last_power` go on as
+    /// the time loop keeps them (the dashpots' work and the power of the last increment).
+    /// Returns the increments taken, at least one: fewer than `count` only where an axial
+    /// spring held on its line would come within the margin of its ends meeting, or a contact
+    /// within the margin of its gap's zero.
     #[allow(clippy::too_many_arguments)]
     pub fn advance(
         &self,
@@ -259,6 +499,7 @@ impl<S: Space> AffineStep<S> {
         carry: &mut Rates<S>,
         v_half: &mut Rates<S>,
         forces: &Forces<S>,
+        solved: &Rates<S>,
         meets: &Meets,
         h: f64,
         count: u64,
@@ -269,17 +510,31 @@ impl<S: Space> AffineStep<S> {
         let mut start = Start {
             accelerations: [0.0; MAX_DOFS],
             velocities: [0.0; MAX_DOFS],
-            meet: *meets,
+            response: self.response,
         };
-        for (l, (p, d)) in self.dofs.iter().enumerate() {
-            start.accelerations[l] = self.inverse_masses[l] * d.dot(&forces.p[*p]);
-            start.velocities[l] = d.dot(&v_half.p[*p]);
+        for (l, t) in self.dofs.iter().enumerate() {
+            start.accelerations[l] = match (self.inverse_masses, t) {
+                (Some(m), Target::Particle(p, d)) => m[l] * d.dot(&forces.p[*p]),
+                _ => rate(solved, t),
+            };
+            start.velocities[l] = rate(v_half, t);
+        }
+        // A pressing contact adds its penalty: −k_p·push ⊗ gap.
+        for (contact, pressing) in self.contacts.iter().zip(meets.pressing) {
+            if pressing {
+                for (row, push) in start.response.iter_mut().zip(contact.push) {
+                    for (x, gap) in row.iter_mut().zip(contact.gap) {
+                        *x -= self.penalty * push * gap;
+                    }
+                }
+            }
         }
         let (n, k) = (self.dofs.len(), self.dashpots);
+        let sides = &meets.sides[..meets.count];
         macro_rules! dispatch {
             ($(($n:literal, $k:literal)),*) => {
                 match (n, k) {
-                    $(($n, $k) => self.run::<$n, $k>(&start, count, h, *dissipated, *last_power),)*
+                    $(($n, $k) => self.run::<$n, $k>(&start, sides, count, h, *dissipated, *last_power),)*
                     _ => unreachable!("AffineStep::of bounds the DOFs and dashpots"),
                 }
             };
@@ -298,31 +553,39 @@ impl<S: Space> AffineStep<S> {
             (4, 1),
             (4, 2)
         );
-        // Back into the configuration: each particle's motion along its free axes, added with
-        // its rounding carry; its velocity along them replaced, the rest of it kept.
-        let mut l = 0;
-        while l < n {
-            let p = self.dofs[l].0;
-            let (mut motion, mut now, mut before) = (S::V::zero(), S::V::zero(), S::V::zero());
-            while l < n && self.dofs[l].0 == p {
-                let d = self.dofs[l].1;
-                motion += d * (batch.motion[l] - batch.carry[l]);
-                now += d * batch.velocities[l];
-                before += d * start.velocities[l];
-                l += 1;
+        // Back into the configuration: each particle's or body's motion along its free axes,
+        // added with its rounding carry; its velocity along them replaced, the rest of it kept.
+        for group in &self.groups {
+            let before = &start.velocities;
+            match group {
+                Group::Particle(p, axes) => {
+                    let (x, c, v) = (&mut cfg.u[*p], &mut carry.p[*p], &mut v_half.p[*p]);
+                    put_back(x, c, v, axes, &batch, before);
+                }
+                Group::Translation(b, axes) => {
+                    let (x, c, v) = (&mut cfg.bu[*b], &mut carry.b[*b], &mut v_half.b[*b]);
+                    put_back(x, c, v, axes, &batch, before);
+                }
+                Group::Rotation(b, axes) => {
+                    let (x, c, v) = (&mut cfg.bth[*b], &mut carry.w[*b], &mut v_half.w[*b]);
+                    put_back(x, c, v, axes, &batch, before);
+                }
             }
-            compensated_add(&mut cfg.u[p], &mut carry.p[p], motion);
-            v_half.p[p] = now + (v_half.p[p] - before);
         }
         *dissipated = batch.dissipated;
         *last_power = batch.last_power;
-        counters.affine_increments += batch.increments;
-        // The caller's force pass served the first increment.
-        counters.force_evaluations += batch.increments - 1;
+        let taken = batch.increments;
+        counters.affine_increments += taken;
+        // Counted as the general path counts its work: the caller's force pass (and body
+        // solve) served the first increment.
+        counters.force_evaluations += taken - 1;
+        counters.contact_evaluations += self.contacts.len() as u64 * (taken - 1);
+        counters.body_solves += self.bodies * (taken - 1);
+        counters.rotation_updates += self.rotating * taken;
         if self.counts_dashpots {
-            counters.damping_evaluations += batch.increments;
+            counters.damping_evaluations += taken;
         }
-        batch.increments
+        taken
     }
 
     /// [`AffineStep::advance`] with `N` DOFs and `K` dashpots known to the compiler, so that
@@ -331,6 +594,7 @@ impl<S: Space> AffineStep<S> {
     fn run<const N: usize, const K: usize>(
         &self,
         start: &Start,
+        sides: &[Side],
         count: u64,
         h: f64,
         mut dissipated: f64,
@@ -338,7 +602,7 @@ impl<S: Space> AffineStep<S> {
     ) -> Batch {
         let a0: [f64; N] = std::array::from_fn(|j| start.accelerations[j]);
         let response: [[f64; N]; N] =
-            std::array::from_fn(|j| std::array::from_fn(|l| self.response[j][l]));
+            std::array::from_fn(|j| std::array::from_fn(|l| start.response[j][l]));
         let rates: [[f64; N]; K] =
             std::array::from_fn(|i| std::array::from_fn(|l| self.rates[i][l]));
         let pushes: [[f64; N]; K] =
@@ -346,18 +610,17 @@ impl<S: Space> AffineStep<S> {
         let inverse: [[f64; K]; K] =
             std::array::from_fn(|i| std::array::from_fn(|m| self.inverse[i][m]));
         let c: [f64; K] = std::array::from_fn(|i| self.coefficients[i]);
-        let lines = &self.held_lines;
         let mut v: [f64; N] = std::array::from_fn(|j| start.velocities[j]);
         let (mut q, mut carry) = ([0.0; N], [0.0; N]);
         let half = 0.5 * h;
         let mut increments = 0;
         'increments: while increments < count {
-            for (line, meet) in lines.iter().zip(&start.meet) {
+            for side in sides {
                 let mut stretch = 0.0;
-                for (e, x) in line.stretch.iter().zip(&q) {
+                for (e, x) in side.pattern.iter().zip(&q) {
                     stretch += e * x;
                 }
-                if stretch <= *meet {
+                if stretch <= side.meet {
                     break 'increments;
                 }
             }
@@ -413,4 +676,57 @@ impl<S: Space> AffineStep<S> {
             last_power,
         }
     }
+}
+
+/// The rate of a generalised DOF (as [`Model::rate_along`], which needs no model).
+fn rate<S: Space>(rates: &Rates<S>, target: &Target<S>) -> f64 {
+    match target {
+        Target::Particle(i, d) => d.dot(&rates.p[*i]),
+        Target::Translation(b, d) => d.dot(&rates.b[*b]),
+        Target::Rotation(b, g) => g.dot(&rates.w[*b]),
+    }
+}
+
+/// The free DOFs as they go back into the state: consecutive DOFs of one particle, of one
+/// body's translation or of one body's rotation together.
+fn groups<S: Space>(dofs: &[Target<S>]) -> Vec<Group<S>> {
+    let mut out: Vec<Group<S>> = Vec::new();
+    for (l, t) in dofs.iter().enumerate() {
+        match (out.last_mut(), *t) {
+            (Some(Group::Particle(p, axes)), Target::Particle(i, d)) if *p == i => {
+                axes.push((l, d))
+            }
+            (Some(Group::Translation(b, axes)), Target::Translation(i, d)) if *b == i => {
+                axes.push((l, d))
+            }
+            (Some(Group::Rotation(b, axes)), Target::Rotation(i, g)) if *b == i => {
+                axes.push((l, g))
+            }
+            (_, Target::Particle(i, d)) => out.push(Group::Particle(i, vec![(l, d)])),
+            (_, Target::Translation(i, d)) => out.push(Group::Translation(i, vec![(l, d)])),
+            (_, Target::Rotation(i, g)) => out.push(Group::Rotation(i, vec![(l, g)])),
+        }
+    }
+    out
+}
+
+/// One particle's or body's part of a batch back into the state: `x` moves by the motion along
+/// `axes` (DOF index and unit direction), added with its rounding carry `carry`; the velocity
+/// `v` along them becomes the batch's, the rest of it (along held axes) is kept.
+fn put_back<T: Lin>(
+    x: &mut T,
+    carry: &mut T,
+    v: &mut T,
+    axes: &[(usize, T)],
+    batch: &Batch,
+    before: &[f64; MAX_DOFS],
+) {
+    let (mut motion, mut now, mut was) = (T::zero(), T::zero(), T::zero());
+    for &(l, d) in axes {
+        motion += d * (batch.motion[l] - batch.carry[l]);
+        now += d * batch.velocities[l];
+        was += d * before[l];
+    }
+    compensated_add(x, carry, motion);
+    *v = now + (*v - was);
 }

@@ -495,7 +495,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
                     if let Some(store) = axial.as_mut() {
                         store.write_back::<S>(&mut cfg.u, &mut carry.p, &mut v_half.p);
                     }
-                    recurrence.meets(&cfg)
+                    recurrence.meets(model, &cfg)
                 }
             {
                 let end = (n / stride + 1) * stride;
@@ -508,11 +508,18 @@ pub fn integrate<S: Space, const FINITE: bool>(
                     &mut forces,
                     &mut counters,
                 );
+                // Each contact stays on its side through the batch: only its start can press
+                // anew.
+                note_impacts(&mut pressed, &forces.contact, n as f64 * h, &mut impacts);
+                if recurrence.solves_bodies() {
+                    model.accelerations(&cfg, &forces, &v_half, &held, &mut acc, &mut counters);
+                }
                 let taken = recurrence.advance(
                     &mut cfg,
                     &mut carry,
                     &mut v_half,
                     &forces,
+                    &acc,
                     &meets,
                     h,
                     end - n,
@@ -568,13 +575,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
                     &mut counters,
                 );
             }
-            for (was, force) in pressed.iter_mut().zip(&forces.contact) {
-                let now = *force > 0.0;
-                if now && *was == Some(false) {
-                    impacts.push(n as f64 * h);
-                }
-                *was = Some(now);
-            }
+            note_impacts(&mut pressed, &forces.contact, n as f64 * h, &mut impacts);
             if solids {
                 model.solid_positions(&cfg, &mut solid_now);
                 if watching && let Some((k, moved)) = model.through_solid(&solid_before, &solid_now)
@@ -888,6 +889,18 @@ pub fn integrate<S: Space, const FINITE: bool>(
         counters,
         impacts,
     })
+}
+
+/// Note which contact pairs press at time `t` (normal forces `contact`) in `pressed`, and an
+/// impact where one that did not press at the last increment noted starts to.
+fn note_impacts(pressed: &mut [Option<bool>], contact: &[f64], t: f64, impacts: &mut Vec<f64>) {
+    for (was, force) in pressed.iter_mut().zip(contact) {
+        let now = *force > 0.0;
+        if now && *was == Some(false) {
+            impacts.push(t);
+        }
+        *was = Some(now);
+    }
 }
 
 /// Turns the rows of increments into output rows: on increments that fall on the output times,

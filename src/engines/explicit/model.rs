@@ -1024,6 +1024,16 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         }
     }
 
+    /// The size of the terms a plane contact's gap sums under small rotation (the gap at
+    /// t = 0, the node's motion relative to the body's reference node, the turn of its arm):
+    /// the gap's rounding is a few ulps of it.
+    pub fn gap_size(&self, cfg: &Config<S>, k: usize) -> f64 {
+        let c = &self.contacts[k];
+        let relative = cfg.u[c.particle] - cfg.bu[c.body];
+        let turn = S::cross(&cfg.bth[c.body], &c.arm0);
+        c.gap0.abs() + relative.dot(&relative).sqrt() + turn.dot(&turn).sqrt()
+    }
+
     /// A contact node's position relative to its solid's centre, in the body frame (small
     /// rotation: Rᵀ ≈ 1 − [θ]×).
     #[inline]

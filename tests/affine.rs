@@ -247,6 +247,35 @@ fn the_rigid_cases_under_small_rotation_step_as_the_general_path_to_round_off() 
 }
 
 #[test]
+fn numbers_that_round_give_the_general_path_to_round_off_too() {
+    // The seed cases' loads, masses and inertia are numbers whose sums round exactly; these
+    // are not. The response and the contact's push are differences of force passes that also
+    // sum the loads, so they carry the loads' rounding over the probe: with a unit normal
+    // force as the probe that is ε·|load| ≈ 1e-11 of the push, with the probe used
+    // (2^20 times the largest force at rest) ε/2^20.
+    let scene = variant(
+        "rigid2d_pin_lumped",
+        &[
+            ("force = [-1.0e5, 0.0]", "force = [-98765.4321, 0.0]"),
+            ("mass = 5.0", "mass = 5.3"),
+            ("inertia = 65.0", "inertia = 64.77"),
+        ],
+    );
+    let settings = RunSettings::default();
+    let engine = ExplicitEngine::small();
+    let affine = run(engine, &scene, &settings);
+    let general = run(engine.general(), &scene, &settings);
+    assert!(affine_increments(&affine) > 0);
+    let ((d, name), contact) = differences(&affine, &general);
+    let bound = contact_bound(&general, &["ux", "ux_node"]);
+    println!(
+        "numbers that round: {d:.1e} ({name}); contact force {contact:.1e} (bound {bound:.1e})"
+    );
+    assert!(d <= ROUND_OFF, "{name} {d:e}");
+    assert!(contact <= bound, "contact force {contact:e} > {bound:e}");
+}
+
+#[test]
 fn a_contact_that_opens_and_closes_ends_a_batch_at_each_change() {
     // The pinned seed problem with omega0 reversed: the face runs away from N and strikes it
     // again, six times in 0.1 s under small rotation. A batch keeps each contact on the side

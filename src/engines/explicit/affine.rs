@@ -24,7 +24,7 @@
 //! stays on the side of its gap it started the batch on (pressed: the penalty acts; apart: no
 //! force). There the response, each contact's gap per unit motion and its push per unit normal
 //! force are formed once per step from the engine's own force pass and body solve (differences
-//! at two motions along each DOF, checked to agree), and a batch stops before an increment where
+//! on both sides of rest along each DOF, checked to agree), and a batch stops before an increment where
 //! a contact's gap would come within a rounding margin of zero: the general path takes that
 //! increment, and notes an impact there as it does.
 
@@ -44,12 +44,16 @@ pub const MAX_DASHPOTS: usize = 2;
 /// checked at every increment).
 pub const MAX_SIDES: usize = 8;
 /// The motion along each DOF at which a step with bodies forms its response by differences
-/// (and its opposite, to check that the forces are affine): a power of two, so that the
-/// motion itself is exact, and large, so that the forces it makes outweigh the rounding of the
-/// loads and forces at rest that the difference removes.
+/// (and its opposite, to check the other side): a power of two, so that the motion itself is
+/// exact, and large, so that the forces it makes outweigh the rounding of the loads and forces
+/// at rest that the difference removes. The contacts' pushes are formed likewise, from normal
+/// forces of PROBE times the largest force at rest.
 const PROBE: f64 = 1_048_576.0;
-/// How closely the differences at the two probes must agree (relative to the largest entry)
-/// for the forces to be taken as affine: they agree to round-off where they are.
+/// How closely the differences on the two sides of rest must agree (relative to the largest
+/// entry). That the forces are affine follows from the small-rotation model (fixed arms and
+/// normals, forces linear in the displacements and rotation vectors); this check is a safety
+/// net that catches a force not affine along a DOF (it cannot see a product of two DOFs).
+/// Where the model is affine the two sides agree to round-off, far inside it.
 const AFFINE_AGREEMENT: f64 = 1e-9;
 
 /// An axial spring held on its line: its stretch along the line per unit motion of each free
@@ -67,7 +71,7 @@ struct HeldLine<S: Space> {
 #[derive(Debug, Clone, Copy)]
 struct PlaneContact {
     /// The gap's change per unit motion of each DOF.
-    gap: [f64; MAX_DOFS],
+    gap_per_motion: [f64; MAX_DOFS],
     /// The acceleration of each DOF per unit normal force (compressive positive).
     push: [f64; MAX_DOFS],
 }
@@ -99,10 +103,10 @@ pub struct AffineStep<S: Space> {
     contacts: Vec<PlaneContact>,
     /// The penalty stiffness.
     penalty: f64,
-    /// The bodies and the bodies that turn: the general path counts a solve and an
+    /// How many bodies, and how many of them turn: the general path counts a solve and an
     /// orientation update per increment for them.
-    bodies: u64,
-    rotating: u64,
+    body_count: u64,
+    rotating_count: u64,
     /// Number of dashpots.
     dashpots: usize,
     /// Whether the scene has dashpots, whose solve the general path counts at every increment
@@ -120,18 +124,20 @@ pub struct AffineStep<S: Space> {
     held_lines: Vec<HeldLine<S>>,
 }
 
-/// A bound on a batch: it stops before an increment where `pattern · q ≤ meet`, with q the
-/// motion of the free DOFs since it started.
+/// A bound on a batch: it stops before an increment where
+/// `pattern · q ≤ limit + 1e-12·Σ|pattern_l q_l|`, with q the motion of the free DOFs since it
+/// started (the last term: the rounding of a sum that has grown since the batch started, on top
+/// of the margin `limit` holds for the terms at its start).
 #[derive(Debug, Clone, Copy, Default)]
 struct Side {
     pattern: [f64; MAX_DOFS],
-    meet: f64,
+    limit: f64,
 }
 
 /// Where a batch from a given state stops, and which contacts press in it
-/// ([`AffineStep::meets`]).
+/// ([`AffineStep::bounds`]).
 #[derive(Debug, Clone, Copy)]
-pub struct Meets {
+pub struct Bounds {
     sides: [Side; MAX_SIDES],
     count: usize,
     pressing: [bool; MAX_SIDES],
@@ -163,7 +169,7 @@ impl<S: Space> AffineStep<S> {
     /// centred treatment (`dashpots`, prepared for the step), and at most [`MAX_SIDES`]
     /// axial springs held on their lines. None otherwise.
     ///
-    /// A scene with bodies or contacts takes [`AffineStep::with_bodies`] instead.
+    /// A scene with bodies or contacts takes `AffineStep::with_bodies` instead.
     pub fn of<const FINITE: bool>(
         model: &Model<S, FINITE>,
         held: &Constraints<S>,
@@ -265,8 +271,8 @@ impl<S: Space> AffineStep<S> {
             response,
             contacts: Vec::new(),
             penalty: 0.0,
-            bodies: 0,
-            rotating: 0,
+            body_count: 0,
+            rotating_count: 0,
             dashpots: k,
             counts_dashpots: model.has_dashpots(),
             coefficients: [0.0; MAX_DASHPOTS],
@@ -298,9 +304,10 @@ impl<S: Space> AffineStep<S> {
     /// accelerations the general path keeps within them, at most [`MAX_SIDES`] contact pairs,
     /// and every body's operator formed once for the step. The response, each contact's gap
     /// per unit motion and its push per unit normal force come from the engine's own force
-    /// pass and body solve, as differences at the motions ±[`PROBE`] along each DOF from rest;
-    /// where the two differ by more than round-off the forces are not affine and the step is
-    /// declined. None otherwise, and under finite rotation.
+    /// pass and body solve, as differences at the motions ±[`PROBE`] along each DOF from rest
+    /// (and normal forces ±PROBE times the largest force at rest); where the two sides differ
+    /// by more than [`AFFINE_AGREEMENT`] the step is declined. None otherwise, and under finite
+    /// rotation.
     fn with_bodies<const FINITE: bool>(
         model: &Model<S, FINITE>,
         held: &Constraints<S>,
@@ -390,17 +397,31 @@ impl<S: Space> AffineStep<S> {
                 }
             }
         }
+        // Each contact's push from normal forces ±`probe`: a power of two at least PROBE times
+        // the largest force at rest, so that the rounding of the loads it is summed with is
+        // far below it.
+        let largest = at_rest.p.iter().chain(&at_rest.b).map(|f| f.dot(f).sqrt());
+        let largest = largest.chain(at_rest.m.iter().map(|m| m.dot(m).sqrt()));
+        let probe = PROBE * largest.fold(1.0_f64, f64::max).log2().ceil().exp2();
         let mut contacts = Vec::new();
         let none = vec![0.0; model.contact_count()];
-        forces_at(&rest, ContactMode::Given(&none), &mut minus);
-        for (k, gap) in gaps.into_iter().enumerate() {
-            let mut unit = none.clone();
-            unit[k] = 1.0;
-            forces_at(&rest, ContactMode::Given(&unit), &mut plus);
-            let push = response_to(&plus, &minus, 1.0)?;
-            contacts.push(PlaneContact { gap, push });
+        forces_at(&rest, ContactMode::Given(&none), &mut forces);
+        for (k, gap_per_motion) in gaps.into_iter().enumerate() {
+            let mut given = none.clone();
+            given[k] = probe;
+            forces_at(&rest, ContactMode::Given(&given), &mut plus);
+            given[k] = -probe;
+            forces_at(&rest, ContactMode::Given(&given), &mut minus);
+            let push = response_to(&plus, &forces, 1.0 / probe)?;
+            if !agree(&push, &response_to(&forces, &minus, 1.0 / probe)?) {
+                return None;
+            }
+            contacts.push(PlaneContact {
+                gap_per_motion,
+                push,
+            });
         }
-        let rotating = held.rotating.iter().filter(|r| **r).count() as u64;
+        let rotating_count = held.rotating.iter().filter(|r| **r).count() as u64;
         Some(AffineStep {
             groups: groups(&dofs),
             dofs,
@@ -408,8 +429,8 @@ impl<S: Space> AffineStep<S> {
             response,
             contacts,
             penalty: model.penalty,
-            bodies: model.bodies.len() as u64,
-            rotating,
+            body_count: model.bodies.len() as u64,
+            rotating_count,
             dashpots: 0,
             counts_dashpots: false,
             coefficients: [0.0; MAX_DASHPOTS],
@@ -427,30 +448,32 @@ impl<S: Space> AffineStep<S> {
     }
 
     /// Where a batch from `cfg` stops: per axial spring held on its line, the stretch at which
-    /// its ends would meet ([`AffineStep::meet`]) plus [`AffineStep::margin`]; per contact
-    /// pair, the motion at which its gap would come within its rounding margin
-    /// ([`Model::gap_size`]) of zero from the side it is on. None where a held line does not
+    /// its ends would meet (`AffineStep::meet`) plus its margin (`AffineStep::margin`); per
+    /// contact pair, the motion at which its gap would come within its rounding margin
+    /// (10^-12 of [`Model::gap_size`]) of zero from the side it is on. To each margin the
+    /// batch adds 10^-12 of the size its motion since the start gives the sum (`Side`).
+    /// None where a held line does not
     /// take the line's force at `cfg` by more than the margin (its length at t = 0 plus its
     /// stretch along the line is positive, as `Model::forces_with` asks) or a contact is
     /// within its margin of zero: the general path then takes the increment.
-    pub fn meets<const FINITE: bool>(
+    pub fn bounds<const FINITE: bool>(
         &self,
         model: &Model<S, FINITE>,
         cfg: &Config<S>,
-    ) -> Option<Meets> {
-        let mut meets = Meets {
+    ) -> Option<Bounds> {
+        let mut bounds = Bounds {
             sides: [Side::default(); MAX_SIDES],
             count: self.held_lines.len() + self.contacts.len(),
             pressing: [false; MAX_SIDES],
         };
-        for (side, line) in meets.sides.iter_mut().zip(&self.held_lines) {
+        for (side, line) in bounds.sides.iter_mut().zip(&self.held_lines) {
             side.pattern = line.stretch;
-            side.meet = self.meet(line, cfg) + self.margin(line, cfg);
-            if side.meet >= 0.0 {
+            side.limit = self.meet(line, cfg) + self.margin(line, cfg);
+            if side.limit >= 0.0 {
                 return None;
             }
         }
-        let sides = meets.sides[self.held_lines.len()..].iter_mut();
+        let sides = bounds.sides[self.held_lines.len()..].iter_mut();
         for (k, (side, contact)) in sides.zip(&self.contacts).enumerate() {
             let gap = model.gap(cfg, k).0;
             let margin = 1e-12 * model.gap_size(cfg, k);
@@ -458,14 +481,14 @@ impl<S: Space> AffineStep<S> {
             // +margin.
             let pressing = gap < 0.0;
             let sign = if pressing { -1.0 } else { 1.0 };
-            side.pattern = contact.gap.map(|g| sign * g);
-            side.meet = -(sign * gap) + margin;
-            if side.meet >= 0.0 {
+            side.pattern = contact.gap_per_motion.map(|g| sign * g);
+            side.limit = -(sign * gap) + margin;
+            if side.limit >= 0.0 {
                 return None;
             }
-            meets.pressing[k] = pressing;
+            bounds.pressing[k] = pressing;
         }
-        Some(meets)
+        Some(bounds)
     }
 
     /// The stretch since `cfg` at which `line`'s ends would meet.
@@ -486,8 +509,8 @@ impl<S: Space> AffineStep<S> {
 
     /// Step `count` (≥ 1) increments at most from `cfg`, `carry` and the half-step velocities
     /// `v_half`, where `forces` are the forces at `cfg`, `solved` the accelerations the
-    /// general path's body solve forms from them (read where [`AffineStep::solves_bodies`])
-    /// and `meets` are [`AffineStep::meets`] at `cfg`; `dissipated` and `last_power` go on as
+    /// general path's body solve forms from them (given where [`AffineStep::solves_bodies`])
+    /// and `bounds` are [`AffineStep::bounds`] at `cfg`; `dissipated` and `last_power` go on as
     /// the time loop keeps them (the dashpots' work and the power of the last increment).
     /// Returns the increments taken, at least one: fewer than `count` only where an axial
     /// spring held on its line would come within the margin of its ends meeting, or a contact
@@ -499,8 +522,8 @@ impl<S: Space> AffineStep<S> {
         carry: &mut Rates<S>,
         v_half: &mut Rates<S>,
         forces: &Forces<S>,
-        solved: &Rates<S>,
-        meets: &Meets,
+        solved: Option<&Rates<S>>,
+        bounds: &Bounds,
         h: f64,
         count: u64,
         dissipated: &mut f64,
@@ -513,24 +536,25 @@ impl<S: Space> AffineStep<S> {
             response: self.response,
         };
         for (l, t) in self.dofs.iter().enumerate() {
-            start.accelerations[l] = match (self.inverse_masses, t) {
-                (Some(m), Target::Particle(p, d)) => m[l] * d.dot(&forces.p[*p]),
-                _ => rate(solved, t),
+            start.accelerations[l] = match (self.inverse_masses, t, solved) {
+                (Some(m), Target::Particle(p, d), _) => m[l] * d.dot(&forces.p[*p]),
+                (None, _, Some(solved)) => rate(solved, t),
+                _ => unreachable!("a step with bodies is given the body solve's accelerations"),
             };
             start.velocities[l] = rate(v_half, t);
         }
         // A pressing contact adds its penalty: −k_p·push ⊗ gap.
-        for (contact, pressing) in self.contacts.iter().zip(meets.pressing) {
+        for (contact, pressing) in self.contacts.iter().zip(bounds.pressing) {
             if pressing {
                 for (row, push) in start.response.iter_mut().zip(contact.push) {
-                    for (x, gap) in row.iter_mut().zip(contact.gap) {
+                    for (x, gap) in row.iter_mut().zip(contact.gap_per_motion) {
                         *x -= self.penalty * push * gap;
                     }
                 }
             }
         }
         let (n, k) = (self.dofs.len(), self.dashpots);
-        let sides = &meets.sides[..meets.count];
+        let sides = &bounds.sides[..bounds.count];
         macro_rules! dispatch {
             ($(($n:literal, $k:literal)),*) => {
                 match (n, k) {
@@ -580,8 +604,8 @@ impl<S: Space> AffineStep<S> {
         // solve) served the first increment.
         counters.force_evaluations += taken - 1;
         counters.contact_evaluations += self.contacts.len() as u64 * (taken - 1);
-        counters.body_solves += self.bodies * (taken - 1);
-        counters.rotation_updates += self.rotating * taken;
+        counters.body_solves += self.body_count * (taken - 1);
+        counters.rotation_updates += self.rotating_count * taken;
         if self.counts_dashpots {
             counters.damping_evaluations += taken;
         }
@@ -616,11 +640,12 @@ impl<S: Space> AffineStep<S> {
         let mut increments = 0;
         'increments: while increments < count {
             for side in sides {
-                let mut stretch = 0.0;
+                let (mut stretch, mut size) = (0.0, 0.0);
                 for (e, x) in side.pattern.iter().zip(&q) {
                     stretch += e * x;
+                    size += (e * x).abs();
                 }
-                if stretch <= side.meet {
+                if stretch <= side.limit + 1e-12 * size {
                     break 'increments;
                 }
             }

@@ -490,12 +490,12 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 && !restart
                 && !n.is_multiple_of(stride)
                 && n + 1 < first + steps_here
-                && let Some(meets) = {
+                && let Some(bounds) = {
                     // The held lines are checked on the current state.
                     if let Some(store) = axial.as_mut() {
                         store.write_back::<S>(&mut cfg.u, &mut carry.p, &mut v_half.p);
                     }
-                    recurrence.meets(model, &cfg)
+                    recurrence.bounds(model, &cfg)
                 }
             {
                 let end = (n / stride + 1) * stride;
@@ -511,16 +511,19 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 // Each contact stays on its side through the batch: only its start can press
                 // anew.
                 note_impacts(&mut pressed, &forces.contact, n as f64 * h, &mut impacts);
-                if recurrence.solves_bodies() {
+                let solved = if recurrence.solves_bodies() {
                     model.accelerations(&cfg, &forces, &v_half, &held, &mut acc, &mut counters);
-                }
+                    Some(&acc)
+                } else {
+                    None
+                };
                 let taken = recurrence.advance(
                     &mut cfg,
                     &mut carry,
                     &mut v_half,
                     &forces,
-                    &acc,
-                    &meets,
+                    solved,
+                    &bounds,
                     h,
                     end - n,
                     &mut dissipated,

@@ -1026,7 +1026,8 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
 
     /// The size of the terms a plane contact's gap sums under small rotation (the gap at
     /// t = 0, the node's motion relative to the body's reference node, the turn of its arm):
-    /// the gap's rounding is a few ulps of it.
+    /// the gap's rounding is a few ulps of it. Only for a plane contact under small rotation
+    /// (it reads the rotation vector, not the orientation).
     pub fn gap_size(&self, cfg: &Config<S>, k: usize) -> f64 {
         let c = &self.contacts[k];
         let relative = cfg.u[c.particle] - cfg.bu[c.body];

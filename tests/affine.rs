@@ -29,6 +29,20 @@ fn eligible(steps: u64, stride: u64) -> u64 {
     (1..=steps - 2).filter(|n| n % stride != 0).count() as u64
 }
 
+/// `scene` run by `engine` with and without the affine step, each checked: `steps` increments
+/// in all, of which the affine run took every one it may take and the general run none.
+fn both_paths(engine: ExplicitEngine, scene: &Scene, steps: u64) -> (RunOutput, RunOutput) {
+    let settings = RunSettings::default();
+    let affine = run(engine, scene, &settings);
+    let general = run(engine.general(), scene, &settings);
+    let rows = scene.output_rows as u64 - 1;
+    assert_eq!(affine.info.steps, steps, "{}", scene.id);
+    let all = eligible(steps, steps / rows);
+    assert_eq!(affine_increments(&affine), all, "{}", scene.id);
+    assert_eq!(affine_increments(&general), 0, "{}", scene.id);
+    (affine, general)
+}
+
 /// The largest difference between the two runs over every column, each over its own peak
 /// (the energy balance, a difference of energies near zero, over the peak of the kinetic and
 /// elastic energy).
@@ -68,18 +82,8 @@ fn the_springs_cases_step_as_the_general_path_to_round_off() {
     for id in SPRINGS_CASES {
         let scene = scene(id);
         for engine in [ExplicitEngine::finite(), ExplicitEngine::small()] {
-            let settings = RunSettings::default();
-            let affine = run(engine, &scene, &settings);
-            let general = run(engine.general(), &scene, &settings);
-            let (steps, rows) = (affine.info.steps, scene.output_rows as u64 - 1);
-            assert_eq!(steps, 20_000, "{id}");
             // Every increment it may take, and none in the general run.
-            assert_eq!(
-                affine_increments(&affine),
-                eligible(steps, steps / rows),
-                "{id}"
-            );
-            assert_eq!(affine_increments(&general), 0, "{id}");
+            let (affine, general) = both_paths(engine, &scene, 20_000);
             // Measured: at most 6.2e-15 (springs_n2n_c, e_kinetic).
             let (d, name) = largest_difference(&affine, &general);
             println!("{id} {}: {d:.1e} ({name})", engine.name());
@@ -217,19 +221,7 @@ fn the_rigid_cases_under_small_rotation_step_as_the_general_path_to_round_off() 
     // Under small rotation the rigid seed cases are affine while their contact presses, which
     // it does from start to end: every increment the step may take is taken.
     for id in RIGID_CASES {
-        let scene = scene(id);
-        let settings = RunSettings::default();
-        let engine = ExplicitEngine::small();
-        let affine = run(engine, &scene, &settings);
-        let general = run(engine.general(), &scene, &settings);
-        let (steps, rows) = (affine.info.steps, scene.output_rows as u64 - 1);
-        assert_eq!(steps, 10_000, "{id}");
-        assert_eq!(
-            affine_increments(&affine),
-            eligible(steps, steps / rows),
-            "{id}"
-        );
-        assert_eq!(affine_increments(&general), 0, "{id}");
+        let (affine, general) = both_paths(ExplicitEngine::small(), &scene(id), 10_000);
         // Measured: at most 1.8e-14 (e_kinetic) on the motion and the energies, 4.4e-11 on
         // the contact force against bounds of 1.4e-8 to 2.0e-8.
         let ((d, name), contact) = differences(&affine, &general);
@@ -284,14 +276,11 @@ fn a_contact_that_opens_and_closes_ends_a_batch_at_each_change() {
     // increment the step may take is taken, and the impacts fall on the same increments as in
     // the general path. (Were a contact kept on its side past the change, it would pull in
     // tension or miss an impact: the runs would differ by far more than round-off.)
-    let scene = stress_scene("contact_reopen");
-    let settings = RunSettings::default();
-    let engine = ExplicitEngine::small();
-    let affine = run(engine, &scene, &settings);
-    let general = run(engine.general(), &scene, &settings);
-    let rows = scene.output_rows as u64 - 1;
-    let all = eligible(affine.info.steps, affine.info.steps / rows);
-    assert_eq!(affine_increments(&affine), all);
+    let (affine, general) = both_paths(
+        ExplicitEngine::small(),
+        &stress_scene("contact_reopen"),
+        100_000,
+    );
     let impacts = affine.info.measures["impacts"];
     assert!(
         impacts >= 5.0,

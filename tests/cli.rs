@@ -1,22 +1,8 @@
 //! The `crosscheck` binary: listing cases and refusing bad input before running anything.
 
+mod common;
+use common::{RIGID_CASES, SPRINGS_CASES};
 use std::process::Command;
-
-const CASE_IDS: [&str; 13] = [
-    "rigid2d_pin_lumped",
-    "rigid2d_pin_surface",
-    "rigid2d_slide_lumped",
-    "rigid2d_slide_surface",
-    "rigid3d_pin_lumped",
-    "rigid3d_pin_surface",
-    "rigid3d_slide_lumped",
-    "rigid3d_slide_surface",
-    "springs_grounded_a",
-    "springs_grounded_b",
-    "springs_grounded_c",
-    "springs_n2n_b",
-    "springs_n2n_c",
-];
 
 fn crosscheck(args: &[&str], dir: &std::path::Path) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_crosscheck"))
@@ -48,7 +34,7 @@ fn list_prints_one_line_per_case() {
         11,
         "{stdout}"
     );
-    for id in CASE_IDS {
+    for id in RIGID_CASES.into_iter().chain(SPRINGS_CASES) {
         let hits = lines
             .iter()
             .filter(|l| l.split_whitespace().next() == Some(id))

@@ -24,9 +24,10 @@
 //! stays on the side of its gap it started the batch on (pressed: the penalty acts; apart: no
 //! force). There the response, each contact's gap per unit motion and its push per unit normal
 //! force are formed once per step from the engine's own force pass and body solve (differences
-//! on both sides of rest along each DOF, checked to agree), and a batch stops before an increment where
-//! a contact's gap would come within a rounding margin of zero: the general path takes that
-//! increment, and notes an impact there as it does.
+//! on both sides of rest along each DOF, checked to agree). A batch stops before an increment
+//! where a contact would change sides; the next starts from the other side with the engine's
+//! own force pass, which notes the impact as the general path does. Within a rounding margin
+//! of a gap's zero the general path takes the increment.
 
 use super::centred::ParticleDashpots;
 use super::model::{
@@ -451,11 +452,11 @@ impl<S: Space> AffineStep<S> {
     /// its ends would meet (`AffineStep::meet`) plus its margin (`AffineStep::margin`); per
     /// contact pair, the motion at which its gap would come within its rounding margin
     /// (10^-12 of [`Model::gap_size`]) of zero from the side it is on. To each margin the
-    /// batch adds 10^-12 of the size its motion since the start gives the sum (`Side`).
-    /// None where a held line does not
-    /// take the line's force at `cfg` by more than the margin (its length at t = 0 plus its
-    /// stretch along the line is positive, as `Model::forces_with` asks) or a contact is
-    /// within its margin of zero: the general path then takes the increment.
+    /// batch adds 10^-12 of the size its motion since the start gives the sum (`Side`). None
+    /// where a held line does not take the line's force at `cfg` by more than the margin (its
+    /// length at t = 0 plus its stretch along the line is positive, as `Model::forces_with`
+    /// asks) or a contact is within its margin of zero: the general path then takes the
+    /// increment.
     pub fn bounds<const FINITE: bool>(
         &self,
         model: &Model<S, FINITE>,

@@ -23,6 +23,7 @@ use super::diagnosis::{PAST_LIMIT_GROWTH, PastLimit, growing_mode};
 use super::linear::{StableIncrement, static_step};
 use super::model::{Config, Constraints, ContactMode, Counters, Forces, Model, Rates, Target};
 use super::space::{Lin, Space};
+use super::turning::TurningStep;
 use crate::contract::ENERGY_COLUMNS;
 use crate::engines::{EngineError, History};
 use crate::scene::{
@@ -447,6 +448,14 @@ pub fn integrate<S: Space, const FINITE: bool>(
         } else {
             None
         };
+        // Under finite rotation, a small step with one body turning about one axis runs its
+        // increments between output rows with the state in registers (`TurningStep`; the
+        // general path's increments bit for bit).
+        let turning_step = if affine_steps && affine_step.is_none() {
+            TurningStep::of(model, &held, settings.damping)
+        } else {
+            None
+        };
         // Without dashpots and with every turning body on one free axis, the centred velocity
         // has a closed form (`Model::centred_single_axis`).
         let single_axis = settings.damping == DampingTreatment::Centred
@@ -532,6 +541,36 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 );
                 next = n + taken;
                 continue;
+            }
+            if let Some(turning) = turning_step.as_ref()
+                && !restart
+                && !n.is_multiple_of(stride)
+                && n + 1 < first + steps_here
+            {
+                let end = (n / stride + 1) * stride;
+                let end = end
+                    .min(first + steps_here - 1)
+                    .min((n / INTERRUPT_STRIDE + 1) * INTERRUPT_STRIDE);
+                let taken = turning.advance(
+                    model,
+                    &held,
+                    &mut cfg,
+                    &mut carry,
+                    &mut v_half,
+                    h,
+                    n,
+                    end - n,
+                    &mut pressed,
+                    &mut impacts,
+                    &mut counters,
+                );
+                // None taken: the increment's centred rate has no real value, which the
+                // general path reports.
+                if taken > 0 {
+                    last_power = 0.0;
+                    next = n + taken;
+                    continue;
+                }
             }
             // An increment that restarts nothing, has no velocity-dependent force, writes no
             // row and is neither the step's last nor the one before it (whose acceleration
@@ -896,7 +935,12 @@ pub fn integrate<S: Space, const FINITE: bool>(
 
 /// Note which contact pairs press at time `t` (normal forces `contact`) in `pressed`, and an
 /// impact where one that did not press at the last increment noted starts to.
-fn note_impacts(pressed: &mut [Option<bool>], contact: &[f64], t: f64, impacts: &mut Vec<f64>) {
+pub(super) fn note_impacts(
+    pressed: &mut [Option<bool>],
+    contact: &[f64],
+    t: f64,
+    impacts: &mut Vec<f64>,
+) {
     for (was, force) in pressed.iter_mut().zip(contact) {
         let now = *force > 0.0;
         if now && *was == Some(false) {

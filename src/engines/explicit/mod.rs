@@ -9,6 +9,7 @@ pub mod linear;
 pub mod model;
 pub mod on_request;
 pub mod space;
+pub mod turning;
 
 use super::{Engine, EngineError, RunInfo, RunOutput, RunSettings};
 use crate::scene::{Dimension, IncrementRule, Scene, SceneSettings};
@@ -30,7 +31,9 @@ pub enum Kinematics {
 #[derive(Debug, Clone, Copy)]
 pub struct ExplicitEngine {
     kinematics: Kinematics,
-    /// Whether a small step with affine forces runs as [`affine::AffineStep`].
+    /// Whether a small step runs its increments between rows with the state in registers:
+    /// with affine forces as [`affine::AffineStep`], with one body turning about one axis
+    /// under finite rotation as [`turning::TurningStep`].
     affine: bool,
 }
 
@@ -50,7 +53,7 @@ impl ExplicitEngine {
         }
     }
     /// The same engine with every increment through the general path, never as an
-    /// [`affine::AffineStep`]: what the affine step is checked against.
+    /// [`affine::AffineStep`] or a [`turning::TurningStep`]: what those are checked against.
     pub fn general(self) -> Self {
         Self {
             affine: false,
@@ -149,6 +152,9 @@ impl Engine for ExplicitEngine {
         }
         if c.affine_increments > 0 {
             counters.insert("affine_increments".to_string(), c.affine_increments);
+        }
+        if c.turning_increments > 0 {
+            counters.insert("turning_increments".to_string(), c.turning_increments);
         }
         if c.held_lines > 0 {
             counters.insert("held_lines".to_string(), c.held_lines);

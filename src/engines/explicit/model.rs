@@ -237,6 +237,9 @@ pub struct Counters {
     /// Increments stepped as the recurrence of a small affine step
     /// ([`AffineStep`](super::affine::AffineStep)).
     pub affine_increments: u64,
+    /// Increments stepped with one turning body's state in registers
+    /// ([`TurningStep`](super::turning::TurningStep)).
+    pub turning_increments: u64,
     /// Axial elements held on their lines in a dynamic step ([`Model::with_lines_held`]: they
     /// act along fixed lines, a spring while its ends keep their order), summed over the
     /// dynamic steps.
@@ -244,30 +247,30 @@ pub struct Counters {
 }
 
 #[derive(Debug, Clone, Copy)]
-struct Grounded<S: Space> {
-    point: Point<S>,
+pub(super) struct Grounded<S: Space> {
+    pub(super) point: Point<S>,
     /// Translation direction (None for a rotational DOF).
-    direction: Option<S::V>,
+    pub(super) direction: Option<S::V>,
     /// Rotation axis and body (rotational DOF at a reference node).
-    rotation: Option<(usize, S::W)>,
-    c: f64,
+    pub(super) rotation: Option<(usize, S::W)>,
+    pub(super) c: f64,
 }
 
 #[derive(Debug, Clone, Copy)]
-struct TwoPoint<S: Space> {
-    a: Point<S>,
-    b: Point<S>,
+pub(super) struct TwoPoint<S: Space> {
+    pub(super) a: Point<S>,
+    pub(super) b: Point<S>,
     /// Fixed direction, or for axial elements the initial unit direction.
-    direction: S::V,
-    axial: bool,
+    pub(super) direction: S::V,
+    pub(super) axial: bool,
     /// An axial element whose line cannot turn in the current step
     /// ([`Model::with_lines_held`]): a spring acts along `direction` while its ends keep their
     /// order along it; a dashpot is then no longer `axial`.
-    line_held: bool,
+    pub(super) line_held: bool,
     /// From end a to end b at t = 0.
-    span0: S::V,
-    length0: f64,
-    c: f64,
+    pub(super) span0: S::V,
+    pub(super) length0: f64,
+    pub(super) c: f64,
 }
 
 /// Where a contact node is relative to its solid (see [`Model::solid_positions`]).
@@ -282,31 +285,31 @@ pub struct SolidPosition<S: Space> {
 }
 
 #[derive(Debug, Clone)]
-struct Contact<S: Space> {
-    particle: usize,
-    body: usize,
+pub(super) struct Contact<S: Space> {
+    pub(super) particle: usize,
+    pub(super) body: usize,
     /// A solid's centre relative to the reference node (body frame) and its parry shape; `None`
     /// for a plane.
-    solid: Option<(S::V, SharedSolid<S>)>,
+    pub(super) solid: Option<(S::V, SharedSolid<S>)>,
     /// Contact dashpot (sized for the pair's restitution; 0 when elastic).
-    damping: f64,
+    pub(super) damping: f64,
     /// The gap at t = 0 of a pair that starts open: the linearisation's penalty is unstressed
     /// there (0 for a closed pair).
-    open_gap: f64,
+    pub(super) open_gap: f64,
     /// A face point relative to the reference node (body frame).
-    face: S::V,
+    pub(super) face: S::V,
     /// Outward normal (body frame).
-    normal: S::V,
+    pub(super) normal: S::V,
     /// The contact node's offset from the reference node at t = 0 (small-rotation arm).
-    arm0: S::V,
+    pub(super) arm0: S::V,
     /// Gap at t = 0 (small rotation: the constant part of the linearised gap).
-    gap0: f64,
+    pub(super) gap0: f64,
 }
 
 #[derive(Debug, Clone, Copy)]
-struct Load<S: Space> {
-    point: Point<S>,
-    force: S::V,
+pub(super) struct Load<S: Space> {
+    pub(super) point: Point<S>,
+    pub(super) force: S::V,
 }
 
 /// A particle's constant data.
@@ -510,18 +513,18 @@ pub struct Model<S: Space, const FINITE: bool> {
     pub particles: Vec<Particle<S>>,
     /// Rigid bodies.
     pub bodies: Vec<Body<S>>,
-    grounded_springs: Vec<Grounded<S>>,
+    pub(super) grounded_springs: Vec<Grounded<S>>,
     grounded_dashpots: Vec<Grounded<S>>,
-    springs: Vec<TwoPoint<S>>,
+    pub(super) springs: Vec<TwoPoint<S>>,
     /// The springs that are [`LineSpring`]s, compact.
-    line_springs: Vec<LineSpring<S::V>>,
+    pub(super) line_springs: Vec<LineSpring<S::V>>,
     /// Indices in `springs` of the others (body ends, or axial under finite rotation).
-    other_springs: Vec<usize>,
+    pub(super) other_springs: Vec<usize>,
     dashpots: Vec<TwoPoint<S>>,
-    contacts: Vec<Contact<S>>,
+    pub(super) contacts: Vec<Contact<S>>,
     /// 1 / mass per particle (apart, so the time loop streams 8 bytes per particle).
     inverse_masses: Vec<f64>,
-    loads: Vec<Load<S>>,
+    pub(super) loads: Vec<Load<S>>,
     /// Where the scene is particles, springs along fixed lines and loads only: the order of
     /// [`Model::step_by_blocks`].
     block_schedule: Option<BlockSchedule>,
@@ -1599,7 +1602,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
 
     /// Mass properties of a body at orientation `r` (finite rotation): the centre in world
     /// axes, the inertia with its orientation.
-    fn oriented(&self, b: usize, r: &S::R) -> BodyInertia<S> {
+    pub(super) fn oriented(&self, b: usize, r: &S::R) -> BodyInertia<S> {
         let i = &self.bodies[b].inertia;
         BodyInertia {
             mass: i.mass,

@@ -1,0 +1,382 @@
+//! One rigid body turning about one axis under finite rotation (`explicit`), stepped with its
+//! state in registers between output rows.
+//!
+//! Under finite rotation a body's arms and contact normals turn with it, so its forces are not
+//! affine in the motion and [`AffineStep`](super::affine::AffineStep) declines the step. What
+//! the general path spends on such a small scene is mostly not arithmetic: it reads the state
+//! from the configuration's vectors and writes it back at every increment, clears and sums the
+//! force vectors element by element through the points' indices, and walks the time loop's
+//! tests. Here a step with one body that turns about one free axis, at most one particle,
+//! springs along fixed lines, plane contacts and loads keeps the body's translation,
+//! orientation (with its rounding carry and mass properties), the particle's displacement and
+//! both velocities in locals, and runs the same increment: the same force terms in the same
+//! order, the same body solve (with the centred angular rate in closed form where the body's
+//! centripetal terms act, [`Model::centred_single_axis`]), the same compensated sums and
+//! orientation update, each by the functions the general path calls. The result is the general
+//! path's bit for bit (`tests/turning.rs`), and so are the work counters and the impacts.
+//!
+//! A batch runs the increments between two output rows, as the affine step's do; an increment
+//! whose centred angular rate has no real value is left to the general path, which reports it.
+
+use super::integrate::note_impacts;
+use super::model::{Config, Constraints, Counters, Model, Point, Rates, centred_rate};
+use super::space::{Lin, Space, compensated_add};
+use crate::scene::DampingTreatment;
+
+/// At most this many contact pairs (their normal forces are kept for the impacts).
+pub const MAX_CONTACTS: usize = 4;
+
+/// Where a force term acts, for the one body and the one particle.
+#[derive(Debug, Clone, Copy)]
+enum End<S: Space> {
+    /// A fixed point: it neither moves nor takes force.
+    Ground,
+    /// The particle.
+    Particle,
+    /// A material point of the body, by its offset from the reference node at t = 0.
+    Body(S::V),
+}
+
+/// A grounded spring's term, as [`Model::forces_with`] sums it.
+#[derive(Debug, Clone, Copy)]
+enum GroundedTerm<S: Space> {
+    /// Along a fixed direction, at a moving point (one on the ground takes no force).
+    Along {
+        /// The particle or the body's point.
+        end: End<S>,
+        /// Unit direction.
+        direction: S::V,
+        /// Stiffness.
+        c: f64,
+    },
+    /// About a fixed axis, on the body's rotation.
+    About {
+        /// Unit axis.
+        axis: S::W,
+        /// Stiffness.
+        c: f64,
+    },
+}
+
+/// A spring of fixed direction between two ends, the particle's joined to the ground
+/// (`LineSpring`) or any two ends (the model's other springs, not axial).
+#[derive(Debug, Clone, Copy)]
+struct LineTerm<S: Space> {
+    a: End<S>,
+    b: End<S>,
+    direction: S::V,
+    c: f64,
+}
+
+/// A plane contact pair between the particle and the body's face.
+#[derive(Debug, Clone, Copy)]
+struct PlaneTerm<S: Space> {
+    /// Face point (body frame).
+    face: S::V,
+    /// Outward normal (body frame).
+    normal: S::V,
+    /// The particle's offset from the reference node at t = 0.
+    arm0: S::V,
+}
+
+/// The increments of a dynamic step with one body turning about one axis, in registers.
+#[derive(Debug, Clone)]
+pub struct TurningStep<S: Space> {
+    /// The grounded springs' terms, in the model's order.
+    grounded: Vec<GroundedTerm<S>>,
+    /// Springs of fixed direction between the particle and the ground (the model's line
+    /// springs, summed before the others).
+    line: Vec<LineTerm<S>>,
+    /// The model's other springs, all of fixed direction.
+    other: Vec<LineTerm<S>>,
+    /// Plane contact pairs.
+    planes: Vec<PlaneTerm<S>>,
+    /// Loads.
+    loads: Vec<(End<S>, S::V)>,
+    /// The particle's 1 / mass, if there is one.
+    inverse_mass: f64,
+    /// Whether the body's centripetal terms act (its angular rate is then centred in closed
+    /// form).
+    centred: bool,
+    /// Penalty stiffness.
+    penalty: f64,
+}
+
+/// The state a batch carries in registers.
+struct State<S: Space> {
+    u: S::V,
+    u_carry: S::V,
+    v: S::V,
+    bu: S::V,
+    bu_carry: S::V,
+    vb: S::V,
+    w: S::W,
+    br: S::R,
+    br_carry: S::Carry,
+}
+
+impl<S: Space> State<S> {
+    #[inline(always)]
+    fn displacement(&self, end: &End<S>) -> S::V {
+        match end {
+            End::Ground => S::V::zero(),
+            End::Particle => self.u,
+            End::Body(rho) => self.bu + S::turned(&self.br, rho),
+        }
+    }
+}
+
+/// The forces of one increment.
+struct Sums<S: Space> {
+    p: S::V,
+    b: S::V,
+    m: S::W,
+    contact: [f64; MAX_CONTACTS],
+}
+
+impl<S: Space> Sums<S> {
+    #[inline(always)]
+    fn apply(&mut self, state: &State<S>, end: &End<S>, f: S::V) {
+        match end {
+            End::Ground => {}
+            End::Particle => self.p += f,
+            End::Body(rho) => {
+                self.b += f;
+                self.m += S::moment(&S::rotate(&state.br, rho), &f);
+            }
+        }
+    }
+}
+
+impl<S: Space> TurningStep<S> {
+    /// The step under `held`, where it qualifies: finite rotation; one body, which turns about
+    /// one free axis; at most one particle; springs of fixed direction (grounded, or between
+    /// two ends, none axial) and loads; at most [`MAX_CONTACTS`] plane contact pairs without
+    /// dashpots; no dashpot and no solid; the centred treatment where the body's centripetal
+    /// terms act. None otherwise.
+    pub fn of<const FINITE: bool>(
+        model: &Model<S, FINITE>,
+        held: &Constraints<S>,
+        damping: DampingTreatment,
+    ) -> Option<Self> {
+        if !FINITE
+            || model.bodies.len() != 1
+            || model.particles.len() > 1
+            || !held.rotating[0]
+            || held.body_free_r[0].len() != 1
+            || model.has_dashpots()
+            || model.has_solids()
+            || model.contact_count() > MAX_CONTACTS
+            || (held.velocity_terms[0] && damping != DampingTreatment::Centred)
+        {
+            return None;
+        }
+        let end = |p: &Point<S>| match p {
+            Point::Ground(_) => End::Ground,
+            Point::Particle(_) => End::Particle,
+            Point::Body { rho, .. } => End::Body(*rho),
+        };
+        let mut grounded = Vec::new();
+        for s in &model.grounded_springs {
+            if let Some(direction) = s.direction
+                && !matches!(s.point, Point::Ground(_))
+            {
+                grounded.push(GroundedTerm::Along {
+                    end: end(&s.point),
+                    direction,
+                    c: s.c,
+                });
+            }
+            if let Some((_, axis)) = s.rotation {
+                grounded.push(GroundedTerm::About { axis, c: s.c });
+            }
+        }
+        let ground_or_particle = |i: u32| {
+            if i == super::blocks::GROUND {
+                End::Ground
+            } else {
+                End::Particle
+            }
+        };
+        let line = model
+            .line_springs
+            .iter()
+            .map(|s| LineTerm {
+                a: ground_or_particle(s.a),
+                b: ground_or_particle(s.b),
+                direction: s.direction,
+                c: s.c,
+            })
+            .collect();
+        let mut other = Vec::new();
+        for s in model.other_springs.iter().map(|k| &model.springs[*k]) {
+            if s.axial {
+                return None;
+            }
+            other.push(LineTerm {
+                a: end(&s.a),
+                b: end(&s.b),
+                direction: s.direction,
+                c: s.c,
+            });
+        }
+        let planes = model
+            .contacts
+            .iter()
+            .map(|c| PlaneTerm {
+                face: c.face,
+                normal: c.normal,
+                arm0: c.arm0,
+            })
+            .collect();
+        let loads = model
+            .loads
+            .iter()
+            .map(|l| (end(&l.point), l.force))
+            .collect();
+        Some(TurningStep {
+            grounded,
+            line,
+            other,
+            planes,
+            loads,
+            inverse_mass: model.particles.first().map_or(0.0, |p| p.inverse_mass),
+            centred: held.velocity_terms[0],
+            penalty: model.penalty,
+        })
+    }
+
+    /// Take up to `count` increments of `h` from the configuration `cfg`, the rounding carries
+    /// `carry` and the half-step velocities `v_half`, as the general path takes them, and
+    /// write the state back; the work counters and the impacts (`pressed`, `impacts`, from
+    /// increment `n`) as the general path notes them. Returns the increments taken: fewer
+    /// than `count` only where an increment's centred angular rate has no real value, which the
+    /// general path then reports.
+    #[allow(clippy::too_many_arguments)]
+    pub fn advance<const FINITE: bool>(
+        &self,
+        model: &Model<S, FINITE>,
+        held: &Constraints<S>,
+        cfg: &mut Config<S>,
+        carry: &mut Rates<S>,
+        v_half: &mut Rates<S>,
+        h: f64,
+        n: u64,
+        count: u64,
+        pressed: &mut [Option<bool>],
+        impacts: &mut Vec<f64>,
+        counters: &mut Counters,
+    ) -> u64 {
+        let particle = !model.particles.is_empty();
+        let at = |x: &[S::V]| if particle { x[0] } else { S::V::zero() };
+        let mut s = State::<S> {
+            u: at(&cfg.u),
+            u_carry: at(&carry.p),
+            v: at(&v_half.p),
+            bu: cfg.bu[0],
+            bu_carry: carry.b[0],
+            vb: v_half.b[0],
+            w: v_half.w[0],
+            br: cfg.br[0],
+            br_carry: cfg.br_carry[0],
+        };
+        let mut inertia = cfg.inertia[0];
+        let motion = if particle {
+            held.motions[held.particle_motion[0] as usize]
+        } else {
+            super::model::Motion::Held
+        };
+        let g = held.body_free_r[0][0];
+        let contacts = self.planes.len();
+        let mut taken = 0;
+        while taken < count {
+            let mut f = Sums::<S> {
+                p: S::V::zero(),
+                b: S::V::zero(),
+                m: S::W::zero(),
+                contact: [0.0; MAX_CONTACTS],
+            };
+            for term in &self.grounded {
+                match term {
+                    GroundedTerm::Along { end, direction, c } => {
+                        let u = direction.dot(&s.displacement(end));
+                        f.apply(&s, end, *direction * (-c * u));
+                    }
+                    GroundedTerm::About { axis, c } => {
+                        let angle = S::twist(&s.br, axis);
+                        f.m -= *axis * (c * angle);
+                    }
+                }
+            }
+            for term in self.line.iter().chain(&self.other) {
+                let stretch = s.displacement(&term.b) - s.displacement(&term.a);
+                let e = term.direction.dot(&stretch);
+                let force = term.direction * (term.c * e);
+                f.apply(&s, &term.a, force);
+                f.apply(&s, &term.b, -force);
+            }
+            for (k, c) in self.planes.iter().enumerate() {
+                let normal = S::rotate(&s.br, &c.normal);
+                let face_to_node = (c.arm0 - c.face) + (s.u - s.bu) - S::turned(&s.br, &c.face);
+                let gap = normal.dot(&face_to_node);
+                let force = self.penalty * (-gap).max(0.0);
+                f.contact[k] = force;
+                f.p += normal * force;
+                f.b -= normal * force;
+                f.m -= S::moment(&(c.arm0 + (s.u - s.bu)), &normal) * force;
+            }
+            for (end, force) in &self.loads {
+                f.apply(&s, end, *force);
+            }
+            let solve = held.body_solve(&inertia, 0);
+            let (ab, aw) = if self.centred {
+                let (a0, p) = solve.solve_on_axis(&f.b, &f.m);
+                let unit_force = S::cross(&g, &S::cross(&g, &inertia.centre)) * (-inertia.mass);
+                let (a1, q) = solve.solve_on_axis(&unit_force, &S::W::zero());
+                let beta = 0.5 * h * q;
+                let gamma = g.dot(&s.w) + 0.5 * h * p;
+                let Some(rate) = centred_rate(beta, gamma) else {
+                    break;
+                };
+                let squared = rate * rate;
+                (a0 + a1 * squared, g * (p + q * squared))
+            } else {
+                solve.solve(&f.b, &f.m)
+            };
+            note_impacts(
+                pressed,
+                &f.contact[..contacts],
+                (n + taken) as f64 * h,
+                impacts,
+            );
+            let a = motion.project(f.p * self.inverse_mass);
+            s.vb += ab * h;
+            s.w += aw * h;
+            s.v += a * h;
+            compensated_add(&mut s.u, &mut s.u_carry, s.v * h);
+            compensated_add(&mut s.bu, &mut s.bu_carry, s.vb * h);
+            let r = S::advance_compensated(&s.br, &mut s.br_carry, &(s.w * h));
+            inertia = model.oriented(0, &r);
+            s.br = r;
+            taken += 1;
+        }
+        if particle {
+            cfg.u[0] = s.u;
+            carry.p[0] = s.u_carry;
+            v_half.p[0] = s.v;
+        }
+        cfg.bu[0] = s.bu;
+        carry.b[0] = s.bu_carry;
+        v_half.b[0] = s.vb;
+        v_half.w[0] = s.w;
+        cfg.br[0] = s.br;
+        cfg.br_carry[0] = s.br_carry;
+        cfg.inertia[0] = inertia;
+        counters.force_evaluations += taken;
+        counters.contact_evaluations += taken * contacts as u64;
+        counters.body_solves += taken * if self.centred { 2 } else { 1 };
+        counters.rotation_updates += taken;
+        counters.turning_increments += taken;
+        taken
+    }
+}

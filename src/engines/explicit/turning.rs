@@ -252,7 +252,10 @@ impl<S: Space> TurningStep<S> {
     /// increment `n`) as the general path notes them. Returns the increments taken: fewer
     /// than `count` only where an increment's centred angular rate has no real value, which the
     /// general path then reports.
+    /// Never inlined: called once per batch, it keeps its own code layout whatever the time
+    /// loop around it becomes.
     #[allow(clippy::too_many_arguments)]
+    #[inline(never)]
     pub fn advance<const FINITE: bool>(
         &self,
         model: &Model<S, FINITE>,

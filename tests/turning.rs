@@ -31,20 +31,23 @@ fn eligible(steps: u64, stride: u64) -> u64 {
     (1..=steps - 2).filter(|n| n % stride != 0).count() as u64
 }
 
-/// `scene` run by `explicit` with and without the turning step: the first took every increment
-/// it may take (of `steps`), the second none, and the two agree bit for bit in every output
-/// value, every work counter and every impact. Returns the run with the turning step.
+/// `scene`, a single dynamic step of `steps` increments, run by `explicit` with and without the
+/// turning step: see [`same_increments`]; the first took every increment it may take.
 fn same_as_general_path(scene: &Scene, steps: u64) -> RunOutput {
+    let rows = scene.output_rows as u64 - 1;
+    same_increments(scene, steps, eligible(steps, steps / rows))
+}
+
+/// `scene` run by `explicit` with and without the turning step: `steps` increments in all, of
+/// which the first run took `expected` with the turning step and the second none, and the two
+/// agree bit for bit in every output value, every work counter and every impact. Returns the
+/// run with the turning step.
+fn same_increments(scene: &Scene, steps: u64, expected: u64) -> RunOutput {
     let turning = run(ExplicitEngine::finite(), scene);
     let general = run(ExplicitEngine::finite().general(), scene);
     let id = &scene.id;
     assert_eq!(turning.info.steps, steps, "{id}");
-    let rows = scene.output_rows as u64 - 1;
-    assert_eq!(
-        turning_increments(&turning),
-        eligible(steps, steps / rows),
-        "{id}"
-    );
+    assert_eq!(turning_increments(&turning), expected, "{id}");
     assert_eq!(turning_increments(&general), 0, "{id}");
     assert_eq!(turning.history.columns, general.history.columns, "{id}");
     assert_eq!(
@@ -145,4 +148,202 @@ fn steps_it_does_not_qualify_for_take_the_general_path() {
     let spin = run(ExplicitEngine::finite(), &stress_scene("stress_spin_major"));
     assert_eq!(turning_increments(&spin), 0);
     assert!(spin.info.steps > 0);
+}
+
+#[test]
+fn every_force_term_lagged_damping_and_a_second_step_are_the_general_path_bit_for_bit() {
+    // The pinned lumped case with every kind of force term the turning step sums: grounded
+    // springs along a direction (on the particle and on a body point) and about the body's
+    // axis, a spring between a body point and the particle, a load on the particle, a second
+    // contact pair that stays open; lagged damping (no velocity-dependent force, so it takes
+    // the same increments); and a second dynamic step that holds the rotation, which the
+    // turning step declines, restarting after its batches.
+    let varied = variant(
+        "rigid2d_pin_lumped",
+        &[
+            (
+                "increment = 1.0e-5\n",
+                "increment = 1.0e-5\ndamping = \"lagged\"\n",
+            ),
+            (
+                "force = [-1.0e5, 0.0]\n",
+                r#"force = [-1.0e5, 0.0]
+
+[[loads]]
+node = "N"
+force = [2.0e4, 0.0]
+
+[[springs]]
+id = "twist"
+kind = "grounded"
+nodes = ["O"]
+dof = "rz"
+stiffness = 2.0e5
+
+[[springs]]
+id = "tie-N"
+kind = "grounded"
+nodes = ["N"]
+dof = "ux"
+stiffness = 3.0e5
+
+[[springs]]
+id = "tie-S1"
+kind = "grounded"
+nodes = ["S1"]
+dof = "uy"
+stiffness = 4.0e5
+
+[[springs]]
+id = "body-to-node"
+kind = "fixed_direction"
+nodes = ["P", "N"]
+direction = [0.6, 0.8]
+stiffness = 2.0e5
+
+[[contacts]]
+id = "far-face"
+node = "N"
+body = "body"
+face_point = [3.0, -0.5]
+face_normal = [-1.0, 0.0]
+initially = "open"
+"#,
+            ),
+            (
+                "    { node = \"N\", dofs = [\"uy\"] },\n]\n",
+                r#"    { node = "N", dofs = ["uy"] },
+]
+
+[[steps]]
+kind = "dynamic"
+duration = 0.02
+hold = [
+    { node = "O", dofs = ["ux", "uy", "rz"] },
+    { node = "N", dofs = ["uy"] },
+]
+"#,
+            ),
+        ],
+    );
+    // 0.12 s at 1e-5 s: 12,000 increments, 501 rows, one every 24 increments. The turning step
+    // takes every increment of the first step it may take; the second holds the rotation.
+    let first = (1..=9_998u64).filter(|n| n % 24 != 0).count() as u64;
+    let out = same_increments(&varied, 12_000, first);
+    // The added terms act: the turn differs from the seed case's by more than round-off.
+    let seed = run(ExplicitEngine::finite(), &scene("rigid2d_pin_lumped"));
+    let (turned, seed_turn) = (col(&out.history, "rz"), col(&seed.history, "rz"));
+    assert!(max_diff(&turned[..400], &seed_turn[..400]) > 1e-3 * peak(&seed_turn));
+}
+
+#[test]
+fn a_body_without_a_particle_is_the_general_path_bit_for_bit() {
+    // A body that can slide along x, with a spring on one of its points, a grounded spring on
+    // its reference node and a load: no particle, no contact.
+    let text = r#"
+id = "body_alone"
+title = "A body alone, turning and sliding"
+family = "rigid_body"
+dimension = 2
+
+[time]
+increment = 1.0e-5
+
+[output]
+rows = 201
+
+[[output.columns]]
+name = "rz"
+rotation = "body"
+
+[[output.columns]]
+name = "ux"
+displacement = "O"
+direction = [1.0, 0.0]
+
+[[output.columns]]
+name = "ux_node"
+zero = "no contact node"
+
+[[output.columns]]
+name = "contact_force"
+zero = "no contact"
+
+[[nodes]]
+id = "O"
+at = [0.0, 0.0]
+
+[[nodes]]
+id = "S1"
+at = [1.0, -3.0]
+body = "body"
+
+[[nodes]]
+id = "G1"
+at = [2.0, -3.0]
+fixed = true
+
+[[nodes]]
+id = "P"
+at = [-1.0, 1.0]
+body = "body"
+
+[[bodies]]
+id = "body"
+reference = "O"
+mass = 20.0
+inertia = 65.0
+
+[[springs]]
+id = "spring-1"
+kind = "fixed_direction"
+nodes = ["S1", "G1"]
+direction = [1.0, 0.0]
+stiffness = 1.0e6
+
+[[springs]]
+id = "tie-O"
+kind = "grounded"
+nodes = ["O"]
+dof = "ux"
+stiffness = 5.0e5
+
+[[loads]]
+node = "P"
+force = [-1.0e5, 0.0]
+
+[[initial_velocities]]
+node = "O"
+velocity = [3.0, 0.0]
+angular = 10.0
+
+[[steps]]
+kind = "dynamic"
+duration = 0.05
+hold = [{ node = "O", dofs = ["uy"] }]
+"#;
+    let scene = crosscheck::case::parse(text, std::path::Path::new("body_alone.toml"))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let out = same_as_general_path(&scene, 5_000);
+    assert!(peak(&col(&out.history, "ux")) > 0.0);
+}
+
+#[test]
+fn an_increment_without_a_centred_rate_fails_as_on_the_general_path() {
+    // Spun so fast that the centripetal terms have no centred rate at the first increment the
+    // turning step would take: it takes none, and the general path reports the failure.
+    let scene = variant(
+        "rigid2d_slide_surface",
+        &[("angular = 10.0", "angular = 1.0e6")],
+    );
+    let failure = |engine: ExplicitEngine| match engine.run(&scene, &RunSettings::default()) {
+        Ok(_) => panic!("{}: ran", scene.id),
+        Err(e) => e.to_string(),
+    };
+    let (turning, general) = (
+        failure(ExplicitEngine::finite()),
+        failure(ExplicitEngine::finite().general()),
+    );
+    assert!(turning.contains("centred angular velocity"), "{turning}");
+    assert_eq!(turning, general);
 }

@@ -287,12 +287,13 @@ fn through_solid(scene: &Scene, k: usize, speed: f64, h: f64, t: f64) -> EngineE
     ))
 }
 
-/// Run a scene through all its steps; a small step with affine forces as an [`AffineStep`]
-/// where `affine_steps`.
+/// Run a scene through all its steps; where `batched_steps`, a small step with affine forces
+/// as an [`AffineStep`], and one with a body turning about one axis under finite rotation as
+/// a [`TurningStep`], between output rows.
 pub fn integrate<S: Space, const FINITE: bool>(
     scene: &Scene,
     settings: &SceneSettings,
-    affine_steps: bool,
+    batched_steps: bool,
 ) -> Result<Integration, EngineError> {
     let penalty = if scene.contacts.is_empty() {
         0.0
@@ -438,7 +439,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
         // A small step whose forces are affine runs its increments between output rows as a
         // recurrence in its free DOFs, the state in registers (`AffineStep`; the same to
         // round-off).
-        let affine_step = if affine_steps {
+        let affine_step = if batched_steps {
             AffineStep::of(
                 model,
                 &held,
@@ -449,9 +450,9 @@ pub fn integrate<S: Space, const FINITE: bool>(
             None
         };
         // Under finite rotation, a small step with one body turning about one axis runs its
-        // increments between output rows with the state in registers (`TurningStep`; the
+        // increments between output rows with the state in locals (`TurningStep`; the
         // general path's increments bit for bit).
-        let turning_step = if affine_steps && affine_step.is_none() {
+        let turning_step = if batched_steps && affine_step.is_none() {
             TurningStep::of(model, &held, settings.damping)
         } else {
             None

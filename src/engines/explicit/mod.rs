@@ -34,7 +34,7 @@ pub struct ExplicitEngine {
     /// Whether a small step runs its increments between rows with the state in registers:
     /// with affine forces as [`affine::AffineStep`], with one body turning about one axis
     /// under finite rotation as [`turning::TurningStep`].
-    affine: bool,
+    batched: bool,
 }
 
 impl ExplicitEngine {
@@ -42,21 +42,21 @@ impl ExplicitEngine {
     pub fn finite() -> Self {
         Self {
             kinematics: Kinematics::Finite,
-            affine: true,
+            batched: true,
         }
     }
     /// Small rotation: engine `explicit_small`.
     pub fn small() -> Self {
         Self {
             kinematics: Kinematics::Small,
-            affine: true,
+            batched: true,
         }
     }
     /// The same engine with every increment through the general path, never as an
     /// [`affine::AffineStep`] or a [`turning::TurningStep`]: what those are checked against.
     pub fn general(self) -> Self {
         Self {
-            affine: false,
+            batched: false,
             ..self
         }
     }
@@ -210,16 +210,16 @@ impl ExplicitEngine {
         let s = merged(scene, settings);
         match (scene.dimension, self.kinematics) {
             (Dimension::Two, Kinematics::Finite) => {
-                integrate::<Planar, true>(scene, &s, self.affine)
+                integrate::<Planar, true>(scene, &s, self.batched)
             }
             (Dimension::Two, Kinematics::Small) => {
-                integrate::<Planar, false>(scene, &s, self.affine)
+                integrate::<Planar, false>(scene, &s, self.batched)
             }
             (Dimension::Three, Kinematics::Finite) => {
-                integrate::<Spatial, true>(scene, &s, self.affine)
+                integrate::<Spatial, true>(scene, &s, self.batched)
             }
             (Dimension::Three, Kinematics::Small) => {
-                integrate::<Spatial, false>(scene, &s, self.affine)
+                integrate::<Spatial, false>(scene, &s, self.batched)
             }
         }
     }

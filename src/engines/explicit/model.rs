@@ -306,6 +306,34 @@ pub(super) struct Contact<S: Space> {
     pub(super) gap0: f64,
 }
 
+impl<S: Space> Contact<S> {
+    /// A plane pair's signed gap (negative: penetration) and outward normal under finite
+    /// rotation, at its body's orientation `r`, with `relative` the node's displacement less
+    /// the body's reference node's: the time loop's and [`TurningStep`]'s, one arithmetic.
+    ///
+    /// [`TurningStep`]: super::turning::TurningStep
+    #[inline(always)]
+    pub(super) fn plane_gap(&self, r: &S::R, relative: S::V) -> (f64, S::V) {
+        let n = S::rotate(r, &self.normal);
+        (n.dot(&self.face_to_node(r, relative)), n)
+    }
+
+    /// From the face point to the node (finite rotation), summed from small parts (the offset
+    /// at t = 0, the displacements, the face point's turn) so that a penalty stiffness does
+    /// not multiply the cancellation of body-sized positions.
+    #[inline(always)]
+    fn face_to_node(&self, r: &S::R, relative: S::V) -> S::V {
+        (self.arm0 - self.face) + relative - S::turned(r, &self.face)
+    }
+
+    /// From the body's reference node to the node (finite rotation), with `relative` as in
+    /// [`Contact::plane_gap`].
+    #[inline(always)]
+    pub(super) fn arm(&self, relative: S::V) -> S::V {
+        self.arm0 + relative
+    }
+}
+
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Load<S: Space> {
     pub(super) point: Point<S>,
@@ -1017,9 +1045,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             return (d, self.to_world(cfg, c.body, &n));
         }
         if FINITE {
-            let r = &cfg.br[c.body];
-            let n = S::rotate(r, &c.normal);
-            (n.dot(&(self.face_to_node(cfg, k))), n)
+            c.plane_gap(&cfg.br[c.body], relative)
         } else {
             let th = &cfg.bth[c.body];
             let d = c.gap0 + c.normal.dot(&relative) - c.normal.dot(&S::cross(th, &c.arm0));
@@ -1066,7 +1092,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     fn contact_arm(&self, cfg: &Config<S>, k: usize) -> S::V {
         let c = &self.contacts[k];
         if FINITE {
-            c.arm0 + (cfg.u[c.particle] - cfg.bu[c.body])
+            c.arm(cfg.u[c.particle] - cfg.bu[c.body])
         } else {
             c.arm0
         }
@@ -1137,14 +1163,11 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         None
     }
 
-    /// From the contact pair's face point to its node (finite rotation), summed from small
-    /// parts (the offset at t = 0, the displacements, the face point's turn) so that a
-    /// penalty stiffness does not multiply the cancellation of body-sized positions.
+    /// Pair `k`'s [`Contact::face_to_node`] at configuration `cfg` (finite rotation).
     #[inline(always)]
     fn face_to_node(&self, cfg: &Config<S>, k: usize) -> S::V {
         let c = &self.contacts[k];
-        (c.arm0 - c.face) + (cfg.u[c.particle] - cfg.bu[c.body])
-            - S::turned(&cfg.br[c.body], &c.face)
+        c.face_to_node(&cfg.br[c.body], cfg.u[c.particle] - cfg.bu[c.body])
     }
 
     /// Position-dependent forces: springs, contact, loads. Fills `out` (cleared first), with

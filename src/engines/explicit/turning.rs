@@ -1,5 +1,5 @@
 //! One rigid body turning about one axis under finite rotation (`explicit`), stepped with its
-//! state in registers between output rows.
+//! state in locals between output rows.
 //!
 //! Under finite rotation a body's arms and contact normals turn with it, so its forces are not
 //! affine in the motion and [`AffineStep`](super::affine::AffineStep) declines the step. What
@@ -9,17 +9,24 @@
 //! tests. Here a step with one body that turns about one free axis, at most one particle,
 //! springs along fixed lines, plane contacts and loads keeps the body's translation,
 //! orientation (with its rounding carry and mass properties), the particle's displacement and
-//! both velocities in locals, and runs the same increment: the same force terms in the same
-//! order, the same body solve (with the centred angular rate in closed form where the body's
-//! centripetal terms act, [`Model::centred_single_axis`]), the same compensated sums and
-//! orientation update, each by the functions the general path calls. The result is the general
-//! path's bit for bit (`tests/turning.rs`), and so are the work counters and the impacts.
+//! both velocities in locals (registers where the compiler can), and runs the same increment:
+//! - the force terms of [`Model::forces_with`] in its order, written out as it writes them
+//!   (the plane contacts through the same functions of the model's `Contact`);
+//! - the same body solve, with the centred angular rate in closed form where the body's
+//!   centripetal terms act ([`Model::centred_single_axis`]);
+//! - the same projection, compensated sums and orientation update, by the same functions.
 //!
-//! A batch runs the increments between two output rows, as the affine step's do; an increment
+//! The result is the general path's bit for bit, and so are the work counters and the impacts:
+//! `tests/turning.rs` checks every output value of scenes that use every force term, so a
+//! change to one path's arithmetic that the other does not follow fails there.
+//!
+//! A batch runs the increments the affine step's batches run: up to the next output row, the
+//! step's last two increments (the last one's acceleration starts the next step) or the next
+//! look at the interruption flag (every 4096 increments), whichever comes first. An increment
 //! whose centred angular rate has no real value is left to the general path, which reports it.
 
 use super::integrate::note_impacts;
-use super::model::{Config, Constraints, Counters, Model, Point, Rates, centred_rate};
+use super::model::{Config, Constraints, Contact, Counters, Model, Point, Rates, centred_rate};
 use super::space::{Lin, Space, compensated_add};
 use crate::scene::DampingTreatment;
 
@@ -68,29 +75,18 @@ struct LineTerm<S: Space> {
     c: f64,
 }
 
-/// A plane contact pair between the particle and the body's face.
-#[derive(Debug, Clone, Copy)]
-struct PlaneTerm<S: Space> {
-    /// Face point (body frame).
-    face: S::V,
-    /// Outward normal (body frame).
-    normal: S::V,
-    /// The particle's offset from the reference node at t = 0.
-    arm0: S::V,
-}
-
-/// The increments of a dynamic step with one body turning about one axis, in registers.
+/// The increments of a dynamic step with one body turning about one axis, state in locals.
 #[derive(Debug, Clone)]
 pub struct TurningStep<S: Space> {
     /// The grounded springs' terms, in the model's order.
     grounded: Vec<GroundedTerm<S>>,
-    /// Springs of fixed direction between the particle and the ground (the model's line
+    /// Springs of fixed direction whose ends are the particle or the ground (the model's line
     /// springs, summed before the others).
     line: Vec<LineTerm<S>>,
     /// The model's other springs, all of fixed direction.
     other: Vec<LineTerm<S>>,
-    /// Plane contact pairs.
-    planes: Vec<PlaneTerm<S>>,
+    /// Plane contact pairs (between the particle and the body's faces).
+    planes: Vec<Contact<S>>,
     /// Loads.
     loads: Vec<(End<S>, S::V)>,
     /// The particle's 1 / mass, if there is one.
@@ -102,7 +98,7 @@ pub struct TurningStep<S: Space> {
     penalty: f64,
 }
 
-/// The state a batch carries in registers.
+/// The state a batch carries in locals.
 struct State<S: Space> {
     u: S::V,
     u_carry: S::V,
@@ -153,7 +149,8 @@ impl<S: Space> TurningStep<S> {
     /// one free axis; at most one particle; springs of fixed direction (grounded, or between
     /// two ends, none axial) and loads; at most [`MAX_CONTACTS`] plane contact pairs without
     /// dashpots; no dashpot and no solid; the centred treatment where the body's centripetal
-    /// terms act. None otherwise.
+    /// terms act (either treatment where they do not: without a dashpot or a centripetal term
+    /// both take the same increment). None otherwise.
     pub fn of<const FINITE: bool>(
         model: &Model<S, FINITE>,
         held: &Constraints<S>,
@@ -220,15 +217,7 @@ impl<S: Space> TurningStep<S> {
                 c: s.c,
             });
         }
-        let planes = model
-            .contacts
-            .iter()
-            .map(|c| PlaneTerm {
-                face: c.face,
-                normal: c.normal,
-                arm0: c.arm0,
-            })
-            .collect();
+        let planes = model.contacts.clone();
         let loads = model
             .loads
             .iter()
@@ -319,14 +308,13 @@ impl<S: Space> TurningStep<S> {
                 f.apply(&s, &term.b, -force);
             }
             for (k, c) in self.planes.iter().enumerate() {
-                let normal = S::rotate(&s.br, &c.normal);
-                let face_to_node = (c.arm0 - c.face) + (s.u - s.bu) - S::turned(&s.br, &c.face);
-                let gap = normal.dot(&face_to_node);
+                let relative = s.u - s.bu;
+                let (gap, normal) = c.plane_gap(&s.br, relative);
                 let force = self.penalty * (-gap).max(0.0);
                 f.contact[k] = force;
                 f.p += normal * force;
                 f.b -= normal * force;
-                f.m -= S::moment(&(c.arm0 + (s.u - s.bu)), &normal) * force;
+                f.m -= S::moment(&c.arm(relative), &normal) * force;
             }
             for (end, force) in &self.loads {
                 f.apply(&s, end, *force);

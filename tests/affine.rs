@@ -13,22 +13,6 @@ fn run(engine: ExplicitEngine, scene: &Scene, settings: &RunSettings) -> RunOutp
         .unwrap_or_else(|e| panic!("{}: {e}", scene.id))
 }
 
-fn affine_increments(out: &RunOutput) -> u64 {
-    out.info
-        .counters
-        .get("affine_increments")
-        .copied()
-        .unwrap_or(0)
-}
-
-/// The increments of a single dynamic step of `steps` increments, with a row every `stride`,
-/// that the affine step may take: every one but the first (which starts the half-step
-/// velocity), the rows and the step's last two (the last one's acceleration would start a
-/// next step).
-fn eligible(steps: u64, stride: u64) -> u64 {
-    (1..=steps - 2).filter(|n| n % stride != 0).count() as u64
-}
-
 /// `scene` run by `engine` with and without the affine step, each checked: `steps` increments
 /// in all, of which the affine run took every one it may take and the general run none.
 fn both_paths(engine: ExplicitEngine, scene: &Scene, steps: u64) -> (RunOutput, RunOutput) {
@@ -38,8 +22,8 @@ fn both_paths(engine: ExplicitEngine, scene: &Scene, steps: u64) -> (RunOutput, 
     let rows = scene.output_rows as u64 - 1;
     assert_eq!(affine.info.steps, steps, "{}", scene.id);
     let all = eligible(steps, steps / rows);
-    assert_eq!(affine_increments(&affine), all, "{}", scene.id);
-    assert_eq!(affine_increments(&general), 0, "{}", scene.id);
+    assert_eq!(counter(&affine, "affine_increments"), all, "{}", scene.id);
+    assert_eq!(counter(&general, "affine_increments"), 0, "{}", scene.id);
     (affine, general)
 }
 
@@ -110,7 +94,7 @@ fn without_dashpots_the_step_is_the_one_pass_increment_to_round_off() {
     let general = run(ExplicitEngine::finite().general(), &scene, &settings);
     let rows = scene.output_rows as u64 - 1;
     assert_eq!(
-        affine_increments(&affine),
+        counter(&affine, "affine_increments"),
         eligible(affine.info.steps, affine.info.steps / rows)
     );
     assert!(general.info.counters["axial_increments"] > 0);
@@ -131,7 +115,7 @@ fn a_dashpot_that_never_acts_is_counted_as_the_general_path_counts_it() {
     let settings = RunSettings::default();
     let affine = run(ExplicitEngine::finite(), &scene, &settings);
     let general = run(ExplicitEngine::finite().general(), &scene, &settings);
-    assert!(affine_increments(&affine) > 0);
+    assert!(counter(&affine, "affine_increments") > 0);
     for counter in ["force_evaluations", "damping_evaluations"] {
         assert_eq!(
             affine.info.counters[counter], general.info.counters[counter],
@@ -152,7 +136,7 @@ fn ends_that_would_pass_each_other_stop_the_recurrence() {
     let affine = run(ExplicitEngine::finite(), &scene, &settings);
     let general = run(ExplicitEngine::finite().general(), &scene, &settings);
     let rows = scene.output_rows as u64 - 1;
-    let taken = affine_increments(&affine);
+    let taken = counter(&affine, "affine_increments");
     let all = eligible(affine.info.steps, affine.info.steps / rows);
     println!("affine increments: {taken} of {all}");
     assert!(taken > all / 2 && taken < all, "{taken} of {all}");
@@ -257,7 +241,7 @@ fn numbers_that_round_give_the_general_path_to_round_off_too() {
     let engine = ExplicitEngine::small();
     let affine = run(engine, &scene, &settings);
     let general = run(engine.general(), &scene, &settings);
-    assert!(affine_increments(&affine) > 0);
+    assert!(counter(&affine, "affine_increments") > 0);
     let ((d, name), contact) = differences(&affine, &general);
     let bound = contact_bound(&general, &["ux", "ux_node"]);
     println!(
@@ -308,14 +292,18 @@ fn the_recurrence_is_declined_where_the_forces_are_not_affine_or_damping_is_lagg
         ..RunSettings::default()
     };
     let out = run(ExplicitEngine::finite(), &scene("springs_n2n_b"), &lagged);
-    assert_eq!(affine_increments(&out), 0, "lagged dashpots");
+    assert_eq!(counter(&out, "affine_increments"), 0, "lagged dashpots");
     for id in ["rigid2d_pin_lumped", "rigid3d_slide_surface"] {
         let out = run(
             ExplicitEngine::finite(),
             &scene(id),
             &RunSettings::default(),
         );
-        assert_eq!(affine_increments(&out), 0, "{id}: finite rotation");
+        assert_eq!(
+            counter(&out, "affine_increments"),
+            0,
+            "{id}: finite rotation"
+        );
     }
     // Under small rotation too where a contact is a solid's (a curved surface) or damped.
     for id in ["contact_drop_e1", "contact_drop_e06"] {
@@ -324,6 +312,6 @@ fn the_recurrence_is_declined_where_the_forces_are_not_affine_or_damping_is_lagg
             &stress_scene(id),
             &RunSettings::default(),
         );
-        assert_eq!(affine_increments(&out), 0, "{id}");
+        assert_eq!(counter(&out, "affine_increments"), 0, "{id}");
     }
 }

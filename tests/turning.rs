@@ -15,22 +15,6 @@ fn run(engine: ExplicitEngine, scene: &Scene) -> RunOutput {
         .unwrap_or_else(|e| panic!("{}: {e}", scene.id))
 }
 
-fn turning_increments(out: &RunOutput) -> u64 {
-    out.info
-        .counters
-        .get("turning_increments")
-        .copied()
-        .unwrap_or(0)
-}
-
-/// The increments of a single dynamic step of `steps` increments, with a row every `stride`,
-/// that the turning step may take: every one but the first (which starts the half-step
-/// velocity), the rows and the step's last two (the last one's acceleration would start a
-/// next step).
-fn eligible(steps: u64, stride: u64) -> u64 {
-    (1..=steps - 2).filter(|n| n % stride != 0).count() as u64
-}
-
 /// `scene`, a single dynamic step of `steps` increments, run by `explicit` with and without the
 /// turning step: see [`same_increments`]; the first took every increment it may take.
 fn same_as_general_path(scene: &Scene, steps: u64) -> RunOutput {
@@ -47,8 +31,8 @@ fn same_increments(scene: &Scene, steps: u64, expected: u64) -> RunOutput {
     let general = run(ExplicitEngine::finite().general(), scene);
     let id = &scene.id;
     assert_eq!(turning.info.steps, steps, "{id}");
-    assert_eq!(turning_increments(&turning), expected, "{id}");
-    assert_eq!(turning_increments(&general), 0, "{id}");
+    assert_eq!(counter(&turning, "turning_increments"), expected, "{id}");
+    assert_eq!(counter(&general, "turning_increments"), 0, "{id}");
     assert_eq!(turning.history.columns, general.history.columns, "{id}");
     assert_eq!(
         turning.history.rows.len(),
@@ -144,9 +128,9 @@ fn scenes_it_has_never_seen_are_the_general_path_bit_for_bit() {
 fn steps_it_does_not_qualify_for_take_the_general_path() {
     // Small rotation (the affine step's), and a body free to turn about three axes.
     let small = run(ExplicitEngine::small(), &scene("rigid2d_pin_lumped"));
-    assert_eq!(turning_increments(&small), 0);
+    assert_eq!(counter(&small, "turning_increments"), 0);
     let spin = run(ExplicitEngine::finite(), &stress_scene("stress_spin_major"));
-    assert_eq!(turning_increments(&spin), 0);
+    assert_eq!(counter(&spin, "turning_increments"), 0);
     assert!(spin.info.steps > 0);
 }
 

@@ -3,7 +3,7 @@
 
 use crosscheck::case;
 use crosscheck::engines::explicit::ExplicitEngine;
-use crosscheck::engines::{Engine, History, RunSettings};
+use crosscheck::engines::{Engine, History, RunOutput, RunSettings};
 use crosscheck::scene::{IncrementRule, Scene};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -167,4 +167,17 @@ pub fn springs_columns(end: &str, mid: &str, direction: &str) -> String {
         )
     })
     .collect()
+}
+
+/// A run's work counter `name` (0 where the run did not report it).
+pub fn counter(out: &RunOutput, name: &str) -> u64 {
+    out.info.counters.get(name).copied().unwrap_or(0)
+}
+
+/// The increments of a single dynamic step of `steps` increments, with a row every `stride`,
+/// that a batched step (the affine step, the turning step) may take: every one but the first
+/// (which starts the half-step velocity), the rows and the step's last two (the last one's
+/// acceleration would start a next step).
+pub fn eligible(steps: u64, stride: u64) -> u64 {
+    (1..=steps - 2).filter(|n| n % stride != 0).count() as u64
 }

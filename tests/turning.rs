@@ -1,6 +1,6 @@
 //! The turning step (`engines::explicit::turning`): under finite rotation, a small step with one
 //! body turning about one axis runs its increments between output rows with the state in
-//! registers, by the general path's own arithmetic in the general path's order. So it must give
+//! locals, by the general path's own arithmetic in the general path's order. So it must give
 //! what the general path gives bit for bit: every output value, every work counter, every
 //! impact.
 mod common;

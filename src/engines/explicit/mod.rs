@@ -31,9 +31,9 @@ pub enum Kinematics {
 #[derive(Debug, Clone, Copy)]
 pub struct ExplicitEngine {
     kinematics: Kinematics,
-    /// Whether a small step runs its increments between rows with the state in registers:
-    /// with affine forces as [`affine::AffineStep`], with one body turning about one axis
-    /// under finite rotation as [`turning::TurningStep`].
+    /// Whether a small step runs its increments between rows with its state in registers or
+    /// locals: with affine forces as [`affine::AffineStep`] (registers), with one body turning
+    /// about one axis under finite rotation as [`turning::TurningStep`] (locals).
     batched: bool,
 }
 

@@ -237,7 +237,7 @@ pub struct Counters {
     /// Increments stepped as the recurrence of a small affine step
     /// ([`AffineStep`](super::affine::AffineStep)).
     pub affine_increments: u64,
-    /// Increments stepped with one turning body's state in registers
+    /// Increments stepped with one turning body's state in locals
     /// ([`TurningStep`](super::turning::TurningStep)).
     pub turning_increments: u64,
     /// Axial elements held on their lines in a dynamic step ([`Model::with_lines_held`]: they

@@ -181,3 +181,69 @@ pub fn counter(out: &RunOutput, name: &str) -> u64 {
 pub fn eligible(steps: u64, stride: u64) -> u64 {
     (1..=steps - 2).filter(|n| n % stride != 0).count() as u64
 }
+
+/// The largest difference between the two runs over every column, each over its own peak
+/// (the energy balance, a difference of energies near zero, over the peak of the kinetic and
+/// elastic energy).
+pub fn largest_difference(a: &RunOutput, b: &RunOutput) -> (f64, String) {
+    let energy: Vec<f64> = col(&a.history, "e_kinetic")
+        .iter()
+        .zip(col(&a.history, "e_elastic"))
+        .map(|(k, e)| k + e)
+        .collect();
+    let mut worst = (0.0, String::new());
+    for name in a.history.columns.iter().skip(1) {
+        let (x, y) = (col(&a.history, name), col(&b.history, name));
+        let scale = if name == "e_balance" {
+            peak(&energy)
+        } else {
+            peak(&x)
+        };
+        let d = if scale == 0.0 {
+            max_diff(&x, &y)
+        } else {
+            max_diff(&x, &y) / scale
+        };
+        if d > worst.0 {
+            worst = (d, name.clone());
+        }
+    }
+    worst
+}
+
+/// The contact force's difference between two runs over its peak may be the positions'
+/// round-off (`round_off` of their peak) times the penalty's leverage: the contact force is
+/// k_p times a penetration that is a small fraction of the motion, so a rounding of the
+/// positions moves it by k_p·δ, against a peak of k_p·(peak penetration). The bound is
+/// round_off · k_p · (peak of the displacement columns) / (peak contact force).
+pub fn contact_bound(out: &RunOutput, displacements: &[&str], round_off: f64) -> f64 {
+    let penalty = out.info.penalty_stiffness.expect("a contact scene");
+    let motion = displacements
+        .iter()
+        .map(|name| peak(&col(&out.history, name)))
+        .fold(0.0, f64::max);
+    round_off * penalty * motion / peak(&col(&out.history, "contact_force"))
+}
+
+/// The largest difference between the two runs over the columns other than the contact force
+/// (see [`largest_difference`]), and the contact force's over its peak.
+pub fn differences(a: &RunOutput, b: &RunOutput) -> ((f64, String), f64) {
+    let (mut a, mut b) = (a.clone(), b.clone());
+    let force = |out: &mut RunOutput| {
+        let i = out
+            .history
+            .columns
+            .iter()
+            .position(|c| c == "contact_force");
+        let i = i.expect("a contact_force column");
+        out.history.columns.remove(i);
+        let mut column = Vec::new();
+        for row in &mut out.history.rows {
+            column.push(row.remove(i));
+        }
+        column
+    };
+    let (fa, fb) = (force(&mut a), force(&mut b));
+    let contact = max_diff(&fa, &fb) / peak(&fb);
+    (largest_difference(&a, &b), contact)
+}

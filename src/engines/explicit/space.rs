@@ -962,7 +962,7 @@ impl<S: Space> BodySolve<'_, S> {
 
 /// `v` projected onto the complement of the orthonormal directions `held`.
 #[inline]
-fn project<V: Lin>(held: &[V], v: V) -> V {
+pub(super) fn project<V: Lin>(held: &[V], v: V) -> V {
     let mut v = v;
     for d in held {
         v -= *d * d.dot(&v);

@@ -30,6 +30,8 @@ use super::model::{Config, Constraints, Contact, Counters, Model, Point, Rates, 
 use super::space::{Lin, Space, compensated_add};
 use crate::scene::DampingTreatment;
 
+mod about_axis;
+
 /// At most this many contact pairs (their normal forces are kept for the impacts).
 pub const MAX_CONTACTS: usize = 4;
 
@@ -40,8 +42,14 @@ enum End<S: Space> {
     Ground,
     /// The particle.
     Particle,
-    /// A material point of the body, by its offset from the reference node at t = 0.
-    Body(S::V),
+    /// A material point of the body, by its offset from the reference node at t = 0 and its
+    /// index among the step's body points.
+    Body {
+        /// Offset from the reference node at t = 0 (the body's axes).
+        rho: S::V,
+        /// Index in [`TurningStep`]'s body points.
+        point: usize,
+    },
 }
 
 /// A grounded spring's term, as [`Model::forces_with`] sums it.
@@ -78,6 +86,14 @@ struct LineTerm<S: Space> {
 /// The increments of a dynamic step with one body turning about one axis, state in locals.
 #[derive(Debug, Clone)]
 pub struct TurningStep<S: Space> {
+    /// Whether the increments carry the turn about the axis since the batch's start
+    /// ([`about_axis`]; 3D) instead of the general path's orientation (bit for bit; 2D).
+    about_axis: bool,
+    /// The body points the terms act on (offsets from the reference node at t = 0, the body's
+    /// axes), indexed by [`End::Body`]'s `point`.
+    points: Vec<S::V>,
+    /// The body's mass centre relative to its reference node at t = 0 (the body's axes).
+    centre: S::V,
     /// The grounded springs' terms, in the model's order.
     grounded: Vec<GroundedTerm<S>>,
     /// Springs of fixed direction whose ends are the particle or the ground (the model's line
@@ -117,7 +133,7 @@ impl<S: Space> State<S> {
         match end {
             End::Ground => S::V::zero(),
             End::Particle => self.u,
-            End::Body(rho) => self.bu + S::turned(&self.br, rho),
+            End::Body { rho, .. } => self.bu + S::turned(&self.br, rho),
         }
     }
 }
@@ -136,7 +152,7 @@ impl<S: Space> Sums<S> {
         match end {
             End::Ground => {}
             End::Particle => self.p += f,
-            End::Body(rho) => {
+            End::Body { rho, .. } => {
                 self.b += f;
                 self.m += S::moment(&S::rotate(&state.br, rho), &f);
             }
@@ -168,10 +184,17 @@ impl<S: Space> TurningStep<S> {
         {
             return None;
         }
-        let end = |p: &Point<S>| match p {
+        let mut points = Vec::new();
+        let mut end = |p: &Point<S>| match p {
             Point::Ground(_) => End::Ground,
             Point::Particle(_) => End::Particle,
-            Point::Body { rho, .. } => End::Body(*rho),
+            Point::Body { rho, .. } => {
+                points.push(*rho);
+                End::Body {
+                    rho: *rho,
+                    point: points.len() - 1,
+                }
+            }
         };
         let mut grounded = Vec::new();
         for s in &model.grounded_springs {
@@ -223,7 +246,17 @@ impl<S: Space> TurningStep<S> {
             .iter()
             .map(|l| (end(&l.point), l.force))
             .collect();
+        // In 3D, about the axis where every term turns it (a spring about an axis reads the
+        // body's twist, which the quaternion gives): see `about_axis`.
+        let about_axis = S::ROT == 3
+            && points.len() <= about_axis::MAX_POINTS
+            && grounded
+                .iter()
+                .all(|t| matches!(t, GroundedTerm::Along { .. }));
         Some(TurningStep {
+            about_axis,
+            points,
+            centre: model.bodies[0].inertia.centre,
             grounded,
             line,
             other,
@@ -236,15 +269,14 @@ impl<S: Space> TurningStep<S> {
     }
 
     /// Take up to `count` increments of `h` from the configuration `cfg`, the rounding carries
-    /// `carry` and the half-step velocities `v_half`, as the general path takes them, and
-    /// write the state back; the work counters and the impacts (`pressed`, `impacts`, from
-    /// increment `n`) as the general path notes them. Returns the increments taken: fewer
-    /// than `count` only where an increment's centred angular rate has no real value, which the
-    /// general path then reports.
-    /// Never inlined: called once per batch, it keeps its own code layout whatever the time
-    /// loop around it becomes.
+    /// `carry` and the half-step velocities `v_half`, and write the state back; the work
+    /// counters and the impacts (`pressed`, `impacts`, from increment `n`) as the general path
+    /// notes them. In 2D these are the general path's increments bit for bit; in 3D they carry
+    /// the turn about the axis ([`about_axis`]), the same to round-off. Returns the increments
+    /// taken: fewer than `count` only where an increment's centred angular rate has no real
+    /// value, which the general path then reports.
     #[allow(clippy::too_many_arguments)]
-    #[inline(never)]
+    #[inline]
     pub fn advance<const FINITE: bool>(
         &self,
         model: &Model<S, FINITE>,
@@ -258,6 +290,41 @@ impl<S: Space> TurningStep<S> {
         pressed: &mut [Option<bool>],
         impacts: &mut Vec<f64>,
         counters: &mut Counters,
+    ) -> u64 {
+        let taken = if self.about_axis {
+            self.advance_about_axis(
+                model, held, cfg, carry, v_half, h, n, count, pressed, impacts,
+            )
+        } else {
+            self.advance_as_general(
+                model, held, cfg, carry, v_half, h, n, count, pressed, impacts,
+            )
+        };
+        counters.force_evaluations += taken;
+        counters.contact_evaluations += taken * self.planes.len() as u64;
+        counters.body_solves += taken * if self.centred { 2 } else { 1 };
+        counters.rotation_updates += taken;
+        counters.turning_increments += taken;
+        taken
+    }
+
+    /// [`TurningStep::advance`] by the general path's arithmetic, in its order.
+    /// Never inlined: called once per batch, it keeps its own code layout whatever the time
+    /// loop around it becomes.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(never)]
+    fn advance_as_general<const FINITE: bool>(
+        &self,
+        model: &Model<S, FINITE>,
+        held: &Constraints<S>,
+        cfg: &mut Config<S>,
+        carry: &mut Rates<S>,
+        v_half: &mut Rates<S>,
+        h: f64,
+        n: u64,
+        count: u64,
+        pressed: &mut [Option<bool>],
+        impacts: &mut Vec<f64>,
     ) -> u64 {
         let particle = !model.particles.is_empty();
         let at = |x: &[S::V]| if particle { x[0] } else { S::V::zero() };
@@ -363,11 +430,6 @@ impl<S: Space> TurningStep<S> {
         cfg.br[0] = s.br;
         cfg.br_carry[0] = s.br_carry;
         cfg.inertia[0] = inertia;
-        counters.force_evaluations += taken;
-        counters.contact_evaluations += taken * contacts as u64;
-        counters.body_solves += taken * if self.centred { 2 } else { 1 };
-        counters.rotation_updates += taken;
-        counters.turning_increments += taken;
         taken
     }
 }

@@ -1,0 +1,327 @@
+//! The turning step's increments for a 3D body: its turn about the one free axis g carried as a
+//! heading since the batch's start, the orientation written back once per batch.
+//!
+//! A body turning about a fixed axis g is at R(θ) = Rot(g, θ)·R₀ after turning θ from its
+//! orientation R₀ at the batch's start, so each of its vectors ρ is at
+//! R(θ)ρ = a + (cos θ − 1)·a⊥ + sin θ·(g × a), with a = R₀ρ and a⊥ = −g × (g × a) its part
+//! across g ([`Arm`]). With a, a⊥ and g × a formed once per batch, turning a point takes 6
+//! products instead of the general path's 9 (R − 1 applied to ρ), and the moment about g of a
+//! force f at the point is f·(g × Rρ) = f·((1 + v)·(g × a) − s·a⊥) instead of a cross product
+//! and a projection. The general path's quaternion update (about 60 flops), its R − 1 (about
+//! 20) and its mass centre's turn give way to the planar heading's update about g (the
+//! versine v and sine s, with their carries, as a 2D body's) and three products per
+//! coordinate. On the one free axis the body solve is closed: g·I g does not change as the
+//! body turns about g, and the drag w = Q(g × c) of the mass centre c is (1 + v)·Q(g × a_c) −
+//! s·Q(a_c⊥), so the operator g·I g − m·w·w costs a dot product and a division.
+//!
+//! The arithmetic is the general path's to round-off, not bit for bit: `tests/turning.rs`
+//! holds the two paths together within bounds that follow from the round-off and the
+//! penalty's leverage. At the batch's end the heading's angle θ turns R₀ by the general path's
+//! own compensated update, so the quaternion keeps its rounding carry.
+
+use super::super::integrate::note_impacts;
+use super::super::model::{Config, Constraints, Model, Motion, Rates, centred_rate};
+use super::super::space::{Heading, Lin, Planar, Space, compensated_add, project};
+use super::{End, GroundedTerm, MAX_CONTACTS, TurningStep};
+
+/// At most this many body points in the step's terms (their [`Arm`]s are formed per batch, in
+/// a fixed array).
+pub const MAX_POINTS: usize = 8;
+
+/// A body vector ρ (the body's axes) at the batch's start orientation R₀, split about the
+/// axis g: turned a further θ about g it is R(θ)ρ = `at` + v·`across` + s·`around`, with
+/// v = cos θ − 1 and s = sin θ.
+#[derive(Debug, Clone, Copy)]
+struct Arm<S: Space> {
+    /// R₀ρ − ρ, the start's turn, from R₀ − 1 (small parts where R₀ is near 1).
+    turned: S::V,
+    /// a = R₀ρ.
+    at: S::V,
+    /// a⊥ = −g × (g × a), the part of a across g.
+    across: S::V,
+    /// g × a.
+    around: S::V,
+}
+
+impl<S: Space> Arm<S> {
+    fn zero() -> Self {
+        Arm {
+            turned: S::V::zero(),
+            at: S::V::zero(),
+            across: S::V::zero(),
+            around: S::V::zero(),
+        }
+    }
+
+    /// ρ at `r0`, about the unit axis `g`.
+    fn new(r0: &S::R, g: &S::W, rho: &S::V) -> Self {
+        let at = S::rotate(r0, rho);
+        let around = S::cross(g, &at);
+        Arm {
+            turned: S::turned(r0, rho),
+            at,
+            across: -S::cross(g, &around),
+            around,
+        }
+    }
+
+    /// (R − 1)ρ at the heading (v, s) since the batch's start.
+    #[inline(always)]
+    fn turned(&self, v: f64, s: f64) -> S::V {
+        self.turned + (self.across * v + self.around * s)
+    }
+
+    /// Rρ at the heading (v, s).
+    #[inline(always)]
+    fn rotated(&self, v: f64, s: f64) -> S::V {
+        self.at + (self.across * v + self.around * s)
+    }
+
+    /// g × Rρ at the heading (c = 1 + v, s): the moment about g of a unit force f at the point
+    /// is f·(g × Rρ).
+    #[inline(always)]
+    fn lever(&self, c: f64, s: f64) -> S::V {
+        self.around * c - self.across * s
+    }
+}
+
+/// The state a batch carries in locals: the particle's displacement and velocity, the body's
+/// translation and velocity, its angular rate about g and its heading since the batch's start.
+struct State<S: Space> {
+    u: S::V,
+    u_carry: S::V,
+    v: S::V,
+    bu: S::V,
+    bu_carry: S::V,
+    vb: S::V,
+    rate: f64,
+    heading: Heading,
+    heading_carry: [f64; 2],
+}
+
+/// The forces of one increment: on the particle, on the body, the body's moment about g, and
+/// the contact pairs' normal forces.
+struct Sums<S: Space> {
+    p: S::V,
+    b: S::V,
+    moment: f64,
+    contact: [f64; MAX_CONTACTS],
+}
+
+impl<S: Space> Default for Sums<S> {
+    fn default() -> Self {
+        Sums {
+            p: S::V::zero(),
+            b: S::V::zero(),
+            moment: 0.0,
+            contact: [0.0; MAX_CONTACTS],
+        }
+    }
+}
+
+impl<S: Space> Sums<S> {
+    /// Force `f` at `end`, whose lever about g (g × its position from the reference node) is
+    /// `lever` where it is a body point.
+    #[inline(always)]
+    fn apply(&mut self, end: &End<S>, lever: &S::V, f: S::V) {
+        match end {
+            End::Ground => {}
+            End::Particle => self.p += f,
+            End::Body { .. } => {
+                self.b += f;
+                self.moment += f.dot(lever);
+            }
+        }
+    }
+}
+
+impl<S: Space> TurningStep<S> {
+    /// [`TurningStep::advance`] with the turn about the axis since the batch's start (see the
+    /// module's documentation).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(never)]
+    pub(super) fn advance_about_axis<const FINITE: bool>(
+        &self,
+        model: &Model<S, FINITE>,
+        held: &Constraints<S>,
+        cfg: &mut Config<S>,
+        carry: &mut Rates<S>,
+        v_half: &mut Rates<S>,
+        h: f64,
+        n: u64,
+        count: u64,
+        pressed: &mut [Option<bool>],
+        impacts: &mut Vec<f64>,
+    ) -> u64 {
+        let g = held.body_free_r[0][0];
+        let r0 = cfg.br[0];
+        let start = cfg.inertia[0];
+        let mut arms = [Arm::<S>::zero(); MAX_POINTS];
+        for (arm, rho) in arms.iter_mut().zip(&self.points) {
+            *arm = Arm::new(&r0, &g, rho);
+        }
+        let mut faces = [(Arm::<S>::zero(), Arm::<S>::zero()); MAX_CONTACTS];
+        for (face, c) in faces.iter_mut().zip(&self.planes) {
+            *face = (Arm::new(&r0, &g, &c.normal), Arm::new(&r0, &g, &c.face));
+        }
+        // The body solve on the one free axis (`BodySolve::solve_on_axis`, closed): g·I g as
+        // the body turns about g, the mass centre's drag through the free translations.
+        let held_t = &held.body_held_t[0][..];
+        let pinned = held_t.len() == S::DIM;
+        let mass = start.mass;
+        let axial = start.axial(&g);
+        let centre = Arm::<S>::new(&r0, &g, &self.centre);
+        let off_centre = !pinned && self.centre != S::V::zero();
+        let (drag_around, drag_across) = (
+            project(held_t, centre.around),
+            project(held_t, centre.across),
+        );
+        // As `factorise` for one axis: NaN where the operator is not positive and finite, which
+        // the time loop reports as a failed run.
+        let reciprocal = |a: f64| {
+            if a > 0.0 && a.is_finite() {
+                1.0 / a
+            } else {
+                f64::NAN
+            }
+        };
+        let fixed_inverse = reciprocal(axial);
+        let particle = !model.particles.is_empty();
+        let at = |x: &[S::V]| if particle { x[0] } else { S::V::zero() };
+        let w0 = v_half.w[0];
+        let rate0 = g.dot(&w0);
+        let mut s = State::<S> {
+            u: at(&cfg.u),
+            u_carry: at(&carry.p),
+            v: at(&v_half.p),
+            bu: cfg.bu[0],
+            bu_carry: carry.b[0],
+            vb: v_half.b[0],
+            rate: rate0,
+            heading: Heading::IDENTITY,
+            heading_carry: [0.0; 2],
+        };
+        let motion = if particle {
+            held.motions[held.particle_motion[0] as usize]
+        } else {
+            Motion::Held
+        };
+        let contacts = self.planes.len();
+        let mut taken = 0;
+        while taken < count {
+            let (v, sine) = (s.heading.versine(), s.heading.sin());
+            let cosine = 1.0 + v;
+            let displacement = |end: &End<S>, s: &State<S>| match end {
+                End::Ground => S::V::zero(),
+                End::Particle => s.u,
+                End::Body { point, .. } => s.bu + arms[*point].turned(v, sine),
+            };
+            let mut f = Sums::<S>::default();
+            let lever = |end: &End<S>| match end {
+                End::Body { point, .. } => arms[*point].lever(cosine, sine),
+                _ => S::V::zero(),
+            };
+            for term in &self.grounded {
+                // Springs about an axis are declined (`TurningStep::of`).
+                if let GroundedTerm::Along { end, direction, c } = term {
+                    let u = direction.dot(&displacement(end, &s));
+                    f.apply(end, &lever(end), *direction * (-c * u));
+                }
+            }
+            for term in self.line.iter().chain(&self.other) {
+                let stretch = displacement(&term.b, &s) - displacement(&term.a, &s);
+                let force = term.direction * (term.c * term.direction.dot(&stretch));
+                f.apply(&term.a, &lever(&term.a), force);
+                f.apply(&term.b, &lever(&term.b), -force);
+            }
+            for (k, (c, (normal, face))) in self.planes.iter().zip(&faces).enumerate() {
+                // `Contact::plane_gap` and `Contact::arm`, with the normal and the face point
+                // turned by the heading.
+                let relative = s.u - s.bu;
+                let n = normal.rotated(v, sine);
+                let gap = n.dot(&((c.arm0 - c.face) + relative - face.turned(v, sine)));
+                let force = self.penalty * (-gap).max(0.0);
+                f.contact[k] = force;
+                f.p += n * force;
+                f.b -= n * force;
+                // The general path's −g·(arm × n)·force, as arm·(g × n)·force.
+                f.moment += c.arm(relative).dot(&normal.lever(cosine, sine)) * force;
+            }
+            for (end, force) in &self.loads {
+                f.apply(end, &lever(end), *force);
+            }
+            let drag = if off_centre {
+                drag_around * cosine - drag_across * sine
+            } else {
+                S::V::zero()
+            };
+            let inverse = if off_centre {
+                reciprocal(axial - mass * drag.dot(&drag))
+            } else {
+                fixed_inverse
+            };
+            let solve = |force: &S::V, moment: f64| {
+                if pinned {
+                    return (S::V::zero(), moment * inverse);
+                }
+                let alpha = (moment - force.dot(&drag)) * inverse;
+                (project(held_t, *force) * (1.0 / mass) - drag * alpha, alpha)
+            };
+            let (ab, alpha) = if self.centred {
+                let (a0, p) = solve(&f.b, f.moment);
+                // −m g × (g × c): the centre's part across g, turned.
+                let unit_force = (centre.across * cosine + centre.around * sine) * mass;
+                let (a1, q) = solve(&unit_force, 0.0);
+                let beta = 0.5 * h * q;
+                let gamma = s.rate + 0.5 * h * p;
+                let Some(rate) = centred_rate(beta, gamma) else {
+                    break;
+                };
+                let squared = rate * rate;
+                (a0 + a1 * squared, p + q * squared)
+            } else {
+                solve(&f.b, f.moment)
+            };
+            note_impacts(
+                pressed,
+                &f.contact[..contacts],
+                (n + taken) as f64 * h,
+                impacts,
+            );
+            let a = motion.project(f.p * self.inverse_mass);
+            s.vb += ab * h;
+            s.rate += alpha * h;
+            s.v += a * h;
+            compensated_add(&mut s.u, &mut s.u_carry, s.v * h);
+            compensated_add(&mut s.bu, &mut s.bu_carry, s.vb * h);
+            s.heading =
+                Planar::advance_compensated(&s.heading, &mut s.heading_carry, &(s.rate * h));
+            taken += 1;
+        }
+        if taken == 0 {
+            // The first increment's centred rate has no real value: the state is as it was,
+            // for the general path to report.
+            return 0;
+        }
+        if particle {
+            cfg.u[0] = s.u;
+            carry.p[0] = s.u_carry;
+            v_half.p[0] = s.v;
+        }
+        cfg.bu[0] = s.bu;
+        carry.b[0] = s.bu_carry;
+        v_half.b[0] = s.vb;
+        v_half.w[0] = w0 + g * (s.rate - rate0);
+        // The heading's angle (its carry is what the stored value holds beyond the exact one)
+        // turns R₀ about g by the general path's compensated update. Read in (−π, π], it drops
+        // whole turns: after more than half a turn in one batch the quaternion comes back with
+        // the general path's opposite sign, the same rotation. Only a twist would see the sign,
+        // and the rows' twist is unwrapped (a spring about an axis declines the step).
+        let angle = (s.heading.sin() - s.heading_carry[1])
+            .atan2(1.0 + (s.heading.versine() - s.heading_carry[0]));
+        let r = S::advance_compensated(&r0, &mut cfg.br_carry[0], &(g * angle));
+        cfg.br[0] = r;
+        cfg.inertia[0] = model.oriented(0, &r);
+        taken
+    }
+}

@@ -8,7 +8,7 @@ mod common;
 use common::*;
 use crosscheck::engines::explicit::ExplicitEngine;
 use crosscheck::engines::{Engine, RunOutput, RunSettings};
-use crosscheck::scene::{Dimension, Scene};
+use crosscheck::scene::Scene;
 
 fn run(engine: ExplicitEngine, scene: &Scene) -> RunOutput {
     engine
@@ -16,24 +16,37 @@ fn run(engine: ExplicitEngine, scene: &Scene) -> RunOutput {
         .unwrap_or_else(|e| panic!("{}: {e}", scene.id))
 }
 
+/// How closely the runs with and without the turning step must agree.
+#[derive(Clone, Copy, PartialEq)]
+enum Agree {
+    /// Bit for bit in every output value (the turning step takes the general path's
+    /// arithmetic: a scene with a spring about an axis).
+    BitForBit,
+    /// Within this fraction of each column's peak (the turn about the axis), the contact
+    /// force within the positions' round-off times the penalty's leverage, up to the first
+    /// impact after t = 0.
+    RoundOff(f64),
+}
+
 /// `scene`, a single dynamic step of `steps` increments, run by `explicit` with and without the
-/// turning step: see [`same_increments`]; the first took every increment it may take.
+/// turning step: see [`same_increments`] (to [`ROUND_OFF`]); the first took every increment it
+/// may take.
 fn same_as_general_path(scene: &Scene, steps: u64) -> RunOutput {
     let rows = scene.output_rows as u64 - 1;
-    same_increments(scene, steps, eligible(steps, steps / rows))
+    same_increments(
+        scene,
+        steps,
+        eligible(steps, steps / rows),
+        Agree::RoundOff(ROUND_OFF),
+    )
 }
 
 /// `scene` run by `explicit` with and without the turning step: `steps` increments in all, of
-/// which the first run took `expected` with the turning step and the second none. In 2D the
-/// two agree bit for bit in every output value; in 3D to round-off ([`ROUND_OFF`], the contact
-/// force times the penalty's leverage). Both count the same work and note the same impacts.
-/// Returns the run with the turning step.
-fn same_increments(scene: &Scene, steps: u64, expected: u64) -> RunOutput {
-    same_increments_within(scene, steps, expected, ROUND_OFF)
-}
-
-/// [`same_increments`], with `round_off` in place of [`ROUND_OFF`] in 3D.
-fn same_increments_within(scene: &Scene, steps: u64, expected: u64, round_off: f64) -> RunOutput {
+/// which the first run took `expected` with the turning step and the second none. The two
+/// agree as `agree` says, count the same work and note the same impacts at the same
+/// increments (the first impact where they agree to round-off). Returns the run with the
+/// turning step.
+fn same_increments(scene: &Scene, steps: u64, expected: u64, agree: Agree) -> RunOutput {
     let turning = run(ExplicitEngine::finite(), scene);
     let general = run(ExplicitEngine::finite().general(), scene);
     let id = &scene.id;
@@ -46,63 +59,92 @@ fn same_increments_within(scene: &Scene, steps: u64, expected: u64, round_off: f
         general.history.rows.len(),
         "{id}"
     );
-    if scene.dimension == Dimension::Three {
-        let pressed = peak(&col(&general.history, "contact_force")) > 0.0;
-        let (d, name, bound) = if pressed {
-            let ((d, name), contact) = differences(&turning, &general);
-            let bound = contact_bound(&general, &["ux", "ux_node"], round_off);
-            println!("{id}: contact force {contact:.1e} (bound {bound:.1e})");
-            assert!(
-                contact <= bound,
-                "{id}: contact force {contact:e} > {bound:e}"
-            );
-            // A contact that closes again during the run passes the contact force's
-            // difference into the motion through its impulse: after an impact every column
-            // may differ by as much as the contact force does.
-            let impacts = general.info.measures.get("impacts").copied();
-            let reclosed = impacts.is_some_and(|n| n > 0.0);
-            (d, name, if reclosed { bound } else { round_off })
-        } else {
-            let (d, name) = largest_difference(&turning, &general);
-            (d, name, round_off)
-        };
-        println!("{id}: {d:.1e} ({name}, bound {bound:.1e})");
-        assert!(d <= bound, "{id}: {name} {d:e} > {bound:e}");
-    } else {
-        for (i, (a, b)) in turning
-            .history
-            .rows
-            .iter()
-            .zip(&general.history.rows)
-            .enumerate()
-        {
-            for (name, (x, y)) in turning.history.columns.iter().zip(a.iter().zip(b)) {
-                assert_eq!(
-                    x.to_bits(),
-                    y.to_bits(),
-                    "{id}: row {i}, {name}: {x:e} vs {y:e}"
-                );
+    match agree {
+        Agree::BitForBit => {
+            for (i, (a, b)) in turning
+                .history
+                .rows
+                .iter()
+                .zip(&general.history.rows)
+                .enumerate()
+            {
+                for (name, (x, y)) in turning.history.columns.iter().zip(a.iter().zip(b)) {
+                    assert_eq!(
+                        x.to_bits(),
+                        y.to_bits(),
+                        "{id}: row {i}, {name}: {x:e} vs {y:e}"
+                    );
+                }
             }
         }
+        Agree::RoundOff(round_off) => {
+            // A penalty contact that closes again rings, and its impacts amplify any
+            // difference without a bound that round-off sets: the general path itself, with
+            // its initial angular rate one ulp higher, ends the 2D pinned case with a tilted
+            // face (48 impacts) 100 % of the peak apart in the contact force. So the rows are
+            // compared up to the first impact after t = 0, which falls on the same increment.
+            let first_impact = |out: &RunOutput| out.info.measures.get("impact_1_time").copied();
+            let until = first_impact(&general);
+            assert_eq!(
+                first_impact(&turning).map(f64::to_bits),
+                until.map(f64::to_bits),
+                "{id}: first impact"
+            );
+            let (turning, general) = (
+                before(&turning, until.unwrap_or(f64::INFINITY)),
+                before(&general, until.unwrap_or(f64::INFINITY)),
+            );
+            let pressed = peak(&col(&general.history, "contact_force")) > 0.0;
+            let (d, name) = if pressed {
+                let ((d, name), contact) = differences(&turning, &general);
+                let moving: Vec<&str> = ["ux", "ux_node"]
+                    .into_iter()
+                    .filter(|c| general.history.columns.iter().any(|n| n == c))
+                    .collect();
+                let bound = contact_bound(&general, &moving, round_off);
+                println!("{id}: contact force {contact:.1e} (bound {bound:.1e})");
+                assert!(
+                    contact <= bound,
+                    "{id}: contact force {contact:e} > {bound:e}"
+                );
+                (d, name)
+            } else {
+                largest_difference(&turning, &general)
+            };
+            let rows = turning.history.rows.len();
+            println!("{id}: {d:.1e} ({name}) over {rows} rows");
+            assert!(d <= round_off, "{id}: {name} {d:e} > {round_off:e}");
+        }
+    }
+    if agree == Agree::BitForBit {
+        assert_eq!(impacts(&turning), impacts(&general), "{id}");
     }
     let mut counters = turning.info.counters.clone();
     counters.remove("turning_increments");
     assert_eq!(counters, general.info.counters, "{id}");
-    let impacts = |out: &RunOutput| {
-        out.info
-            .measures
-            .iter()
-            .filter(|(k, _)| k.starts_with("impact"))
-            .map(|(k, v)| (k.clone(), v.to_bits()))
-            .collect::<Vec<_>>()
-    };
-    assert_eq!(impacts(&turning), impacts(&general), "{id}");
     turning
 }
 
-/// How far the 3D turning step may stray from the general path, over each column's peak: the
-/// two turn the body by different arithmetic (a heading about the axis against a quaternion),
-/// a few ulps apart at each increment; over the 10^4 increments of a seed case, summed with
+/// Every impact a run noted: its count and the times of the first ones, bit for bit.
+fn impacts(out: &RunOutput) -> Vec<(String, u64)> {
+    out.info
+        .measures
+        .iter()
+        .filter(|(k, _)| k.starts_with("impact"))
+        .map(|(k, v)| (k.clone(), v.to_bits()))
+        .collect()
+}
+
+/// `out` with only its rows before time `t`.
+fn before(out: &RunOutput, t: f64) -> RunOutput {
+    let mut out = out.clone();
+    out.history.rows.retain(|row| row[0] < t);
+    out
+}
+
+/// How far the turning step about the axis may stray from the general path, over each column's
+/// peak: the two turn the body by different arithmetic (a heading about the axis since the
+/// batch's start against the general path's orientation), a few ulps apart at each increment; over the 10^4 increments of a seed case, summed with
 /// random signs, that is about √(10^4)·4ε ≈ 1e-13 of the peak. The bound allows ten times that.
 /// (The seed cases turn by less than a radian; a body that turns Θ radians carries Θ times
 /// that in its angle, and so in every column the angle moves.)
@@ -114,18 +156,19 @@ fn every_rigid_seed_case_is_the_general_path() {
     // surface-mass variants in 2D and 3D: with and without the centripetal terms (an
     // off-centre mass centre on a body that can translate), a fixed body operator and one
     // formed at every increment.
-    // Measured in 3D: at most 7.6e-15 (e_kinetic) on the motion and the energies, 4.2e-11 to
-    // 7.0e-11 on the contact force against bounds of 1.3e-8 to 2.1e-8.
+    // Measured: at most 1.2e-14 (e_kinetic) on the motion and the energies, 4.2e-11 to
+    // 8.4e-11 on the contact force against bounds of 1.3e-8 to 2.1e-8.
     for id in RIGID_CASES {
         same_as_general_path(&scene(id), 10_000);
     }
 }
 
 #[test]
-fn a_contact_that_opens_and_closes_is_the_general_path_bit_for_bit() {
+fn a_contact_that_opens_and_closes_is_the_general_path_to_round_off() {
     let out = same_as_general_path(&stress_scene("contact_reopen"), 100_000);
-    // The pair reopens and closes again: at least one impact after t = 0, noted at the same
-    // increment by both paths (checked above).
+    // The pair reopens and closes again: at least one impact after t = 0, the first noted at
+    // the same increment by both paths (checked above). Measured over the 125 rows before it:
+    // 4.3e-16 (e_balance).
     assert!(
         out.info.measures["impacts"] >= 1.0,
         "{:?}",
@@ -178,152 +221,144 @@ fn steps_it_does_not_qualify_for_take_the_general_path() {
     assert!(spin.info.steps > 0);
 }
 
-#[test]
-fn every_force_term_lagged_damping_and_a_second_step_are_the_general_path_bit_for_bit() {
-    // The pinned lumped case with every kind of force term the turning step sums: grounded
-    // springs along a direction (on the particle and on a body point) and about the body's
-    // axis, a spring between a body point and the particle, a load on the particle, a second
-    // contact pair that stays open; lagged damping (no velocity-dependent force, so it takes
-    // the same increments); and a second dynamic step that holds the rotation, which the
-    // turning step declines, restarting after its batches.
-    let varied = variant(
-        "rigid2d_pin_lumped",
+/// The pinned lumped case in 2D or 3D (`dim`) with every kind of force term the turning step
+/// sums: grounded springs along a direction (on the particle and on a body point), a spring
+/// between a body point and the particle (off the line of the others), a load on the particle,
+/// a second contact pair that stays open, and `twist` (a grounded spring about the body's axis,
+/// or nothing); lagged damping (no velocity-dependent force, so it takes the same increments);
+/// and a second dynamic step that holds the rotation, which the turning step declines,
+/// restarting after its batches.
+fn every_term(dim: u32, twist: &str) -> Scene {
+    let v = |x: &str| {
+        if dim == 2 {
+            format!("[{x}]")
+        } else {
+            format!("[{x}, 0.0]")
+        }
+    };
+    let (held_o, held_n) = if dim == 2 {
+        (r#""ux", "uy", "rz""#, r#""uy""#)
+    } else {
+        (r#""ux", "uy", "uz", "rx", "ry", "rz""#, r#""uy", "uz""#)
+    };
+    let load = format!("force = {}\n", v("-1.0e5, 0.0"));
+    let added = format!(
+        r#"{load}
+[[loads]]
+node = "N"
+force = {}
+{twist}
+[[springs]]
+id = "tie-N"
+kind = "grounded"
+nodes = ["N"]
+dof = "ux"
+stiffness = 3.0e5
+
+[[springs]]
+id = "tie-S1"
+kind = "grounded"
+nodes = ["S1"]
+dof = "uy"
+stiffness = 4.0e5
+
+[[springs]]
+id = "body-to-node"
+kind = "fixed_direction"
+nodes = ["P", "N"]
+direction = {}
+stiffness = 2.0e5
+
+[[contacts]]
+id = "far-face"
+node = "N"
+body = "body"
+face_point = {}
+face_normal = {}
+initially = "open"
+"#,
+        v("2.0e4, 0.0"),
+        v("0.6, 0.8"),
+        v("3.0, -0.5"),
+        v("-1.0, 0.0"),
+    );
+    let last_hold = format!("    {{ node = \"N\", dofs = [{held_n}] }},\n]\n");
+    let second = format!(
+        r#"{last_hold}
+[[steps]]
+kind = "dynamic"
+duration = 0.02
+hold = [
+    {{ node = "O", dofs = [{held_o}] }},
+    {{ node = "N", dofs = [{held_n}] }},
+]
+"#
+    );
+    variant(
+        &format!("rigid{dim}d_pin_lumped"),
         &[
             (
                 "increment = 1.0e-5\n",
                 "increment = 1.0e-5\ndamping = \"lagged\"\n",
             ),
-            (
-                "force = [-1.0e5, 0.0]\n",
-                r#"force = [-1.0e5, 0.0]
+            (&load, &added),
+            (&last_hold, &second),
+        ],
+    )
+}
 
-[[loads]]
-node = "N"
-force = [2.0e4, 0.0]
-
+/// A grounded spring about the body's axis z, for [`every_term`].
+const TWIST: &str = r#"
 [[springs]]
 id = "twist"
 kind = "grounded"
 nodes = ["O"]
 dof = "rz"
 stiffness = 2.0e5
+"#;
 
-[[springs]]
-id = "tie-N"
-kind = "grounded"
-nodes = ["N"]
-dof = "ux"
-stiffness = 3.0e5
-
-[[springs]]
-id = "tie-S1"
-kind = "grounded"
-nodes = ["S1"]
-dof = "uy"
-stiffness = 4.0e5
-
-[[springs]]
-id = "body-to-node"
-kind = "fixed_direction"
-nodes = ["P", "N"]
-direction = [0.6, 0.8]
-stiffness = 2.0e5
-
-[[contacts]]
-id = "far-face"
-node = "N"
-body = "body"
-face_point = [3.0, -0.5]
-face_normal = [-1.0, 0.0]
-initially = "open"
-"#,
-            ),
-            (
-                "    { node = \"N\", dofs = [\"uy\"] },\n]\n",
-                r#"    { node = "N", dofs = ["uy"] },
-]
-
-[[steps]]
-kind = "dynamic"
-duration = 0.02
-hold = [
-    { node = "O", dofs = ["ux", "uy", "rz"] },
-    { node = "N", dofs = ["uy"] },
-]
-"#,
-            ),
-        ],
-    );
-    // 0.12 s at 1e-5 s: 12,000 increments, 501 rows, one every 24 increments. The turning step
-    // takes every increment of the first step it may take; the second holds the rotation.
+/// `scene` (from [`every_term`]) with and without the turning step, agreeing as `agree` says:
+/// 0.12 s at 1e-5 s, 12,000 increments, 501 rows, one every 24 increments. The turning step
+/// takes every increment of the first step it may take; the second holds the rotation. The
+/// added terms act: the turn differs from the seed case's by more than round-off.
+fn every_term_agrees(scene: &Scene, seed: &str, agree: Agree) {
     let first = (1..=9_998u64).filter(|n| n % 24 != 0).count() as u64;
-    let out = same_increments(&varied, 12_000, first);
-    // The added terms act: the turn differs from the seed case's by more than round-off.
-    let seed = run(ExplicitEngine::finite(), &scene("rigid2d_pin_lumped"));
+    let out = same_increments(scene, 12_000, first, agree);
+    let seed = run(ExplicitEngine::finite(), &crate::scene(seed));
     let (turned, seed_turn) = (col(&out.history, "rz"), col(&seed.history, "rz"));
     assert!(max_diff(&turned[..400], &seed_turn[..400]) > 1e-3 * peak(&seed_turn));
 }
 
 #[test]
-fn every_force_term_in_3d_is_the_general_path_to_round_off() {
-    // The 3D pinned lumped case with every kind of force term the heading about the axis sums:
-    // grounded springs along a direction on the particle and on a body point, a spring between
-    // a body point and the particle (off the axis of the other springs), a load on the
-    // particle, and a second contact pair that stays open.
-    let varied = variant(
-        "rigid3d_pin_lumped",
-        &[(
-            "force = [-1.0e5, 0.0, 0.0]\n",
-            r#"force = [-1.0e5, 0.0, 0.0]
-
-[[loads]]
-node = "N"
-force = [2.0e4, 0.0, 0.0]
-
-[[springs]]
-id = "tie-N"
-kind = "grounded"
-nodes = ["N"]
-dof = "ux"
-stiffness = 3.0e5
-
-[[springs]]
-id = "tie-S1"
-kind = "grounded"
-nodes = ["S1"]
-dof = "uy"
-stiffness = 4.0e5
-
-[[springs]]
-id = "body-to-node"
-kind = "fixed_direction"
-nodes = ["P", "N"]
-direction = [0.6, 0.8, 0.0]
-stiffness = 2.0e5
-
-[[contacts]]
-id = "far-face"
-node = "N"
-body = "body"
-face_point = [3.0, -0.5, 0.0]
-face_normal = [-1.0, 0.0, 0.0]
-initially = "open"
-"#,
-        )],
-    );
-    // The contact opens and closes again (12 impacts). Measured: 6.3e-12 (ux_node), the
-    // contact force 7.1e-12, against a bound of 1.6e-10.
-    let out = same_as_general_path(&varied, 10_000);
-    // The added terms act: the turn differs from the seed case's by more than round-off.
-    let seed = run(ExplicitEngine::finite(), &scene("rigid3d_pin_lumped"));
-    let (turned, seed_turn) = (col(&out.history, "rz"), col(&seed.history, "rz"));
-    assert!(max_diff(&turned, &seed_turn) > 1e-3 * peak(&seed_turn));
+fn every_force_term_lagged_damping_and_a_second_step_are_the_general_path_to_round_off() {
+    // The contact opens at once and first closes again at 0.00687 s (after row 28). Measured
+    // over the 29 rows before it: 2.4e-16 in 2D, 4.8e-16 in 3D (e_elastic).
+    for dim in [2, 3] {
+        every_term_agrees(
+            &every_term(dim, ""),
+            &format!("rigid{dim}d_pin_lumped"),
+            Agree::RoundOff(ROUND_OFF),
+        );
+    }
 }
 
 #[test]
-fn a_body_without_a_particle_is_the_general_path_bit_for_bit() {
+fn a_spring_about_the_axis_keeps_the_general_paths_arithmetic_bit_for_bit() {
+    // A spring about the axis reads the body's twist from the general path's orientation: the
+    // turning step then takes the general path's arithmetic, bit for bit.
+    for dim in [2, 3] {
+        every_term_agrees(
+            &every_term(dim, TWIST),
+            &format!("rigid{dim}d_pin_lumped"),
+            Agree::BitForBit,
+        );
+    }
+}
+
+#[test]
+fn a_body_without_a_particle_is_the_general_path_to_round_off() {
     // A body that can slide along x, with a spring on one of its points, a grounded spring on
-    // its reference node and a load: no particle, no contact.
+    // its reference node and a load: no particle, no contact. Measured: 1.8e-15 (e_kinetic).
     let text = r#"
 id = "body_alone"
 title = "A body alone, turning and sliding"
@@ -548,7 +583,12 @@ hold = [{ node = "O", dofs = ["uy", "uz", "rx", "ry"] }]
         .unwrap_or_else(|e| panic!("{e}"));
     // About 990 rad in all: the angle's round-off, and so each column's, is 990 times a seed
     // case's. Measured: 5.6e-13 (w_external, the load's work as its point goes round).
-    let out = same_increments_within(&scene, 10_000, eligible(10_000, 50), 990.0 * ROUND_OFF);
+    let out = same_increments(
+        &scene,
+        10_000,
+        eligible(10_000, 50),
+        Agree::RoundOff(990.0 * ROUND_OFF),
+    );
     // It spins: the kinetic energy stays within a few per cent of its start (½·I_g·ω², with
     // the weak springs storing little).
     let kinetic = col(&out.history, "e_kinetic");

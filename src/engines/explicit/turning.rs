@@ -8,17 +8,24 @@
 //! force vectors element by element through the points' indices, and walks the time loop's
 //! tests. Here a step with one body that turns about one free axis, at most one particle,
 //! springs along fixed lines, plane contacts and loads keeps the body's translation,
-//! orientation (with its rounding carry and mass properties), the particle's displacement and
-//! both velocities in locals (registers where the compiler can), and runs the same increment:
-//! - the force terms of [`Model::forces_with`] in its order, written out as it writes them
-//!   (the plane contacts through the same functions of the model's `Contact`);
-//! - the same body solve, with the centred angular rate in closed form where the body's
-//!   centripetal terms act ([`Model::centred_single_axis`]);
-//! - the same projection, compensated sums and orientation update, by the same functions.
+//! orientation, the particle's displacement and both velocities in locals (registers where
+//! the compiler can), and runs the increment one of two ways:
+//! - **About the axis** ([`about_axis`]): the body's turn since the batch's start is carried
+//!   as a heading about its free axis, each point's lever and turn formed from parts fixed for
+//!   the batch, and the body solve on that axis in closed form. The same to round-off: the
+//!   body turns by other arithmetic than the general path's. Taken wherever every term turns
+//!   with the body: no spring about an axis, at most [`about_axis::MAX_POINTS`] body points.
+//! - **As the general path** (otherwise: a spring about an axis reads the body's twist): the
+//!   force terms of [`Model::forces_with`] in its order, written out as it writes them (the
+//!   plane contacts through the same functions of the model's `Contact`); the same body
+//!   solve, with the centred angular rate in closed form where the body's centripetal terms
+//!   act ([`Model::centred_single_axis`]); the same projection, compensated sums and
+//!   orientation update (with its rounding carry and mass properties), by the same functions.
+//!   The general path's bit for bit.
 //!
-//! The result is the general path's bit for bit, and so are the work counters and the impacts:
-//! `tests/turning.rs` checks every output value of scenes that use every force term, so a
-//! change to one path's arithmetic that the other does not follow fails there.
+//! Either way the work counters and the impacts are the general path's. `tests/turning.rs`
+//! checks every output value of scenes that use every force term, bit for bit or to
+//! round-off, so a change to one path's arithmetic that the other does not follow fails there.
 //!
 //! A batch runs the increments the affine step's batches run: up to the next output row, the
 //! step's last two increments (the last one's acceleration starts the next step) or the next
@@ -87,7 +94,7 @@ struct LineTerm<S: Space> {
 #[derive(Debug, Clone)]
 pub struct TurningStep<S: Space> {
     /// Whether the increments carry the turn about the axis since the batch's start
-    /// ([`about_axis`]; 3D) instead of the general path's orientation (bit for bit; 2D).
+    /// ([`about_axis`]) instead of the general path's orientation (bit for bit).
     about_axis: bool,
     /// The body points the terms act on (offsets from the reference node at t = 0, the body's
     /// axes), indexed by [`End::Body`]'s `point`.
@@ -246,10 +253,9 @@ impl<S: Space> TurningStep<S> {
             .iter()
             .map(|l| (end(&l.point), l.force))
             .collect();
-        // In 3D, about the axis where every term turns it (a spring about an axis reads the
-        // body's twist, which the quaternion gives): see `about_axis`.
-        let about_axis = S::ROT == 3
-            && points.len() <= about_axis::MAX_POINTS
+        // About the axis where every term turns with the body (a spring about an axis reads
+        // the body's twist, which the general path's orientation gives).
+        let about_axis = points.len() <= about_axis::MAX_POINTS
             && grounded
                 .iter()
                 .all(|t| matches!(t, GroundedTerm::Along { .. }));
@@ -271,8 +277,8 @@ impl<S: Space> TurningStep<S> {
     /// Take up to `count` increments of `h` from the configuration `cfg`, the rounding carries
     /// `carry` and the half-step velocities `v_half`, and write the state back; the work
     /// counters and the impacts (`pressed`, `impacts`, from increment `n`) as the general path
-    /// notes them. In 2D these are the general path's increments bit for bit; in 3D they carry
-    /// the turn about the axis ([`about_axis`]), the same to round-off. Returns the increments
+    /// notes them: about the axis ([`about_axis`]; the same to round-off) or as the general
+    /// path takes them (bit for bit), as the module's documentation says. Returns the increments
     /// taken: fewer than `count` only where an increment's centred angular rate has no real
     /// value, which the general path then reports.
     #[allow(clippy::too_many_arguments)]

@@ -1,10 +1,10 @@
-//! The turning step's increments for a 3D body: its turn about the one free axis g carried as a
-//! heading since the batch's start, the orientation written back once per batch.
+//! The turning step's increments about the body's one free axis g: its turn since the batch's
+//! start carried as a heading about g, the orientation written back once per batch.
 //!
 //! A body turning about a fixed axis g is at R(θ) = Rot(g, θ)·R₀ after turning θ from its
 //! orientation R₀ at the batch's start, so each of its vectors ρ is at
 //! R(θ)ρ = a + (cos θ − 1)·a⊥ + sin θ·(g × a), with a = R₀ρ and a⊥ = −g × (g × a) its part
-//! across g ([`Arm`]). With a, a⊥ and g × a formed once per batch, turning a point takes 6
+//! across g ([`Arm`]). With a, a⊥ and g × a formed once per batch, turning a 3D point takes 6
 //! products instead of the general path's 9 (R − 1 applied to ρ), and the moment about g of a
 //! force f at the point is f·(g × Rρ) = f·((1 + v)·(g × a) − s·a⊥) instead of a cross product
 //! and a projection. The general path's quaternion update (about 60 flops), its R − 1 (about
@@ -12,7 +12,9 @@
 //! versine v and sine s, with their carries, as a 2D body's) and three products per
 //! coordinate. On the one free axis the body solve is closed: g·I g does not change as the
 //! body turns about g, and the drag w = Q(g × c) of the mass centre c is (1 + v)·Q(g × a_c) −
-//! s·Q(a_c⊥), so the operator g·I g − m·w·w costs a dot product and a division.
+//! s·Q(a_c⊥), so the operator g·I g − m·w·w costs a dot product and a division. In 2D (g = z,
+//! a⊥ = a) the turn costs what the general path's does; what the step saves there is the body
+//! solve's and the mass properties' bookkeeping.
 //!
 //! The arithmetic is the general path's to round-off, not bit for bit: `tests/turning.rs`
 //! holds the two paths together within bounds that follow from the round-off and the

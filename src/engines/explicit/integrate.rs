@@ -450,8 +450,8 @@ pub fn integrate<S: Space, const FINITE: bool>(
             None
         };
         // Under finite rotation, a small step with one body turning about one axis runs its
-        // increments between output rows with the state in locals (`TurningStep`; the
-        // general path's increments bit for bit).
+        // increments between output rows with the state in locals (`TurningStep`: its turn
+        // about the axis, the same to round-off, or the general path's increments bit for bit).
         let turning_step = if batched_steps && affine_step.is_none() {
             TurningStep::of(model, &held, settings.damping)
         } else {

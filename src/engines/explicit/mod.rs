@@ -156,6 +156,9 @@ impl Engine for ExplicitEngine {
         if c.turning_increments > 0 {
             counters.insert("turning_increments".to_string(), c.turning_increments);
         }
+        if c.about_axis_increments > 0 {
+            counters.insert("about_axis_increments".to_string(), c.about_axis_increments);
+        }
         if c.held_lines > 0 {
             counters.insert("held_lines".to_string(), c.held_lines);
         }

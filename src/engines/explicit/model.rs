@@ -240,6 +240,10 @@ pub struct Counters {
     /// Increments stepped with one turning body's state in locals
     /// ([`TurningStep`](super::turning::TurningStep)).
     pub turning_increments: u64,
+    /// Of those, the increments that carried the body's turn about its axis
+    /// ([`TurningStep`](super::turning::TurningStep)'s arithmetic about the axis, the same to
+    /// round-off; the others are the general path's bit for bit).
+    pub about_axis_increments: u64,
     /// Axial elements held on their lines in a dynamic step ([`Model::with_lines_held`]: they
     /// act along fixed lines, a spring while its ends keep their order), summed over the
     /// dynamic steps.
@@ -309,7 +313,8 @@ pub(super) struct Contact<S: Space> {
 impl<S: Space> Contact<S> {
     /// A plane pair's signed gap (negative: penetration) and outward normal under finite
     /// rotation, at its body's orientation `r`, with `relative` the node's displacement less
-    /// the body's reference node's: the time loop's and [`TurningStep`]'s, one arithmetic.
+    /// the body's reference node's: the time loop's and [`TurningStep`]'s as the general path
+    /// (one arithmetic; its turn about the axis forms the same gap to round-off).
     ///
     /// [`TurningStep`]: super::turning::TurningStep
     #[inline(always)]

@@ -23,9 +23,12 @@
 //!   orientation update (with its rounding carry and mass properties), by the same functions.
 //!   The general path's bit for bit.
 //!
-//! Either way the work counters and the impacts are the general path's. `tests/turning.rs`
-//! checks every output value of scenes that use every force term, bit for bit or to
-//! round-off, so a change to one path's arithmetic that the other does not follow fails there.
+//! Either way the work counters are the general path's (with a counter of their own,
+//! `turning_increments`, and `about_axis_increments` for those about the axis), and so are the
+//! impacts. `tests/turning.rs` checks every output value of scenes that use every force term,
+//! bit for bit, or to round-off up to the first impact after t = 0 (a penalty contact that
+//! closes again amplifies a difference in the last bit to the whole contact force), so a change
+//! to one path's arithmetic that the other does not follow fails there.
 //!
 //! A batch runs the increments the affine step's batches run: up to the next output row, the
 //! step's last two increments (the last one's acceleration starts the next step) or the next
@@ -311,6 +314,9 @@ impl<S: Space> TurningStep<S> {
         counters.body_solves += taken * if self.centred { 2 } else { 1 };
         counters.rotation_updates += taken;
         counters.turning_increments += taken;
+        if self.about_axis {
+            counters.about_axis_increments += taken;
+        }
         taken
     }
 

@@ -224,10 +224,14 @@ impl<S: Space> TurningStep<S> {
                 _ => S::V::zero(),
             };
             for term in &self.grounded {
-                // Springs about an axis are declined (`TurningStep::of`).
-                if let GroundedTerm::Along { end, direction, c } = term {
-                    let u = direction.dot(&displacement(end, &s));
-                    f.apply(end, &lever(end), *direction * (-c * u));
+                match term {
+                    GroundedTerm::Along { end, direction, c } => {
+                        let u = direction.dot(&displacement(end, &s));
+                        f.apply(end, &lever(end), *direction * (-c * u));
+                    }
+                    GroundedTerm::About { .. } => {
+                        unreachable!("a spring about an axis takes the general path's arithmetic")
+                    }
                 }
             }
             for term in self.line.iter().chain(&self.other) {
@@ -313,12 +317,15 @@ impl<S: Space> TurningStep<S> {
         cfg.bu[0] = s.bu;
         carry.b[0] = s.bu_carry;
         v_half.b[0] = s.vb;
-        v_half.w[0] = w0 + g * (s.rate - rate0);
+        // The part of w off g (round-off, after the step's start enforced the held axes) kept;
+        // exact in 2D, where it is 0.
+        v_half.w[0] = (w0 - g * rate0) + g * s.rate;
         // The heading's angle (its carry is what the stored value holds beyond the exact one)
         // turns R₀ about g by the general path's compensated update. Read in (−π, π], it drops
         // whole turns: after more than half a turn in one batch the quaternion comes back with
-        // the general path's opposite sign, the same rotation. Only a twist would see the sign,
-        // and the rows' twist is unwrapped (a spring about an axis declines the step).
+        // the general path's opposite sign, the same rotation. Only a twist would see the sign:
+        // the rows' twist is unwrapped, and a spring about an axis takes the general path's
+        // arithmetic instead of this.
         let angle = (s.heading.sin() - s.heading_carry[1])
             .atan2(1.0 + (s.heading.versine() - s.heading_carry[0]));
         let r = S::advance_compensated(&r0, &mut cfg.br_carry[0], &(g * angle));

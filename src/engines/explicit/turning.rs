@@ -124,14 +124,68 @@ pub struct TurningStep<S: Space> {
     penalty: f64,
 }
 
-/// The state a batch carries in locals.
-struct State<S: Space> {
+/// The translations a batch carries in locals, either way it turns the body: the particle's
+/// displacement (with its rounding carry) and half-step velocity, and the body's reference
+/// node's.
+#[derive(Debug, Clone, Copy)]
+struct Translations<S: Space> {
     u: S::V,
     u_carry: S::V,
     v: S::V,
     bu: S::V,
     bu_carry: S::V,
     vb: S::V,
+}
+
+impl<S: Space> Translations<S> {
+    /// From the configuration, its rounding carries and half-step velocities (the particle's
+    /// parts zero where there is none).
+    #[inline(always)]
+    fn read(particle: bool, cfg: &Config<S>, carry: &Rates<S>, v_half: &Rates<S>) -> Self {
+        let at = |x: &[S::V]| if particle { x[0] } else { S::V::zero() };
+        Translations {
+            u: at(&cfg.u),
+            u_carry: at(&carry.p),
+            v: at(&v_half.p),
+            bu: cfg.bu[0],
+            bu_carry: carry.b[0],
+            vb: v_half.b[0],
+        }
+    }
+
+    /// One increment of `h` at the particle's acceleration `a` and the body's `ab`: the
+    /// half-step velocities, then the displacements by compensated sums.
+    #[inline(always)]
+    fn advance(&mut self, a: S::V, ab: S::V, h: f64) {
+        self.vb += ab * h;
+        self.v += a * h;
+        compensated_add(&mut self.u, &mut self.u_carry, self.v * h);
+        compensated_add(&mut self.bu, &mut self.bu_carry, self.vb * h);
+    }
+
+    /// Back into the configuration, its carries and its half-step velocities.
+    #[inline(always)]
+    fn write(
+        &self,
+        particle: bool,
+        cfg: &mut Config<S>,
+        carry: &mut Rates<S>,
+        v_half: &mut Rates<S>,
+    ) {
+        if particle {
+            cfg.u[0] = self.u;
+            carry.p[0] = self.u_carry;
+            v_half.p[0] = self.v;
+        }
+        cfg.bu[0] = self.bu;
+        carry.b[0] = self.bu_carry;
+        v_half.b[0] = self.vb;
+    }
+}
+
+/// The state a batch carries in locals.
+struct State<S: Space> {
+    t: Translations<S>,
     w: S::W,
     br: S::R,
     br_carry: S::Carry,
@@ -142,8 +196,8 @@ impl<S: Space> State<S> {
     fn displacement(&self, end: &End<S>) -> S::V {
         match end {
             End::Ground => S::V::zero(),
-            End::Particle => self.u,
-            End::Body { rho, .. } => self.bu + S::turned(&self.br, rho),
+            End::Particle => self.t.u,
+            End::Body { rho, .. } => self.t.bu + S::turned(&self.br, rho),
         }
     }
 }
@@ -339,14 +393,8 @@ impl<S: Space> TurningStep<S> {
         impacts: &mut Vec<f64>,
     ) -> u64 {
         let particle = !model.particles.is_empty();
-        let at = |x: &[S::V]| if particle { x[0] } else { S::V::zero() };
         let mut s = State::<S> {
-            u: at(&cfg.u),
-            u_carry: at(&carry.p),
-            v: at(&v_half.p),
-            bu: cfg.bu[0],
-            bu_carry: carry.b[0],
-            vb: v_half.b[0],
+            t: Translations::read(particle, cfg, carry, v_half),
             w: v_half.w[0],
             br: cfg.br[0],
             br_carry: cfg.br_carry[0],
@@ -387,7 +435,7 @@ impl<S: Space> TurningStep<S> {
                 f.apply(&s, &term.b, -force);
             }
             for (k, c) in self.planes.iter().enumerate() {
-                let relative = s.u - s.bu;
+                let relative = s.t.u - s.t.bu;
                 let (gap, normal) = c.plane_gap(&s.br, relative);
                 let force = self.penalty * (-gap).max(0.0);
                 f.contact[k] = force;
@@ -420,24 +468,14 @@ impl<S: Space> TurningStep<S> {
                 impacts,
             );
             let a = motion.project(f.p * self.inverse_mass);
-            s.vb += ab * h;
+            s.t.advance(a, ab, h);
             s.w += aw * h;
-            s.v += a * h;
-            compensated_add(&mut s.u, &mut s.u_carry, s.v * h);
-            compensated_add(&mut s.bu, &mut s.bu_carry, s.vb * h);
             let r = S::advance_compensated(&s.br, &mut s.br_carry, &(s.w * h));
             inertia = model.oriented(0, &r);
             s.br = r;
             taken += 1;
         }
-        if particle {
-            cfg.u[0] = s.u;
-            carry.p[0] = s.u_carry;
-            v_half.p[0] = s.v;
-        }
-        cfg.bu[0] = s.bu;
-        carry.b[0] = s.bu_carry;
-        v_half.b[0] = s.vb;
+        s.t.write(particle, cfg, carry, v_half);
         v_half.w[0] = s.w;
         cfg.br[0] = s.br;
         cfg.br_carry[0] = s.br_carry;

@@ -23,8 +23,8 @@
 
 use super::super::integrate::note_impacts;
 use super::super::model::{Config, Constraints, Model, Motion, Rates, centred_rate};
-use super::super::space::{Heading, Lin, Planar, Space, compensated_add, project};
-use super::{End, GroundedTerm, MAX_CONTACTS, TurningStep};
+use super::super::space::{Heading, Lin, Planar, Space, project};
+use super::{End, GroundedTerm, MAX_CONTACTS, Translations, TurningStep};
 
 /// At most this many body points in the step's terms (their [`Arm`]s are formed per batch, in
 /// a fixed array).
@@ -90,12 +90,7 @@ impl<S: Space> Arm<S> {
 /// The state a batch carries in locals: the particle's displacement and velocity, the body's
 /// translation and velocity, its angular rate about g and its heading since the batch's start.
 struct State<S: Space> {
-    u: S::V,
-    u_carry: S::V,
-    v: S::V,
-    bu: S::V,
-    bu_carry: S::V,
-    vb: S::V,
+    t: Translations<S>,
     rate: f64,
     heading: Heading,
     heading_carry: [f64; 2],
@@ -189,16 +184,10 @@ impl<S: Space> TurningStep<S> {
         };
         let fixed_inverse = reciprocal(axial);
         let particle = !model.particles.is_empty();
-        let at = |x: &[S::V]| if particle { x[0] } else { S::V::zero() };
         let w0 = v_half.w[0];
         let rate0 = g.dot(&w0);
         let mut s = State::<S> {
-            u: at(&cfg.u),
-            u_carry: at(&carry.p),
-            v: at(&v_half.p),
-            bu: cfg.bu[0],
-            bu_carry: carry.b[0],
-            vb: v_half.b[0],
+            t: Translations::read(particle, cfg, carry, v_half),
             rate: rate0,
             heading: Heading::IDENTITY,
             heading_carry: [0.0; 2],
@@ -215,8 +204,8 @@ impl<S: Space> TurningStep<S> {
             let cosine = 1.0 + v;
             let displacement = |end: &End<S>, s: &State<S>| match end {
                 End::Ground => S::V::zero(),
-                End::Particle => s.u,
-                End::Body { point, .. } => s.bu + arms[*point].turned(v, sine),
+                End::Particle => s.t.u,
+                End::Body { point, .. } => s.t.bu + arms[*point].turned(v, sine),
             };
             let mut f = Sums::<S>::default();
             let lever = |end: &End<S>| match end {
@@ -243,7 +232,7 @@ impl<S: Space> TurningStep<S> {
             for (k, (c, (normal, face))) in self.planes.iter().zip(&faces).enumerate() {
                 // `Contact::plane_gap` and `Contact::arm`, with the normal and the face point
                 // turned by the heading.
-                let relative = s.u - s.bu;
+                let relative = s.t.u - s.t.bu;
                 let n = normal.rotated(v, sine);
                 let gap = n.dot(&((c.arm0 - c.face) + relative - face.turned(v, sine)));
                 let force = self.penalty * (-gap).max(0.0);
@@ -295,11 +284,8 @@ impl<S: Space> TurningStep<S> {
                 impacts,
             );
             let a = motion.project(f.p * self.inverse_mass);
-            s.vb += ab * h;
+            s.t.advance(a, ab, h);
             s.rate += alpha * h;
-            s.v += a * h;
-            compensated_add(&mut s.u, &mut s.u_carry, s.v * h);
-            compensated_add(&mut s.bu, &mut s.bu_carry, s.vb * h);
             s.heading =
                 Planar::advance_compensated(&s.heading, &mut s.heading_carry, &(s.rate * h));
             taken += 1;
@@ -309,14 +295,7 @@ impl<S: Space> TurningStep<S> {
             // for the general path to report.
             return 0;
         }
-        if particle {
-            cfg.u[0] = s.u;
-            carry.p[0] = s.u_carry;
-            v_half.p[0] = s.v;
-        }
-        cfg.bu[0] = s.bu;
-        carry.b[0] = s.bu_carry;
-        v_half.b[0] = s.vb;
+        s.t.write(particle, cfg, carry, v_half);
         // The part of w off g (round-off, after the step's start enforced the held axes) kept;
         // exact in 2D, where it is 0.
         v_half.w[0] = (w0 - g * rate0) + g * s.rate;

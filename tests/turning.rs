@@ -242,11 +242,11 @@ fn steps_it_does_not_qualify_for_take_the_general_path() {
 /// The pinned lumped case in 2D or 3D (`dim`) with every kind of force term the turning step
 /// sums: grounded springs along a direction (on the particle and on a body point), a spring
 /// between a body point and the particle (off the line of the others), a load on the particle,
-/// a second contact pair that stays open, and `twist` (a grounded spring about the body's axis,
-/// or nothing); lagged damping (no velocity-dependent force, so it takes the same increments);
+/// a second contact pair that stays open, and `extra` (a grounded spring about the body's axis,
+/// more loads, or nothing); lagged damping (no velocity-dependent force, so it takes the same increments);
 /// and a second dynamic step that holds the rotation, which the turning step declines,
 /// restarting after its batches.
-fn every_term(dim: u32, twist: &str) -> Scene {
+fn every_term(dim: u32, extra: &str) -> Scene {
     let v = |x: &str| {
         if dim == 2 {
             format!("[{x}]")
@@ -265,7 +265,7 @@ fn every_term(dim: u32, twist: &str) -> Scene {
 [[loads]]
 node = "N"
 force = {}
-{twist}
+{extra}
 [[springs]]
 id = "tie-N"
 kind = "grounded"
@@ -367,6 +367,26 @@ fn a_spring_about_the_axis_keeps_the_general_paths_arithmetic_bit_for_bit() {
     for dim in [2, 3] {
         every_term_agrees(
             &every_term(dim, TWIST),
+            &format!("rigid{dim}d_pin_lumped"),
+            Agree::BitForBit,
+        );
+    }
+}
+
+#[test]
+fn more_body_points_than_the_step_splits_keep_the_general_paths_arithmetic_bit_for_bit() {
+    // The turn about the axis splits at most `MAX_POINTS` (8) body-point ends per batch; past
+    // that the turning step takes the general path's arithmetic. Eight more loads on S1 make
+    // twelve.
+    for dim in [2, 3] {
+        let force = if dim == 2 {
+            "[0.0, 1.0e2]"
+        } else {
+            "[0.0, 1.0e2, 0.0]"
+        };
+        let loads = format!("\n[[loads]]\nnode = \"S1\"\nforce = {force}\n").repeat(8);
+        every_term_agrees(
+            &every_term(dim, &loads),
             &format!("rigid{dim}d_pin_lumped"),
             Agree::BitForBit,
         );

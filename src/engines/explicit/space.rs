@@ -981,14 +981,7 @@ pub(super) fn project<V: Lin>(held: &[V], v: V) -> V {
 fn factorise(n: usize, a: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
     let mut l = [[0.0; 3]; 3];
     if n == 1 {
-        let a = a[0][0];
-        // Not positive and finite (NaN, or an infinite value whose reciprocal would be a
-        // finite zero): failed.
-        l[0][0] = if a > 0.0 && a.is_finite() {
-            1.0 / a
-        } else {
-            f64::NAN
-        };
+        l[0][0] = pivot_reciprocal(a[0][0]);
         return l;
     }
     for j in 0..n {
@@ -1011,6 +1004,18 @@ fn factorise(n: usize, a: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
         }
     }
     l
+}
+
+/// The reciprocal of a one-axis operator `a`, as [`factorise`] stores it: NaN where `a` is not
+/// positive and finite (NaN, or an infinite value whose reciprocal would be a finite zero),
+/// which the time loop reports as a failed run.
+#[inline]
+pub(super) fn pivot_reciprocal(a: f64) -> f64 {
+    if a > 0.0 && a.is_finite() {
+        1.0 / a
+    } else {
+        f64::NAN
+    }
 }
 
 /// Solve the system factorised by [`factorise`] for the right-hand side `r` (NaN where the

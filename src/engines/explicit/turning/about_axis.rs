@@ -23,7 +23,7 @@
 
 use super::super::integrate::note_impacts;
 use super::super::model::{Config, Constraints, Model, Motion, Rates, centred_rate};
-use super::super::space::{Heading, Lin, Planar, Space, project};
+use super::super::space::{Heading, Lin, Planar, Space, pivot_reciprocal, project};
 use super::{End, GroundedTerm, MAX_CONTACTS, Translations, TurningStep};
 
 /// At most this many body points in the step's terms (their [`Arm`]s are formed per batch, in
@@ -173,16 +173,7 @@ impl<S: Space> TurningStep<S> {
             project(held_t, centre.around),
             project(held_t, centre.across),
         );
-        // As `factorise` for one axis: NaN where the operator is not positive and finite, which
-        // the time loop reports as a failed run.
-        let reciprocal = |a: f64| {
-            if a > 0.0 && a.is_finite() {
-                1.0 / a
-            } else {
-                f64::NAN
-            }
-        };
-        let fixed_inverse = reciprocal(axial);
+        let fixed_inverse = pivot_reciprocal(axial);
         let particle = !model.particles.is_empty();
         let w0 = v_half.w[0];
         let rate0 = g.dot(&w0);
@@ -251,7 +242,7 @@ impl<S: Space> TurningStep<S> {
                 S::V::zero()
             };
             let inverse = if off_centre {
-                reciprocal(axial - mass * drag.dot(&drag))
+                pivot_reciprocal(axial - mass * drag.dot(&drag))
             } else {
                 fixed_inverse
             };

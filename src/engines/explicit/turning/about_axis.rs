@@ -16,13 +16,26 @@
 //! a⊥ = a) the turn costs what the general path's does; what the step saves there is the body
 //! solve's and the mass properties' bookkeeping.
 //!
+//! Three more things are formed once per batch so that an increment does scalar arithmetic
+//! where the general path does vector arithmetic ([`Along`]):
+//! - a grounded spring's or a load's fixed direction d on its body point: d·(R − 1)ρ and the
+//!   moment arm d·(g × Rρ) are linear in (v, s), three scalars each;
+//! - the mass centre's drag: |w|² and the centripetal unit force's dot with w are quadratic
+//!   forms in (cos θ, sin θ) with three coefficients, and the unit force's free part is
+//!   linear in them;
+//! - the step's h·(g·I g − m w·w)⁻¹ and h²·(…)⁻¹, so that the moment reaches the rate and the
+//!   turn h·rate (advanced side by side, the heading from the latter) in two operations.
+//!
+//! Where the centripetal terms act, the centred rate enters only squared, and
+//! [`centred_rate_squared`] forms its square directly, from the series of C(z)².
+//!
 //! The arithmetic is the general path's to round-off, not bit for bit: `tests/turning.rs`
 //! holds the two paths together within bounds that follow from the round-off and the
 //! penalty's leverage. At the batch's end the heading's angle θ turns R₀ by the general path's
 //! own compensated update, so the quaternion keeps its rounding carry.
 
 use super::super::integrate::note_impacts;
-use super::super::model::{Config, Constraints, Model, Motion, Rates, centred_rate};
+use super::super::model::{Config, Constraints, Model, Motion, Rates, centred_rate_squared};
 use super::super::space::{Heading, Lin, Planar, Space, pivot_reciprocal, project};
 use super::{End, GroundedTerm, MAX_CONTACTS, Translations, TurningStep};
 
@@ -83,6 +96,43 @@ impl<S: Space> Arm<S> {
     /// is f·(g × Rρ).
     #[inline(always)]
     fn lever(&self, c: f64, s: f64) -> S::V {
+        self.around * c - self.across * s
+    }
+}
+
+/// A fixed direction d (a grounded spring's, or a load's force) on a body point's [`Arm`], as
+/// scalars: d·(R − 1)ρ = `turned` + v·`across` + s·`around` and d·(g × Rρ) =
+/// c·`around` − s·`across` (c = 1 + v), so the term's stretch and moment cost a few scalar
+/// products instead of turning the point and two dot products.
+#[derive(Debug, Clone, Copy, Default)]
+struct Along {
+    /// d·(R₀ − 1)ρ.
+    turned: f64,
+    /// d·a⊥.
+    across: f64,
+    /// d·(g × a).
+    around: f64,
+}
+
+impl Along {
+    fn new<S: Space>(arm: &Arm<S>, d: &S::V) -> Self {
+        Along {
+            turned: d.dot(&arm.turned),
+            across: d.dot(&arm.across),
+            around: d.dot(&arm.around),
+        }
+    }
+
+    /// d·(R − 1)ρ at the heading (v, s).
+    #[inline(always)]
+    fn turned(&self, v: f64, s: f64) -> f64 {
+        self.turned + (self.across * v + self.around * s)
+    }
+
+    /// d·(g × Rρ) at the heading (c = 1 + v, s): the moment about g of the force d at the
+    /// point.
+    #[inline(always)]
+    fn lever(&self, c: f64, s: f64) -> f64 {
         self.around * c - self.across * s
     }
 }
@@ -157,6 +207,22 @@ impl<S: Space> TurningStep<S> {
         for (arm, rho) in arms.iter_mut().zip(&self.points) {
             *arm = Arm::new(&r0, &g, rho);
         }
+        // A grounded spring's or a load's direction d on its body point's arm, as scalars
+        // (each body point is one term's end).
+        let mut along = [Along::default(); MAX_POINTS];
+        let directed = self
+            .grounded
+            .iter()
+            .filter_map(|term| match term {
+                GroundedTerm::Along { end, direction, .. } => Some((end, direction)),
+                GroundedTerm::About { .. } => None,
+            })
+            .chain(self.loads.iter().map(|(end, force)| (end, force)));
+        for (end, d) in directed {
+            if let End::Body { point, .. } = end {
+                along[*point] = Along::new(&arms[*point], d);
+            }
+        }
         let mut faces = [(Arm::<S>::zero(), Arm::<S>::zero()); MAX_CONTACTS];
         for (face, c) in faces.iter_mut().zip(&self.planes) {
             *face = (Arm::new(&r0, &g, &c.normal), Arm::new(&r0, &g, &c.face));
@@ -172,6 +238,15 @@ impl<S: Space> TurningStep<S> {
         let (drag_around, drag_across) = (
             project(held_t, centre.around),
             project(held_t, centre.across),
+        );
+        // With P the projection onto the free translations, d_r = P(g × a_c) and
+        // d_x = P(a_c⊥): the drag is c·d_r − s·d_x, so |drag|² and the centripetal unit
+        // force's m(c·a_c⊥ + s·(g × a_c))·drag are quadratic forms in (c, s) (P symmetric and
+        // idempotent), and the unit force's P/m is c·d_x + s·d_r.
+        let (rr, xx, rx) = (
+            drag_around.dot(&drag_around),
+            drag_across.dot(&drag_across),
+            drag_around.dot(&drag_across),
         );
         let fixed_inverse = pivot_reciprocal(axial);
         let particle = !model.particles.is_empty();
@@ -205,6 +280,17 @@ impl<S: Space> TurningStep<S> {
             };
             for term in &self.grounded {
                 match term {
+                    GroundedTerm::Along {
+                        end: End::Body { point, .. },
+                        direction,
+                        c,
+                    } => {
+                        let d = &along[*point];
+                        let u = direction.dot(&s.t.bu) + d.turned(v, sine);
+                        let tension = -c * u;
+                        f.b += *direction * tension;
+                        f.moment += tension * d.lever(cosine, sine);
+                    }
                     GroundedTerm::Along { end, direction, c } => {
                         let u = direction.dot(&displacement(end, &s));
                         f.apply(end, &lever(end), *direction * (-c * u));
@@ -234,39 +320,75 @@ impl<S: Space> TurningStep<S> {
                 f.moment += c.arm(relative).dot(&normal.lever(cosine, sine)) * force;
             }
             for (end, force) in &self.loads {
-                f.apply(end, &lever(end), *force);
+                if let End::Body { point, .. } = end {
+                    f.b += *force;
+                    f.moment += along[*point].lever(cosine, sine);
+                } else {
+                    f.apply(end, &lever(end), *force);
+                }
             }
             let drag = if off_centre {
                 drag_around * cosine - drag_across * sine
             } else {
                 S::V::zero()
             };
+            let (cc, cs, ss) = (cosine * cosine, cosine * sine, sine * sine);
             let inverse = if off_centre {
-                pivot_reciprocal(axial - mass * drag.dot(&drag))
+                pivot_reciprocal(axial - mass * ((rr * cc - (2.0 * rx) * cs) + xx * ss))
             } else {
                 fixed_inverse
             };
-            let solve = |force: &S::V, moment: f64| {
-                if pinned {
-                    return (S::V::zero(), moment * inverse);
+            // The solve on g: α = (moment − force·drag)·inverse, the drag 0 where the mass
+            // centre is on g or the body is pinned; the translations' acceleration from α.
+            let numerator = |force: &S::V, moment: f64| {
+                if off_centre {
+                    moment - force.dot(&drag)
+                } else {
+                    moment
                 }
-                let alpha = (moment - force.dot(&drag)) * inverse;
-                (project(held_t, *force) * (1.0 / mass) - drag * alpha, alpha)
             };
-            let (ab, alpha) = if self.centred {
-                let (a0, p) = solve(&f.b, f.moment);
-                // −m g × (g × c): the centre's part across g, turned.
-                let unit_force = (centre.across * cosine + centre.around * sine) * mass;
-                let (a1, q) = solve(&unit_force, 0.0);
+            let translation = |force: &S::V, alpha: f64| {
+                if pinned {
+                    S::V::zero()
+                } else {
+                    project(held_t, *force) * (1.0 / mass) - drag * alpha
+                }
+            };
+            // h·inverse and h²·inverse depend only on the heading: formed while the forces
+            // are summed, they take a product each off the chain from the moment to the next
+            // heading. The rate and its increment h·rate are advanced side by side (the
+            // heading from the latter), each to round-off.
+            let (h_inverse, hh_inverse) = (h * inverse, (h * h) * inverse);
+            let num = numerator(&f.b, f.moment);
+            let (ab, rate, turn) = if self.centred {
+                let p = num * inverse;
+                // The centripetal force at unit rate, −m g × (g × c) = m(c·a_c⊥ + s·(g × a_c))
+                // (the centre's part across g, turned), as its solve on g reads it: its
+                // moment about g is 0, its dot with the drag m(rx(c² − s²) + (rr − xx)cs),
+                // its P/m c·d_x + s·d_r.
+                let q = if off_centre {
+                    -(mass * (rx * (cc - ss) + (rr - xx) * cs)) * inverse
+                } else {
+                    0.0
+                };
+                let unit_translation = if pinned {
+                    S::V::zero()
+                } else {
+                    (drag_across * cosine + drag_around * sine) - drag * q
+                };
                 let beta = 0.5 * h * q;
-                let gamma = s.rate + 0.5 * h * p;
-                let Some(rate) = centred_rate(beta, gamma) else {
+                let gamma = s.rate + num * (0.5 * h_inverse);
+                let Some(squared) = centred_rate_squared(beta, gamma) else {
                     break;
                 };
-                let squared = rate * rate;
-                (a0 + a1 * squared, p + q * squared)
+                let ab = translation(&f.b, p) + unit_translation * squared;
+                // rate + h·(p + q·s²), and h times it.
+                let rate = (s.rate + num * h_inverse) + (h * q) * squared;
+                let turn = (s.rate * h + num * hh_inverse) + ((h * h) * q) * squared;
+                (ab, rate, turn)
             } else {
-                solve(&f.b, f.moment)
+                let ab = translation(&f.b, num * inverse);
+                (ab, s.rate + num * h_inverse, s.rate * h + num * hh_inverse)
             };
             note_impacts(
                 pressed,
@@ -276,9 +398,8 @@ impl<S: Space> TurningStep<S> {
             );
             let a = motion.project(f.p * self.inverse_mass);
             s.t.advance(a, ab, h);
-            s.rate += alpha * h;
-            s.heading =
-                Planar::advance_compensated(&s.heading, &mut s.heading_carry, &(s.rate * h));
+            s.rate = rate;
+            s.heading = Planar::advance_compensated(&s.heading, &mut s.heading_carry, &turn);
             taken += 1;
         }
         if taken == 0 {

@@ -64,12 +64,13 @@ fn no_real_root_is_none() {
 
 /// The square's residual, relative to it: t = s² gives the root s = β t + γ of the quadratic
 /// (exact for the true s²), whose square returns t. A relative error δ in t comes back as
-/// δ·|1 − 2βs| ≥ 0.6 δ for |z| ≤ 0.2; the check's own rounding (β t, the sum, the square, the
-/// series' γ² and its product) is a few ε of t, so 8ε bounds a correct square and a series that
-/// leaves out only terms under round-off (42 z⁴ at z = 2.5e-5 is 1.6e-17 of t, 429 z⁶ at the
-/// next switch 2e-17) stays under it. Tried: a wrong z² or z³ coefficient (4 for 5, 13 for
-/// 14) and either switch raised tenfold each fail it (residuals of 1.9e-15 to 4.2e-15 of t).
-/// One z⁵ too few (131 for 132) moves t by under 8e-17 of itself, under round-off: it passes.
+/// δ·|1 − 2βs| = δ·√(1 − 4z), at least 0.44 δ for |z| ≤ 0.2; the check's own rounding (β t,
+/// the sum, the square, the series' γ² and its product) is a few ε of t, so 8ε bounds a
+/// correct square and a series that leaves out only terms under round-off (42 z⁴ at
+/// z = 2.5e-5 is 1.6e-17 of t, 429 z⁶ at the next switch 2e-17) stays under it. Tried: a
+/// wrong z² or z³ coefficient (4 for 5, 13 for 14) and either switch raised tenfold each fail
+/// it (residuals of 1.9e-15 to 4.2e-15 of t). One z⁵ too few (131 for 132) moves t by under
+/// 8e-17 of itself, under round-off: it passes.
 const SQUARE_RESIDUAL: f64 = 8.0 * f64::EPSILON;
 
 #[test]
@@ -103,6 +104,8 @@ fn the_square_is_the_roots() {
         (-2.0, -0.2),
         (f64::NAN, 1.0),
         (1.0, f64::INFINITY),
+        (-1.0, f64::INFINITY),
+        (f64::NEG_INFINITY, 1.0),
     ] {
         assert_eq!(
             centred_rate_squared(beta, gamma),

@@ -2441,8 +2441,8 @@ const SQUARE_SIX: f64 = 6e-4;
 /// terms), in a shorter chain of dependent operations than the root's: s = γ·C(z) with
 /// z = βγ and C(z) = 1 + z·C(z)², so s² = γ²·(C(z) − 1)/z = γ²·Σ Cₙ₊₁ zⁿ (1, 2, 5, 14, 42,
 /// 132, …). The series' coefficients times z are formed as (k·β)·γ, from β, which is ready
-/// before γ; from γ the chain is five steps (βγ, z², the bracket, the sum, the product with γ²)
-/// where the root and its square take eight. Beyond [`SQUARE_SIX`], the root squared. None
+/// before γ; from γ the chain is five or six steps (βγ, z², z⁴ beyond [`SQUARE_FOUR`], the
+/// bracket, the sum, the product with γ²) where the root and its square take seven or eight. Beyond [`SQUARE_SIX`], the root squared. None
 /// where [`centred_rate`] is.
 #[inline(always)]
 pub fn centred_rate_squared(beta: f64, gamma: f64) -> Option<f64> {

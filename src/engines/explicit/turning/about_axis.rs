@@ -11,20 +11,24 @@
 //! 20) and its mass centre's turn give way to the planar heading's update about g (the
 //! versine v and sine s, with their carries, as a 2D body's) and three products per
 //! coordinate. On the one free axis the body solve is closed: g·I g does not change as the
-//! body turns about g, and the drag w = Q(g × c) of the mass centre c is (1 + v)·Q(g × a_c) −
-//! s·Q(a_c⊥), so the operator g·I g − m·w·w costs a dot product and a division. In 2D (g = z,
-//! a⊥ = a) the turn costs what the general path's does; what the step saves there is the body
-//! solve's and the mass properties' bookkeeping.
+//! body turns about g, and the drag w = P(g × Rρ_c) of the mass centre Rρ_c (P the projection
+//! onto the free translations) is (1 + v)·P(g × a_c) − s·P(a_c⊥), so the operator
+//! g·I g − m·w·w costs a few products and a division. In 2D (g = z, a⊥ = a) the turn costs
+//! what the general path's does; what the step saves there is the body solve's and the mass
+//! properties' bookkeeping.
 //!
-//! Three more things are formed once per batch so that an increment does scalar arithmetic
-//! where the general path does vector arithmetic ([`Along`]):
-//! - a grounded spring's or a load's fixed direction d on its body point: d·(R − 1)ρ and the
-//!   moment arm d·(g × Rρ) are linear in (v, s), three scalars each;
+//! Two more things are formed once per batch so that an increment does scalar arithmetic where
+//! the general path does vector arithmetic:
+//! - a grounded spring's or a load's fixed direction d on its body point ([`Along`]): the
+//!   stretch d·(R − 1)ρ and the moment arm d·(g × Rρ) are affine in (v, s), from three
+//!   scalars;
 //! - the mass centre's drag: |w|² and the centripetal unit force's dot with w are quadratic
-//!   forms in (cos θ, sin θ) with three coefficients, and the unit force's free part is
-//!   linear in them;
-//! - the step's h·(g·I g − m w·w)⁻¹ and h²·(…)⁻¹, so that the moment reaches the rate and the
-//!   turn h·rate (advanced side by side, the heading from the latter) in two operations.
+//!   forms in (cos θ, sin θ) with three coefficients (P is symmetric and idempotent), and the
+//!   unit force's free part is linear in them.
+//!
+//! And per increment, h·(g·I g − m w·w)⁻¹ and h²·(…)⁻¹ are formed from the heading while the
+//! forces are summed, so that the moment reaches the rate and the turn h·rate (advanced side
+//! by side, the heading from the latter) in two operations each.
 //!
 //! Where the centripetal terms act, the centred rate enters only squared, and
 //! [`centred_rate_squared`] forms its square directly, from the series of C(z)².
@@ -339,7 +343,8 @@ impl<S: Space> TurningStep<S> {
                 fixed_inverse
             };
             // The solve on g: α = (moment − force·drag)·inverse, the drag 0 where the mass
-            // centre is on g or the body is pinned; the translations' acceleration from α.
+            // centre is on the reference node or the body is pinned; the translations'
+            // acceleration from α.
             let numerator = |force: &S::V, moment: f64| {
                 if off_centre {
                     moment - force.dot(&drag)
@@ -362,7 +367,7 @@ impl<S: Space> TurningStep<S> {
             let num = numerator(&f.b, f.moment);
             let (ab, rate, turn) = if self.centred {
                 let p = num * inverse;
-                // The centripetal force at unit rate, −m g × (g × c) = m(c·a_c⊥ + s·(g × a_c))
+                // The centripetal force at unit rate, −m g × (g × ρ_c) = m(c·a_c⊥ + s·(g × a_c))
                 // (the centre's part across g, turned), as its solve on g reads it: its
                 // moment about g is 0, its dot with the drag m(rx(c² − s²) + (rr − xx)cs),
                 // its P/m c·d_x + s·d_r.

@@ -514,6 +514,52 @@ fn an_increment_without_a_centred_rate_fails_as_on_the_general_path() {
 }
 
 #[test]
+fn a_centred_rate_lost_within_a_batch_fails_as_on_the_general_path() {
+    // Spun at 2e5 rad/s (2 rad an increment), the sliding cases keep a centred rate for a few
+    // increments and then lose it, within the first batch (a row every 20 increments): the
+    // step stops at that increment, writes back the ones it took, and the general path takes
+    // the failing one. The failure must be the general path's own, at the same time: a step
+    // that wrote back one increment fewer than it took fails one increment early (tried).
+    // A step that took none and left the state as it was would pass, rightly: the general
+    // path then takes those increments itself.
+    for scene in [
+        variant(
+            "rigid2d_slide_surface",
+            &[("angular = 10.0", "angular = 2.0e5")],
+        ),
+        variant(
+            "rigid3d_slide_surface",
+            &[("angular = [0.0, 0.0, 10.0]", "angular = [0.0, 0.0, 2.0e5]")],
+        ),
+    ] {
+        let failure = |engine: ExplicitEngine| match engine.run(&scene, &RunSettings::default()) {
+            Ok(_) => panic!("{}: ran", scene.id),
+            Err(e) => e.to_string(),
+        };
+        let (turning, general) = (
+            failure(ExplicitEngine::finite()),
+            failure(ExplicitEngine::finite().general()),
+        );
+        assert!(turning.contains("centred angular velocity"), "{turning}");
+        assert_eq!(turning, general);
+        // The increment that failed: neither the batch's first nor on a row.
+        let t: f64 = turning
+            .split("at t = ")
+            .nth(1)
+            .and_then(|rest| rest.split(':').next())
+            .and_then(|t| t.parse().ok())
+            .unwrap_or_else(|| panic!("no time in {turning}"));
+        let increment = (t / 1e-5).round() as u64;
+        println!("{}: no centred rate at increment {increment}", scene.id);
+        assert!(
+            increment > 0 && !increment.is_multiple_of(20),
+            "{}: {turning}",
+            scene.id
+        );
+    }
+}
+
+#[test]
 fn a_fast_spin_about_a_tilted_axis_is_the_general_path_to_round_off() {
     // A 3D body without a particle or a contact, turning about (0, −1, 1)/√2 at 9,900 rad/s
     // and sliding along x, with its mass centre off its reference node (the centripetal terms

@@ -27,26 +27,34 @@ fn zs() -> Vec<f64> {
     z
 }
 
-#[test]
-fn the_root_solves_the_quadratic() {
+/// The inputs (z, β, γ) the tests run: each z of [`zs`] of either sign, at four values of γ,
+/// with β = z/γ.
+fn inputs() -> Vec<(f64, f64, f64)> {
+    let mut inputs = Vec::new();
     for z in zs() {
-        for sign in [1.0, -1.0] {
+        for z in [z, -z] {
             for gamma in [1e-3, 0.7, 12.0, -5.0] {
-                let beta = sign * z / gamma;
-                let s = centred_rate(beta, gamma).expect("a real root for 4βγ < 1");
-                let residual = beta * s * s - s + gamma;
-                assert!(
-                    residual.abs() <= RESIDUAL * s.abs(),
-                    "z = {:e}, γ = {gamma}: residual {:e} of s = {s}",
-                    sign * z,
-                    residual.abs() / s.abs()
-                );
-                // The branch that tends to γ: s/γ = C(z) lies between 1 and 2 for z ≥ 0 and
-                // between 1/2 and 1 below.
-                let ratio = s / gamma;
-                assert!((0.5..=2.0).contains(&ratio), "z = {z:e}: s/γ = {ratio}");
+                inputs.push((z, z / gamma, gamma));
             }
         }
+    }
+    inputs
+}
+
+#[test]
+fn the_root_solves_the_quadratic() {
+    for (z, beta, gamma) in inputs() {
+        let s = centred_rate(beta, gamma).expect("a real root for 4βγ < 1");
+        let residual = beta * s * s - s + gamma;
+        assert!(
+            residual.abs() <= RESIDUAL * s.abs(),
+            "z = {z:e}, γ = {gamma}: residual {:e} of s = {s}",
+            residual.abs() / s.abs()
+        );
+        // The branch that tends to γ: s/γ = C(z) lies between 1 and 2 for z ≥ 0 and between
+        // 1/2 and 1 below.
+        let ratio = s / gamma;
+        assert!((0.5..=2.0).contains(&ratio), "z = {z:e}: s/γ = {ratio}");
     }
 }
 
@@ -75,29 +83,22 @@ const SQUARE_RESIDUAL: f64 = 8.0 * f64::EPSILON;
 
 #[test]
 fn the_square_is_the_roots() {
-    for z in zs() {
-        for sign in [1.0, -1.0] {
-            for gamma in [1e-3, 0.7, 12.0, -5.0] {
-                let beta = sign * z / gamma;
-                let t = centred_rate_squared(beta, gamma).expect("a real root for 4βγ < 1");
-                let s = beta * t + gamma;
-                let residual = s * s - t;
-                assert!(
-                    residual.abs() <= SQUARE_RESIDUAL * t,
-                    "z = {:e}, γ = {gamma}: residual {:e} of s² = {t}",
-                    sign * z,
-                    residual.abs() / t
-                );
-                // The same root as `centred_rate`'s (tested above), to the rounding of either.
-                let root = centred_rate(beta, gamma).expect("a real root");
-                assert!(
-                    (t - root * root).abs() <= SQUARE_RESIDUAL * t,
-                    "z = {:e}: s² = {t}, the root squared {}",
-                    sign * z,
-                    root * root
-                );
-            }
-        }
+    for (z, beta, gamma) in inputs() {
+        let t = centred_rate_squared(beta, gamma).expect("a real root for 4βγ < 1");
+        let s = beta * t + gamma;
+        let residual = s * s - t;
+        assert!(
+            residual.abs() <= SQUARE_RESIDUAL * t,
+            "z = {z:e}, γ = {gamma}: residual {:e} of s² = {t}",
+            residual.abs() / t
+        );
+        // The same root as `centred_rate`'s (tested above), to the rounding of either.
+        let root = centred_rate(beta, gamma).expect("a real root");
+        assert!(
+            (t - root * root).abs() <= SQUARE_RESIDUAL * t,
+            "z = {z:e}: s² = {t}, the root squared {}",
+            root * root
+        );
     }
     for (beta, gamma) in [
         (1.0, 0.26),

@@ -138,12 +138,7 @@ fn an_impact_below_the_limit_is_named_as_the_cause() {
     assert!(err.contains("no mode is past its limit"), "{err}");
     assert!(err.contains("ω·h = 1.800"), "{err}");
     assert!(err.contains("(ω·h)² − 1 = 2.24"), "{err}");
-    let at: f64 = err
-        .split("penalty impact at t = ")
-        .nth(1)
-        .and_then(|r| r.split(',').next())
-        .and_then(|x| x.parse().ok())
-        .unwrap_or_else(|| panic!("no impact time in: {err}"));
+    let at = common::number_after(&err, "penalty impact at t = ", ',');
     let h = 0.9 * 2.0 / (1.0e7f64).sqrt();
     let strike = (2.0f64 / 9.81).sqrt();
     assert!(

@@ -515,13 +515,7 @@ fn centred_rate_failure(scene: &Scene) -> u64 {
     );
     assert!(turning.contains("centred angular velocity"), "{turning}");
     assert_eq!(turning, general);
-    let t: f64 = turning
-        .split("at t = ")
-        .nth(1)
-        .and_then(|rest| rest.split(':').next())
-        .and_then(|t| t.parse().ok())
-        .unwrap_or_else(|| panic!("no time in {turning}"));
-    (t / 1e-5).round() as u64
+    (number_after(&turning, "at t = ", ':') / 1e-5).round() as u64
 }
 
 #[test]

@@ -247,3 +247,13 @@ pub fn differences(a: &RunOutput, b: &RunOutput) -> ((f64, String), f64) {
     let contact = max_diff(&fa, &fb) / peak(&fb);
     (largest_difference(&a, &b), contact)
 }
+
+/// The number in `text` between `marker` and the next `end` (a time or a figure an error
+/// message names).
+pub fn number_after(text: &str, marker: &str, end: char) -> f64 {
+    text.split(marker)
+        .nth(1)
+        .and_then(|rest| rest.split(end).next())
+        .and_then(|x| x.parse().ok())
+        .unwrap_or_else(|| panic!("no number after `{marker}` in: {text}"))
+}

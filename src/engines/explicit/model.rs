@@ -2430,33 +2430,39 @@ pub fn centred_rate(beta: f64, gamma: f64) -> Option<f64> {
     Some(2.0 * gamma / (1.0 + discriminant.sqrt()))
 }
 
-/// Below this |z| the series of [`centred_rate_squared`] stops at z³: the first term left out,
+/// Below this |z| the series of [`centred_square_factor`] stops at z³: the first term left out,
 /// 42 z⁴, is under 1.7e-17, a fifth of an ulp of the sum or less.
 const SQUARE_FOUR: f64 = 2.5e-5;
 
 /// Below this |z| that series stops at z⁵: the first term left out, 429 z⁶, is under 2.1e-17.
 const SQUARE_SIX: f64 = 6e-4;
 
-/// The square s² of [`centred_rate`]'s root s, for a step that needs only s² (the centripetal
-/// terms), in a shorter chain of dependent operations than the root's: s = γ·C(z) with
-/// z = βγ and C(z) = 1 + z·C(z)², so s² = γ²·(C(z) − 1)/z = γ²·Σ Cₙ₊₁ zⁿ (1, 2, 5, 14, 42,
-/// 132, …). The series' coefficients times z are formed as (k·β)·γ, from β, which is ready
-/// before γ; from γ the chain is five or six steps (βγ, z², z⁴ beyond [`SQUARE_FOUR`], the
-/// bracket, the sum, the product with γ²) where the root and its square take seven or eight. Beyond [`SQUARE_SIX`], the root squared. None
-/// where [`centred_rate`] is.
+/// The factor C(z)² that turns γ² into the square s² = γ²·C(z)² of [`centred_rate`]'s root
+/// s = γ·C(z), for a step that needs only s² (the centripetal terms) and multiplies it by
+/// factors of its own: those can take γ² before the factor is ready, so the chain of dependent
+/// operations from γ is shorter than the root's and its square's. With z = βγ and
+/// C(z) = 1 + z·C(z)², C(z)² = (C(z) − 1)/z = Σ Cₙ₊₁ zⁿ (1, 2, 5, 14, 42, 132, …); the series'
+/// coefficients times z are formed as (k·β)·γ, from β, which is ready before γ. From γ the
+/// factor takes four or five steps (βγ, z², z⁴ beyond [`SQUARE_FOUR`], the bracket, the sum).
+/// Beyond [`SQUARE_SIX`], (2/(1 + √(1 − 4z)))². None where [`centred_rate`] is.
 #[inline(always)]
-pub fn centred_rate_squared(beta: f64, gamma: f64) -> Option<f64> {
+pub fn centred_square_factor(beta: f64, gamma: f64) -> Option<f64> {
     let z = beta * gamma;
     let magnitude = z.abs();
     if magnitude < SQUARE_SIX {
         let z2 = z * z;
         let low = (1.0 + (2.0 * beta) * gamma) + z2 * (5.0 + (14.0 * beta) * gamma);
-        let series = if magnitude < SQUARE_FOUR {
+        return Some(if magnitude < SQUARE_FOUR {
             low
         } else {
             low + (z2 * z2) * (42.0 + (132.0 * beta) * gamma)
-        };
-        return Some((gamma * gamma) * series);
+        });
     }
-    centred_rate(beta, gamma).map(|s| s * s)
+    let discriminant = 1.0 - 4.0 * z;
+    // As in `centred_rate`: negative or NaN, no real root; infinite, no finite one.
+    if !(discriminant >= 0.0 && discriminant.is_finite()) {
+        return None;
+    }
+    let c = 2.0 / (1.0 + discriminant.sqrt());
+    Some(c * c)
 }

@@ -115,6 +115,9 @@ pub struct TurningStep<S: Space> {
     planes: Vec<Contact<S>>,
     /// Loads.
     loads: Vec<(End<S>, S::V)>,
+    /// The grounded springs along a fixed direction on the particle (direction, stiffness),
+    /// for the increments about the axis.
+    particle_springs: Vec<(S::V, f64)>,
     /// The particle's 1 / mass, if there is one.
     inverse_mass: f64,
     /// Whether the body's centripetal terms act (its angular rate is then centred in closed
@@ -316,8 +319,20 @@ impl<S: Space> TurningStep<S> {
             && grounded
                 .iter()
                 .all(|t| matches!(t, GroundedTerm::Along { .. }));
+        let particle_springs = grounded
+            .iter()
+            .filter_map(|t| match t {
+                GroundedTerm::Along {
+                    end: End::Particle,
+                    direction,
+                    c,
+                } => Some((*direction, *c)),
+                _ => None,
+            })
+            .collect();
         Some(TurningStep {
             about_axis,
+            particle_springs,
             points,
             centre: model.bodies[0].inertia.centre,
             grounded,

@@ -17,21 +17,25 @@
 //! what the general path's does; what the step saves there is the body solve's and the mass
 //! properties' bookkeeping.
 //!
-//! Two more things are formed once per batch so that an increment does scalar arithmetic where
-//! the general path does vector arithmetic:
+//! More is formed once per batch so that an increment does scalar arithmetic where the general
+//! path does vector arithmetic, and loops over its terms without a match on their kind:
 //! - a grounded spring's or a load's fixed direction d on its body point ([`Along`]): the
 //!   stretch d·(R − 1)ρ and the moment arm d·(g × Rρ) are affine in (v, s), from three
 //!   scalars;
 //! - the mass centre's drag: |w|² and the centripetal unit force's dot with w are quadratic
 //!   forms in (cos θ, sin θ) with three coefficients (P is symmetric and idempotent), and the
-//!   unit force's free part is linear in them.
+//!   unit force's free part is linear in them; the operator g·I g − m|w|² is a polynomial in
+//!   (cos θ − 1, sin θ) with six;
+//! - the grounded springs sorted by what they act on (a body point or the particle), and the
+//!   loads summed into one force on each and one moment arm (their forces are fixed).
 //!
 //! And per increment, h·(g·I g − m w·w)⁻¹ and h²·(…)⁻¹ are formed from the heading while the
 //! forces are summed, so that the moment reaches the rate and the turn h·rate (advanced side
 //! by side, the heading from the latter) in two operations each.
 //!
 //! Where the centripetal terms act, the centred rate enters only squared, and
-//! [`centred_rate_squared`] forms its square directly, from the series of C(z)².
+//! [`centred_square_factor`] forms the factor C(z)² that turns γ² into its square, from the
+//! series of C(z)².
 //!
 //! The arithmetic is the general path's to round-off, not bit for bit: `tests/turning.rs`
 //! holds the two paths together within bounds that follow from the round-off and the
@@ -39,7 +43,7 @@
 //! own compensated update, so the quaternion keeps its rounding carry.
 
 use super::super::integrate::note_impacts;
-use super::super::model::{Config, Constraints, Model, Motion, Rates, centred_rate_squared};
+use super::super::model::{Config, Constraints, Model, Motion, Rates, centred_square_factor};
 use super::super::space::{Heading, Lin, Planar, Space, pivot_reciprocal, project};
 use super::{End, GroundedTerm, MAX_CONTACTS, Translations, TurningStep};
 
@@ -150,13 +154,11 @@ struct State<S: Space> {
     heading_carry: [f64; 2],
 }
 
-/// The forces of one increment: on the particle, on the body, the body's moment about g, and
-/// the contact pairs' normal forces.
+/// The forces of one increment: on the particle, on the body, and the body's moment about g.
 struct Sums<S: Space> {
     p: S::V,
     b: S::V,
     moment: f64,
-    contact: [f64; MAX_CONTACTS],
 }
 
 impl<S: Space> Default for Sums<S> {
@@ -165,7 +167,6 @@ impl<S: Space> Default for Sums<S> {
             p: S::V::zero(),
             b: S::V::zero(),
             moment: 0.0,
-            contact: [0.0; MAX_CONTACTS],
         }
     }
 }
@@ -204,6 +205,27 @@ impl<S: Space> TurningStep<S> {
         pressed: &mut [Option<bool>],
         impacts: &mut Vec<f64>,
     ) -> u64 {
+        self.about_axis_increments(
+            model, held, cfg, carry, v_half, h, n, count, pressed, impacts,
+        )
+    }
+
+    /// The increments of [`TurningStep::advance_about_axis`].
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn about_axis_increments<const FINITE: bool>(
+        &self,
+        model: &Model<S, FINITE>,
+        held: &Constraints<S>,
+        cfg: &mut Config<S>,
+        carry: &mut Rates<S>,
+        v_half: &mut Rates<S>,
+        h: f64,
+        n: u64,
+        count: u64,
+        pressed: &mut [Option<bool>],
+        impacts: &mut Vec<f64>,
+    ) -> u64 {
         let g = held.body_free_r[0][0];
         let r0 = cfg.br[0];
         let start = cfg.inertia[0];
@@ -211,20 +233,37 @@ impl<S: Space> TurningStep<S> {
         for (arm, rho) in arms.iter_mut().zip(&self.points) {
             *arm = Arm::new(&r0, &g, rho);
         }
-        // A grounded spring's or a load's direction d on its body point's arm, as scalars
-        // (each body point is one term's end).
-        let mut along = [Along::default(); MAX_POINTS];
-        let directed = self
-            .grounded
-            .iter()
-            .filter_map(|term| match term {
-                GroundedTerm::Along { end, direction, .. } => Some((end, direction)),
-                GroundedTerm::About { .. } => None,
-            })
-            .chain(self.loads.iter().map(|(end, force)| (end, force)));
-        for (end, d) in directed {
-            if let End::Body { point, .. } = end {
-                along[*point] = Along::new(&arms[*point], d);
+        // The grounded springs and the loads sorted by what they act on, so that an increment
+        // loops over each kind without a match: a spring on a body point with its direction d
+        // as scalars ([`Along`]; each body point is one term's end), a spring on the particle,
+        // and the loads summed once (their forces are fixed, and the moment of a load on a
+        // body point is linear in (c, s), so the loads' [`Along`]s add into one).
+        let mut body_springs = [(Along::default(), S::V::zero(), 0.0); MAX_POINTS];
+        let mut on_body = 0;
+        for term in &self.grounded {
+            if let GroundedTerm::Along {
+                end: End::Body { point, .. },
+                direction,
+                c,
+            } = term
+            {
+                body_springs[on_body] = (Along::new(&arms[*point], direction), *direction, *c);
+                on_body += 1;
+            }
+        }
+        let body_springs = &body_springs[..on_body];
+        let (mut load_on_particle, mut load_on_body) = (S::V::zero(), S::V::zero());
+        let mut load_lever = Along::default();
+        for (end, force) in &self.loads {
+            match end {
+                End::Ground => {}
+                End::Particle => load_on_particle += *force,
+                End::Body { point, .. } => {
+                    load_on_body += *force;
+                    let along = Along::new(&arms[*point], force);
+                    load_lever.across += along.across;
+                    load_lever.around += along.around;
+                }
             }
         }
         let mut faces = [(Arm::<S>::zero(), Arm::<S>::zero()); MAX_CONTACTS];
@@ -252,6 +291,13 @@ impl<S: Space> TurningStep<S> {
             drag_across.dot(&drag_across),
             drag_around.dot(&drag_across),
         );
+        // The operator g·I g − m|drag|² as a polynomial in (v, s), c = 1 + v: its constant
+        // g·I g − m·rr, its linear part −2m(rr·v − rx·s), its quadratic part
+        // −m(rr·v² − 2rx·vs + xx·s²); from the heading it takes four dependent steps where
+        // squaring c first takes six.
+        let operator_at_start = axial - mass * rr;
+        let (operator_v, operator_s) = (-2.0 * mass * rr, 2.0 * mass * rx);
+        let (operator_vv, operator_vs, operator_ss) = (-mass * rr, 2.0 * mass * rx, -mass * xx);
         let fixed_inverse = pivot_reciprocal(axial);
         let particle = !model.particles.is_empty();
         let w0 = v_half.w[0];
@@ -277,32 +323,23 @@ impl<S: Space> TurningStep<S> {
                 End::Particle => s.t.u,
                 End::Body { point, .. } => s.t.bu + arms[*point].turned(v, sine),
             };
-            let mut f = Sums::<S>::default();
+            let mut f = Sums::<S> {
+                p: load_on_particle,
+                b: load_on_body,
+                moment: load_lever.lever(cosine, sine),
+            };
             let lever = |end: &End<S>| match end {
                 End::Body { point, .. } => arms[*point].lever(cosine, sine),
                 _ => S::V::zero(),
             };
-            for term in &self.grounded {
-                match term {
-                    GroundedTerm::Along {
-                        end: End::Body { point, .. },
-                        direction,
-                        c,
-                    } => {
-                        let d = &along[*point];
-                        let u = direction.dot(&s.t.bu) + d.turned(v, sine);
-                        let tension = -c * u;
-                        f.b += *direction * tension;
-                        f.moment += tension * d.lever(cosine, sine);
-                    }
-                    GroundedTerm::Along { end, direction, c } => {
-                        let u = direction.dot(&displacement(end, &s));
-                        f.apply(end, &lever(end), *direction * (-c * u));
-                    }
-                    GroundedTerm::About { .. } => {
-                        unreachable!("a spring about an axis takes the general path's arithmetic")
-                    }
-                }
+            for (d, direction, c) in body_springs {
+                let u = direction.dot(&s.t.bu) + d.turned(v, sine);
+                let tension = -c * u;
+                f.b += *direction * tension;
+                f.moment += tension * d.lever(cosine, sine);
+            }
+            for (direction, c) in &self.particle_springs {
+                f.p += *direction * (-c * direction.dot(&s.t.u));
             }
             for term in self.line.iter().chain(&self.other) {
                 let stretch = displacement(&term.b, &s) - displacement(&term.a, &s);
@@ -310,6 +347,13 @@ impl<S: Space> TurningStep<S> {
                 f.apply(&term.a, &lever(&term.a), force);
                 f.apply(&term.b, &lever(&term.b), -force);
             }
+            let drag = if off_centre {
+                drag_around * cosine - drag_across * sine
+            } else {
+                S::V::zero()
+            };
+            // The contact pairs' normal forces (for the impacts).
+            let mut pressed_by = [0.0; MAX_CONTACTS];
             for (k, (c, (normal, face))) in self.planes.iter().zip(&faces).enumerate() {
                 // `Contact::plane_gap` and `Contact::arm`, with the normal and the face point
                 // turned by the heading.
@@ -317,41 +361,30 @@ impl<S: Space> TurningStep<S> {
                 let n = normal.rotated(v, sine);
                 let gap = n.dot(&((c.arm0 - c.face) + relative - face.turned(v, sine)));
                 let force = self.penalty * (-gap).max(0.0);
-                f.contact[k] = force;
+                pressed_by[k] = force;
                 f.p += n * force;
                 f.b -= n * force;
                 // The general path's −g·(arm × n)·force, as arm·(g × n)·force.
                 f.moment += c.arm(relative).dot(&normal.lever(cosine, sine)) * force;
             }
-            for (end, force) in &self.loads {
-                if let End::Body { point, .. } = end {
-                    f.b += *force;
-                    f.moment += along[*point].lever(cosine, sine);
-                } else {
-                    f.apply(end, &lever(end), *force);
-                }
-            }
-            let drag = if off_centre {
-                drag_around * cosine - drag_across * sine
+            let num = if off_centre {
+                f.moment - f.b.dot(&drag)
             } else {
-                S::V::zero()
+                f.moment
             };
             let (cc, cs, ss) = (cosine * cosine, cosine * sine, sine * sine);
             let inverse = if off_centre {
-                pivot_reciprocal(axial - mass * ((rr * cc - (2.0 * rx) * cs) + xx * ss))
+                pivot_reciprocal(
+                    (operator_at_start + (operator_v * v + operator_s * sine))
+                        + ((operator_vv * v) * v
+                            + ((operator_vs * v) * sine + (operator_ss * sine) * sine)),
+                )
             } else {
                 fixed_inverse
             };
             // The solve on g: α = (moment − force·drag)·inverse, the drag 0 where the mass
             // centre is on the reference node or the body is pinned; the translations'
             // acceleration from α.
-            let numerator = |force: &S::V, moment: f64| {
-                if off_centre {
-                    moment - force.dot(&drag)
-                } else {
-                    moment
-                }
-            };
             let translation = |force: &S::V, alpha: f64| {
                 if pinned {
                     S::V::zero()
@@ -364,7 +397,8 @@ impl<S: Space> TurningStep<S> {
             // heading. The rate and its increment h·rate are advanced side by side (the
             // heading from the latter), each to round-off.
             let (h_inverse, hh_inverse) = (h * inverse, (h * h) * inverse);
-            let num = numerator(&f.b, f.moment);
+            // (h/2)·inverse, exactly 0.5·h_inverse, one product from the inverse.
+            let half_h_inverse = (0.5 * h) * inverse;
             let (ab, rate, turn) = if self.centred {
                 let p = num * inverse;
                 // The centripetal force at unit rate, −m g × (g × ρ_c) = m(c·a_c⊥ + s·(g × a_c))
@@ -382,14 +416,16 @@ impl<S: Space> TurningStep<S> {
                     (drag_across * cosine + drag_around * sine) - drag * q
                 };
                 let beta = 0.5 * h * q;
-                let gamma = s.rate + num * (0.5 * h_inverse);
-                let Some(squared) = centred_rate_squared(beta, gamma) else {
+                let gamma = s.rate + num * half_h_inverse;
+                let Some(factor) = centred_square_factor(beta, gamma) else {
                     break;
                 };
-                let ab = translation(&f.b, p) + unit_translation * squared;
+                // s² = γ²·factor: γ² takes its products while the factor is formed.
+                let gamma2 = gamma * gamma;
+                let ab = translation(&f.b, p) + unit_translation * (gamma2 * factor);
                 // rate + h·(p + q·s²), and h times it.
-                let rate = (s.rate + num * h_inverse) + (h * q) * squared;
-                let turn = (s.rate * h + num * hh_inverse) + ((h * h) * q) * squared;
+                let rate = (s.rate + num * h_inverse) + ((h * q) * gamma2) * factor;
+                let turn = (s.rate * h + num * hh_inverse) + (((h * h) * q) * gamma2) * factor;
                 (ab, rate, turn)
             } else {
                 let ab = translation(&f.b, num * inverse);
@@ -397,7 +433,7 @@ impl<S: Space> TurningStep<S> {
             };
             note_impacts(
                 pressed,
-                &f.contact[..contacts],
+                &pressed_by[..contacts],
                 (n + taken) as f64 * h,
                 impacts,
             );

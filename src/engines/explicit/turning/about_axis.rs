@@ -189,10 +189,44 @@ impl<S: Space> Sums<S> {
 
 impl<S: Space> TurningStep<S> {
     /// [`TurningStep::advance`] with the turn about the axis since the batch's start (see the
-    /// module's documentation).
+    /// module's documentation). On an x86-64 processor with AVX the same increments are
+    /// compiled a second time with its three-operand instructions, which drop the register
+    /// copies that SSE2's two-operand forms need (the arithmetic, and so every result, is the
+    /// same bit for bit: Rust neither fuses nor reorders floating-point operations).
     #[allow(clippy::too_many_arguments)]
     #[inline(never)]
     pub(super) fn advance_about_axis<const FINITE: bool>(
+        &self,
+        model: &Model<S, FINITE>,
+        held: &Constraints<S>,
+        cfg: &mut Config<S>,
+        carry: &mut Rates<S>,
+        v_half: &mut Rates<S>,
+        h: f64,
+        n: u64,
+        count: u64,
+        pressed: &mut [Option<bool>],
+        impacts: &mut Vec<f64>,
+    ) -> u64 {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the processor has AVX, checked just above.
+            return unsafe {
+                self.about_axis_with_avx(
+                    model, held, cfg, carry, v_half, h, n, count, pressed, impacts,
+                )
+            };
+        }
+        self.about_axis_increments(
+            model, held, cfg, carry, v_half, h, n, count, pressed, impacts,
+        )
+    }
+
+    /// [`TurningStep::about_axis_increments`] compiled for AVX.
+    #[cfg(target_arch = "x86_64")]
+    #[allow(clippy::too_many_arguments)]
+    #[target_feature(enable = "avx")]
+    fn about_axis_with_avx<const FINITE: bool>(
         &self,
         model: &Model<S, FINITE>,
         held: &Constraints<S>,

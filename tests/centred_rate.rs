@@ -73,7 +73,7 @@ fn no_real_root_is_none() {
 /// The square's residual, relative to it: t = s² gives the root s = β t + γ of the quadratic
 /// (exact for the true s²), whose square returns t. A relative error δ in t comes back as
 /// δ·|1 − 2βs| = δ·√(1 − 4z), at least 0.44 δ for |z| ≤ 0.2; the check's own rounding (β t,
-/// the sum, the square, the series' γ² and its product) is a few ε of t, so 8ε bounds a
+/// the sum, the square, γ² and its product with the factor) is a few ε of t, so 8ε bounds a
 /// correct square and a series that leaves out only terms under round-off (42 z⁴ at
 /// z = 2.5e-5 is 1.6e-17 of t, 429 z⁶ at the next switch 2e-17) stays under it. Tried: a
 /// wrong z² or z³ coefficient (4 for 5, 13 for 14) and either switch raised tenfold each fail

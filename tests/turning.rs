@@ -394,6 +394,35 @@ fn more_body_points_than_the_step_splits_keep_the_general_paths_arithmetic_bit_f
 }
 
 #[test]
+fn several_loads_on_the_body_are_the_general_path_to_round_off() {
+    // The turn about the axis sums the loads on body points into one force and one moment arm
+    // per batch. Three more loads (on S1 and P, across and along the springs) make seven body
+    // points, within the eight the step splits.
+    for dim in [2, 3] {
+        let v = |x: &str| {
+            if dim == 2 {
+                format!("[{x}]")
+            } else {
+                format!("[{x}, 0.0]")
+            }
+        };
+        let loads: String = [
+            ("S1", "0.0, 3.0e4"),
+            ("P", "2.0e4, -1.0e4"),
+            ("S1", "-1.0e4, 0.0"),
+        ]
+        .iter()
+        .map(|(node, force)| format!("\n[[loads]]\nnode = \"{node}\"\nforce = {}\n", v(force)))
+        .collect();
+        every_term_agrees(
+            &every_term(dim, &loads),
+            &format!("rigid{dim}d_pin_lumped"),
+            Agree::RoundOff(ROUND_OFF),
+        );
+    }
+}
+
+#[test]
 fn a_body_without_a_particle_is_the_general_path_to_round_off() {
     // A body that can slide along x, with a spring on one of its points, a grounded spring on
     // its reference node and a load: no particle, no contact. Measured: 1.8e-15 (e_kinetic).

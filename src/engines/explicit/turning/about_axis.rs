@@ -29,8 +29,8 @@
 //! - the grounded springs sorted by what they act on (a body point or the particle), and the
 //!   loads summed into one force on each and one moment arm (their forces are fixed).
 //!
-//! And per increment, h·(g·I g − m w·w)⁻¹ and h²·(…)⁻¹ are formed from the heading while the
-//! forces are summed, so that the moment reaches the rate and the turn h·rate (advanced side
+//! And per increment, h·(g·I g − m w·w)⁻¹, h²·(…)⁻¹ and (h/2)·(…)⁻¹ are formed from the heading
+//! while the forces are summed, so that the moment reaches the rate and the turn h·rate (advanced side
 //! by side, the heading from the latter) in two operations each.
 //!
 //! Where the centripetal terms act, the centred rate enters only squared, and
@@ -161,16 +161,6 @@ struct Sums<S: Space> {
     moment: f64,
 }
 
-impl<S: Space> Default for Sums<S> {
-    fn default() -> Self {
-        Sums {
-            p: S::V::zero(),
-            b: S::V::zero(),
-            moment: 0.0,
-        }
-    }
-}
-
 impl<S: Space> Sums<S> {
     /// Force `f` at `end`, whose lever about g (g × its position from the reference node) is
     /// `lever` where it is a body point.
@@ -210,7 +200,8 @@ impl<S: Space> TurningStep<S> {
     ) -> u64 {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx") {
-            // SAFETY: the processor has AVX, checked just above.
+            // SAFETY: the processor has AVX and the operating system saves its registers, as
+            // `is_x86_feature_detected!` checked just above; the callee needs nothing else.
             return unsafe {
                 self.about_axis_with_avx(
                     model, held, cfg, carry, v_half, h, n, count, pressed, impacts,
@@ -271,7 +262,8 @@ impl<S: Space> TurningStep<S> {
         // loops over each kind without a match: a spring on a body point with its direction d
         // as scalars ([`Along`]; each body point is one term's end), a spring on the particle,
         // and the loads summed once (their forces are fixed, and the moment of a load on a
-        // body point is linear in (c, s), so the loads' [`Along`]s add into one).
+        // body point is linear in (c, s): the loads' [`Along`]s add their `across` and
+        // `around` into one; a load has no stretch, so `turned` stays 0).
         let mut body_springs = [(Along::default(), S::V::zero(), 0.0); MAX_POINTS];
         let mut on_body = 0;
         for term in &self.grounded {
@@ -327,8 +319,8 @@ impl<S: Space> TurningStep<S> {
         );
         // The operator g·I g − m|drag|² as a polynomial in (v, s), c = 1 + v: its constant
         // g·I g − m·rr, its linear part −2m(rr·v − rx·s), its quadratic part
-        // −m(rr·v² − 2rx·vs + xx·s²); from the heading it takes four dependent steps where
-        // squaring c first takes six.
+        // −m(rr·v² − 2rx·vs + xx·s²); from the heading it takes five dependent steps where
+        // forming c and its square first takes seven.
         let operator_at_start = axial - mass * rr;
         let (operator_v, operator_s) = (-2.0 * mass * rr, 2.0 * mass * rx);
         let (operator_vv, operator_vs, operator_ss) = (-mass * rr, 2.0 * mass * rx, -mass * xx);

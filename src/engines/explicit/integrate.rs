@@ -23,7 +23,7 @@ use super::diagnosis::{PAST_LIMIT_GROWTH, PastLimit, growing_mode};
 use super::linear::{StableIncrement, static_step};
 use super::model::{Config, Constraints, ContactMode, Counters, Forces, Model, Rates, Target};
 use super::space::{Lin, Space};
-use super::turning::TurningStep;
+use super::turning::{Batch, TurningStep};
 use crate::contract::ENERGY_COLUMNS;
 use crate::engines::{EngineError, History};
 use crate::scene::{
@@ -553,16 +553,18 @@ pub fn integrate<S: Space, const FINITE: bool>(
                     .min(first + steps_here - 1)
                     .min((n / INTERRUPT_STRIDE + 1) * INTERRUPT_STRIDE);
                 let taken = turning.advance(
-                    model,
-                    &held,
-                    &mut cfg,
-                    &mut carry,
-                    &mut v_half,
-                    h,
-                    n,
-                    end - n,
-                    &mut pressed,
-                    &mut impacts,
+                    Batch {
+                        model,
+                        held: &held,
+                        cfg: &mut cfg,
+                        carry: &mut carry,
+                        v_half: &mut v_half,
+                        h,
+                        n,
+                        count: end - n,
+                        pressed: &mut pressed,
+                        impacts: &mut impacts,
+                    },
                     &mut counters,
                 );
                 // None taken: the increment's centred rate has no real value, which the

@@ -93,6 +93,34 @@ struct LineTerm<S: Space> {
     c: f64,
 }
 
+/// What the time loop hands [`TurningStep::advance`] for one batch: the model and its
+/// constraints; the configuration `cfg`, its rounding carries `carry` and half-step velocities
+/// `v_half`, which the batch advances; the increment `h`, the batch's first increment `n` and
+/// the most it may take, `count`; and the contact pairs' states `pressed` and the `impacts`,
+/// which it notes.
+pub struct Batch<'a, S: Space, const FINITE: bool> {
+    /// The model.
+    pub model: &'a Model<S, FINITE>,
+    /// The step's constraints.
+    pub held: &'a Constraints<S>,
+    /// The configuration.
+    pub cfg: &'a mut Config<S>,
+    /// The displacements' rounding carries.
+    pub carry: &'a mut Rates<S>,
+    /// The half-step velocities.
+    pub v_half: &'a mut Rates<S>,
+    /// The increment.
+    pub h: f64,
+    /// The batch's first increment.
+    pub n: u64,
+    /// The most increments the batch may take.
+    pub count: u64,
+    /// Whether each contact pair pressed at the last increment.
+    pub pressed: &'a mut [Option<bool>],
+    /// The impacts' times.
+    pub impacts: &'a mut Vec<f64>,
+}
+
 /// The increments of a dynamic step with one body turning about one axis, state in locals.
 #[derive(Debug, Clone)]
 pub struct TurningStep<S: Space> {
@@ -346,37 +374,23 @@ impl<S: Space> TurningStep<S> {
         })
     }
 
-    /// Take up to `count` increments of `h` from the configuration `cfg`, the rounding carries
+    /// Take up to the [`Batch`]'s `count` increments of `h` from the configuration `cfg`, the rounding carries
     /// `carry` and the half-step velocities `v_half`, and write the state back; the work
     /// counters and the impacts (`pressed`, `impacts`, from increment `n`) as the general path
     /// notes them: about the axis ([`about_axis`]; the same to round-off) or as the general
     /// path takes them (bit for bit), as the module's documentation says. Returns the increments
     /// taken: fewer than `count` only where an increment's centred angular rate has no real
     /// value, which the general path then reports.
-    #[allow(clippy::too_many_arguments)]
     #[inline]
     pub fn advance<const FINITE: bool>(
         &self,
-        model: &Model<S, FINITE>,
-        held: &Constraints<S>,
-        cfg: &mut Config<S>,
-        carry: &mut Rates<S>,
-        v_half: &mut Rates<S>,
-        h: f64,
-        n: u64,
-        count: u64,
-        pressed: &mut [Option<bool>],
-        impacts: &mut Vec<f64>,
+        batch: Batch<'_, S, FINITE>,
         counters: &mut Counters,
     ) -> u64 {
         let taken = if self.about_axis {
-            self.advance_about_axis(
-                model, held, cfg, carry, v_half, h, n, count, pressed, impacts,
-            )
+            self.advance_about_axis(batch)
         } else {
-            self.advance_as_general(
-                model, held, cfg, carry, v_half, h, n, count, pressed, impacts,
-            )
+            self.advance_as_general(batch)
         };
         counters.force_evaluations += taken;
         counters.contact_evaluations += taken * self.planes.len() as u64;
@@ -392,29 +406,24 @@ impl<S: Space> TurningStep<S> {
     /// [`TurningStep::advance`] by the general path's arithmetic, in its order.
     /// Never inlined: called once per batch, it keeps its own code layout whatever the time
     /// loop around it becomes.
-    #[allow(clippy::too_many_arguments)]
     #[inline(never)]
-    fn advance_as_general<const FINITE: bool>(
-        &self,
-        model: &Model<S, FINITE>,
-        held: &Constraints<S>,
-        cfg: &mut Config<S>,
-        carry: &mut Rates<S>,
-        v_half: &mut Rates<S>,
-        h: f64,
-        n: u64,
-        count: u64,
-        pressed: &mut [Option<bool>],
-        impacts: &mut Vec<f64>,
-    ) -> u64 {
+    fn advance_as_general<const FINITE: bool>(&self, batch: Batch<'_, S, FINITE>) -> u64 {
+        let Batch {
+            model,
+            held,
+            h,
+            n,
+            count,
+            ..
+        } = batch;
         let particle = !model.particles.is_empty();
         let mut s = State::<S> {
-            t: Translations::read(particle, cfg, carry, v_half),
-            w: v_half.w[0],
-            br: cfg.br[0],
-            br_carry: cfg.br_carry[0],
+            t: Translations::read(particle, batch.cfg, batch.carry, batch.v_half),
+            w: batch.v_half.w[0],
+            br: batch.cfg.br[0],
+            br_carry: batch.cfg.br_carry[0],
         };
-        let mut inertia = cfg.inertia[0];
+        let mut inertia = batch.cfg.inertia[0];
         let motion = if particle {
             held.motions[held.particle_motion[0] as usize]
         } else {
@@ -477,10 +486,10 @@ impl<S: Space> TurningStep<S> {
                 solve.solve(&f.b, &f.m)
             };
             note_impacts(
-                pressed,
+                batch.pressed,
                 &f.contact[..contacts],
                 (n + taken) as f64 * h,
-                impacts,
+                batch.impacts,
             );
             let a = motion.project(f.p * self.inverse_mass);
             s.t.advance(a, ab, h);
@@ -490,11 +499,11 @@ impl<S: Space> TurningStep<S> {
             s.br = r;
             taken += 1;
         }
-        s.t.write(particle, cfg, carry, v_half);
-        v_half.w[0] = s.w;
-        cfg.br[0] = s.br;
-        cfg.br_carry[0] = s.br_carry;
-        cfg.inertia[0] = inertia;
+        s.t.write(particle, batch.cfg, batch.carry, batch.v_half);
+        batch.v_half.w[0] = s.w;
+        batch.cfg.br[0] = s.br;
+        batch.cfg.br_carry[0] = s.br_carry;
+        batch.cfg.inertia[0] = inertia;
         taken
     }
 }

@@ -43,9 +43,9 @@
 //! own compensated update, so the quaternion keeps its rounding carry.
 
 use super::super::integrate::note_impacts;
-use super::super::model::{Config, Constraints, Model, Motion, Rates, centred_square_factor};
+use super::super::model::{Motion, centred_square_factor};
 use super::super::space::{Heading, Lin, Planar, Space, pivot_reciprocal, project};
-use super::{End, GroundedTerm, MAX_CONTACTS, Translations, TurningStep};
+use super::{Batch, End, GroundedTerm, MAX_CONTACTS, Translations, TurningStep};
 
 /// At most this many body points in the step's terms (their [`Arm`]s are formed per batch, in
 /// a fixed array).
@@ -183,74 +183,42 @@ impl<S: Space> TurningStep<S> {
     /// compiled a second time with its three-operand instructions, which drop the register
     /// copies that SSE2's two-operand forms need (the arithmetic, and so every result, is the
     /// same bit for bit: Rust neither fuses nor reorders floating-point operations).
-    #[allow(clippy::too_many_arguments)]
     #[inline(never)]
     pub(super) fn advance_about_axis<const FINITE: bool>(
         &self,
-        model: &Model<S, FINITE>,
-        held: &Constraints<S>,
-        cfg: &mut Config<S>,
-        carry: &mut Rates<S>,
-        v_half: &mut Rates<S>,
-        h: f64,
-        n: u64,
-        count: u64,
-        pressed: &mut [Option<bool>],
-        impacts: &mut Vec<f64>,
+        batch: Batch<'_, S, FINITE>,
     ) -> u64 {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx") {
             // SAFETY: the processor has AVX and the operating system saves its registers, as
             // `is_x86_feature_detected!` checked just above; the callee needs nothing else.
-            return unsafe {
-                self.about_axis_with_avx(
-                    model, held, cfg, carry, v_half, h, n, count, pressed, impacts,
-                )
-            };
+            return unsafe { self.about_axis_with_avx(batch) };
         }
-        self.about_axis_increments(
-            model, held, cfg, carry, v_half, h, n, count, pressed, impacts,
-        )
+        self.about_axis_increments(batch)
     }
 
     /// [`TurningStep::about_axis_increments`] compiled for AVX.
     #[cfg(target_arch = "x86_64")]
-    #[allow(clippy::too_many_arguments)]
     #[target_feature(enable = "avx")]
-    fn about_axis_with_avx<const FINITE: bool>(
-        &self,
-        model: &Model<S, FINITE>,
-        held: &Constraints<S>,
-        cfg: &mut Config<S>,
-        carry: &mut Rates<S>,
-        v_half: &mut Rates<S>,
-        h: f64,
-        n: u64,
-        count: u64,
-        pressed: &mut [Option<bool>],
-        impacts: &mut Vec<f64>,
-    ) -> u64 {
-        self.about_axis_increments(
-            model, held, cfg, carry, v_half, h, n, count, pressed, impacts,
-        )
+    fn about_axis_with_avx<const FINITE: bool>(&self, batch: Batch<'_, S, FINITE>) -> u64 {
+        self.about_axis_increments(batch)
     }
 
     /// The increments of [`TurningStep::advance_about_axis`].
-    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn about_axis_increments<const FINITE: bool>(
-        &self,
-        model: &Model<S, FINITE>,
-        held: &Constraints<S>,
-        cfg: &mut Config<S>,
-        carry: &mut Rates<S>,
-        v_half: &mut Rates<S>,
-        h: f64,
-        n: u64,
-        count: u64,
-        pressed: &mut [Option<bool>],
-        impacts: &mut Vec<f64>,
-    ) -> u64 {
+    fn about_axis_increments<const FINITE: bool>(&self, batch: Batch<'_, S, FINITE>) -> u64 {
+        let Batch {
+            model,
+            held,
+            cfg,
+            carry,
+            v_half,
+            h,
+            n,
+            count,
+            pressed,
+            impacts,
+        } = batch;
         let g = held.body_free_r[0][0];
         let r0 = cfg.br[0];
         let start = cfg.inertia[0];

@@ -94,10 +94,11 @@ struct LineTerm<S: Space> {
 }
 
 /// What the time loop hands [`TurningStep::advance`] for one batch: the model and its
-/// constraints; the configuration `cfg`, its rounding carries `carry` and half-step velocities
-/// `v_half`, which the batch advances; the increment `h`, the batch's first increment `n` and
-/// the most it may take, `count`; and the contact pairs' states `pressed` and the `impacts`,
-/// which it notes.
+/// constraints; the configuration `cfg` (with the orientation's rounding carry), the
+/// displacements' rounding carries `carry` and the half-step velocities `v_half`, which the
+/// batch advances; the time increment `h`, the index `n` of the batch's first increment and the
+/// most increments it may take, `count`; and the contact pairs' states `pressed` and the
+/// `impacts`, which it notes.
 pub struct Batch<'a, S: Space, const FINITE: bool> {
     /// The model.
     pub model: &'a Model<S, FINITE>,
@@ -109,13 +110,13 @@ pub struct Batch<'a, S: Space, const FINITE: bool> {
     pub carry: &'a mut Rates<S>,
     /// The half-step velocities.
     pub v_half: &'a mut Rates<S>,
-    /// The increment.
+    /// The time increment.
     pub h: f64,
-    /// The batch's first increment.
+    /// The index of the batch's first increment (at time n·h).
     pub n: u64,
     /// The most increments the batch may take.
     pub count: u64,
-    /// Whether each contact pair pressed at the last increment.
+    /// Whether each contact pair pressed at the last increment (None before the first).
     pub pressed: &'a mut [Option<bool>],
     /// The impacts' times.
     pub impacts: &'a mut Vec<f64>,
@@ -374,13 +375,13 @@ impl<S: Space> TurningStep<S> {
         })
     }
 
-    /// Take up to the [`Batch`]'s `count` increments of `h` from the configuration `cfg`, the rounding carries
-    /// `carry` and the half-step velocities `v_half`, and write the state back; the work
-    /// counters and the impacts (`pressed`, `impacts`, from increment `n`) as the general path
-    /// notes them: about the axis ([`about_axis`]; the same to round-off) or as the general
-    /// path takes them (bit for bit), as the module's documentation says. Returns the increments
-    /// taken: fewer than `count` only where an increment's centred angular rate has no real
-    /// value, which the general path then reports.
+    /// Take up to the [`Batch`]'s `count` increments of `h` from the configuration `cfg`, the
+    /// rounding carries `carry` and the half-step velocities `v_half`, and write the state
+    /// back; the work counters and the impacts (`pressed`, `impacts`, from increment `n`) as
+    /// the general path notes them: about the axis ([`about_axis`]; the same to round-off) or
+    /// as the general path takes them (bit for bit), as the module's documentation says.
+    /// Returns the increments taken: fewer than `count` only where an increment's centred
+    /// angular rate has no real value, which the general path then reports.
     #[inline]
     pub fn advance<const FINITE: bool>(
         &self,

@@ -29,9 +29,9 @@
 //! - the grounded springs sorted by what they act on (a body point or the particle), and the
 //!   loads summed into one force on each and one moment arm (their forces are fixed).
 //!
-//! And per increment, h·(g·I g − m w·w)⁻¹, h²·(…)⁻¹ and (h/2)·(…)⁻¹ are formed from the heading
-//! while the forces are summed, so that the moment reaches the rate and the turn h·rate (advanced side
-//! by side, the heading from the latter) in two operations each.
+//! And per increment, h·(g·I g − m w·w)⁻¹, h²·(…)⁻¹ and (h/2)·(…)⁻¹ are formed from the
+//! heading while the forces are summed, so that the moment reaches the rate and the turn h·rate
+//! (advanced side by side, the heading from the latter) in two operations each.
 //!
 //! Where the centripetal terms act, the centred rate enters only squared, and
 //! [`centred_square_factor`] forms the factor C(z)² that turns γ² into its square, from the
@@ -194,19 +194,19 @@ impl<S: Space> TurningStep<S> {
             // `is_x86_feature_detected!` checked just above; the callee needs nothing else.
             return unsafe { self.about_axis_with_avx(batch) };
         }
-        self.about_axis_increments(batch)
+        self.step_about_axis(batch)
     }
 
-    /// [`TurningStep::about_axis_increments`] compiled for AVX.
+    /// [`TurningStep::step_about_axis`] compiled for AVX.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
     fn about_axis_with_avx<const FINITE: bool>(&self, batch: Batch<'_, S, FINITE>) -> u64 {
-        self.about_axis_increments(batch)
+        self.step_about_axis(batch)
     }
 
     /// The increments of [`TurningStep::advance_about_axis`].
     #[inline(always)]
-    fn about_axis_increments<const FINITE: bool>(&self, batch: Batch<'_, S, FINITE>) -> u64 {
+    fn step_about_axis<const FINITE: bool>(&self, batch: Batch<'_, S, FINITE>) -> u64 {
         let Batch {
             model,
             held,
@@ -347,17 +347,17 @@ impl<S: Space> TurningStep<S> {
                 S::V::zero()
             };
             // The contact pairs' normal forces (for the impacts).
-            let mut pressed_by = [0.0; MAX_CONTACTS];
+            let mut normal_forces = [0.0; MAX_CONTACTS];
             for (k, (c, (normal, face))) in self.planes.iter().zip(&faces).enumerate() {
                 // `Contact::plane_gap` and `Contact::arm`, with the normal and the face point
                 // turned by the heading.
                 let relative = s.t.u - s.t.bu;
-                let n = normal.rotated(v, sine);
-                let gap = n.dot(&((c.arm0 - c.face) + relative - face.turned(v, sine)));
+                let turned_normal = normal.rotated(v, sine);
+                let gap = turned_normal.dot(&((c.arm0 - c.face) + relative - face.turned(v, sine)));
                 let force = self.penalty * (-gap).max(0.0);
-                pressed_by[k] = force;
-                f.p += n * force;
-                f.b -= n * force;
+                normal_forces[k] = force;
+                f.p += turned_normal * force;
+                f.b -= turned_normal * force;
                 // The general path's −g·(arm × n)·force, as arm·(g × n)·force.
                 f.moment += c.arm(relative).dot(&normal.lever(cosine, sine)) * force;
             }
@@ -427,7 +427,7 @@ impl<S: Space> TurningStep<S> {
             };
             note_impacts(
                 pressed,
-                &pressed_by[..contacts],
+                &normal_forces[..contacts],
                 (n + taken) as f64 * h,
                 impacts,
             );

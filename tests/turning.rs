@@ -423,6 +423,47 @@ fn several_loads_on_the_body_are_the_general_path_to_round_off() {
 }
 
 #[test]
+fn springs_between_two_nodes_with_one_on_the_ground_are_the_general_path_to_round_off() {
+    // The turn about the axis takes a two-point spring between a body point and the ground as a
+    // grounded spring on the point, and one between the particle and the ground as a grounded
+    // spring on the particle. Two such springs, the ground end first and oblique to the
+    // seed's springs, so that their stretch and their moment read both components.
+    for dim in [2, 3] {
+        let v = |x: &str| {
+            if dim == 2 {
+                format!("[{x}]")
+            } else {
+                format!("[{x}, 0.0]")
+            }
+        };
+        let springs = format!(
+            r#"
+[[springs]]
+id = "ground-to-P"
+kind = "fixed_direction"
+nodes = ["G1", "P"]
+direction = {}
+stiffness = 1.5e5
+
+[[springs]]
+id = "ground-to-N"
+kind = "fixed_direction"
+nodes = ["G2", "N"]
+direction = {}
+stiffness = 2.5e5
+"#,
+            v("0.8, -0.6"),
+            v("0.6, 0.8"),
+        );
+        every_term_agrees(
+            &every_term(dim, &springs),
+            &format!("rigid{dim}d_pin_lumped"),
+            Agree::RoundOff(ROUND_OFF),
+        );
+    }
+}
+
+#[test]
 fn a_body_without_a_particle_is_the_general_path_to_round_off() {
     // A body that can slide along x, with a spring on one of its points, a grounded spring on
     // its reference node and a load: no particle, no contact. Measured: 1.8e-15 (e_kinetic).

@@ -520,7 +520,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
                 );
                 // Each contact stays on its side through the batch: only its start can press
                 // anew.
-                note_impacts(&mut pressed, &forces.contact, n as f64 * h, &mut impacts);
+                note_impacts(&mut pressed, &forces.contact, (n, h), &mut impacts);
                 let solved = if recurrence.solves_bodies() {
                     model.accelerations(&cfg, &forces, &v_half, &held, &mut acc, &mut counters);
                     Some(&acc)
@@ -620,7 +620,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
                     &mut counters,
                 );
             }
-            note_impacts(&mut pressed, &forces.contact, n as f64 * h, &mut impacts);
+            note_impacts(&mut pressed, &forces.contact, (n, h), &mut impacts);
             if solids {
                 model.solid_positions(&cfg, &mut solid_now);
                 if watching && let Some((k, moved)) = model.through_solid(&solid_before, &solid_now)
@@ -936,18 +936,19 @@ pub fn integrate<S: Space, const FINITE: bool>(
     })
 }
 
-/// Note which contact pairs press at time `t` (normal forces `contact`) in `pressed`, and an
-/// impact where one that did not press at the last increment noted starts to.
+/// Note which contact pairs press at increment `n`, time n·`h` (normal forces `contact`) in
+/// `pressed`, and an impact where one that did not press at the last increment noted starts
+/// to (the time is formed only then).
 pub(super) fn note_impacts(
     pressed: &mut [Option<bool>],
     contact: &[f64],
-    t: f64,
+    (n, h): (u64, f64),
     impacts: &mut Vec<f64>,
 ) {
     for (was, force) in pressed.iter_mut().zip(contact) {
         let now = *force > 0.0;
         if now && *was == Some(false) {
-            impacts.push(t);
+            impacts.push(n as f64 * h);
         }
         *was = Some(now);
     }

@@ -144,9 +144,19 @@ pub struct TurningStep<S: Space> {
     planes: Vec<Contact<S>>,
     /// Loads.
     loads: Vec<(End<S>, S::V)>,
-    /// The grounded springs along a fixed direction on the particle (direction, stiffness),
-    /// for the increments about the axis.
+    /// The springs of fixed direction between the particle and the ground (direction,
+    /// stiffness): the grounded springs along a fixed direction on the particle, then the line
+    /// springs with one end on each, in the model's order (for the increments about the axis).
     particle_springs: Vec<(S::V, f64)>,
+    /// The springs of fixed direction between a body point and the ground (the point's index,
+    /// direction, stiffness): the grounded springs along a fixed direction on a body point,
+    /// then the model's other springs with one end on each, in the model's order (for the
+    /// increments about the axis).
+    body_springs: Vec<(usize, S::V, f64)>,
+    /// The springs the increments about the axis sum end by end: the model's other springs
+    /// that are not in `body_springs` (the line springs are all in `particle_springs`, or take
+    /// no force: both ends on the particle, or on the ground).
+    coupled: Vec<LineTerm<S>>,
     /// The particle's 1 / mass, if there is one.
     inverse_mass: f64,
     /// Whether the body's centripetal terms act (its angular rate is then centred in closed
@@ -314,7 +324,7 @@ impl<S: Space> TurningStep<S> {
                 End::Particle
             }
         };
-        let line = model
+        let line: Vec<_> = model
             .line_springs
             .iter()
             .map(|s| LineTerm {
@@ -348,6 +358,8 @@ impl<S: Space> TurningStep<S> {
             && grounded
                 .iter()
                 .all(|t| matches!(t, GroundedTerm::Along { .. }));
+        // A line spring's force on the particle, d·(c·d·(u_b − u_a)) with the other end on
+        // the ground, is the grounded spring's d·(−c·d·u) bit for bit (negation is exact).
         let particle_springs = grounded
             .iter()
             .filter_map(|t| match t {
@@ -358,10 +370,49 @@ impl<S: Space> TurningStep<S> {
                 } => Some((*direction, *c)),
                 _ => None,
             })
+            .chain(line.iter().filter_map(|t: &LineTerm<S>| {
+                matches!(
+                    (t.a, t.b),
+                    (End::Particle, End::Ground) | (End::Ground, End::Particle)
+                )
+                .then_some((t.direction, t.c))
+            }))
+            .collect();
+        // Likewise a spring between a body point and the ground is a grounded spring on the
+        // point (to round-off: the increments about the axis sum a grounded spring's stretch
+        // and moment from scalars, [`about_axis`]).
+        let on_body_point = |t: &LineTerm<S>| match (t.a, t.b) {
+            (End::Body { point, .. }, End::Ground) | (End::Ground, End::Body { point, .. }) => {
+                Some(point)
+            }
+            _ => None,
+        };
+        let body_springs = grounded
+            .iter()
+            .filter_map(|t| match t {
+                GroundedTerm::Along {
+                    end: End::Body { point, .. },
+                    direction,
+                    c,
+                } => Some((*point, *direction, *c)),
+                _ => None,
+            })
+            .chain(
+                other
+                    .iter()
+                    .filter_map(|t| on_body_point(t).map(|point| (point, t.direction, t.c))),
+            )
+            .collect();
+        let coupled = other
+            .iter()
+            .filter(|t| on_body_point(t).is_none())
+            .copied()
             .collect();
         Some(TurningStep {
             about_axis,
             particle_springs,
+            body_springs,
+            coupled,
             points,
             centre: model.bodies[0].inertia.centre,
             grounded,
@@ -489,7 +540,7 @@ impl<S: Space> TurningStep<S> {
             note_impacts(
                 batch.pressed,
                 &f.contact[..contacts],
-                (n + taken) as f64 * h,
+                (n + taken, h),
                 batch.impacts,
             );
             let a = motion.project(f.p * self.inverse_mass);

@@ -45,7 +45,7 @@
 use super::super::integrate::note_impacts;
 use super::super::model::{Motion, centred_square_factor};
 use super::super::space::{Heading, Lin, Planar, Space, pivot_reciprocal, project};
-use super::{Batch, End, GroundedTerm, MAX_CONTACTS, Translations, TurningStep};
+use super::{Batch, End, MAX_CONTACTS, Translations, TurningStep};
 
 /// At most this many body points in the step's terms (their [`Arm`]s are formed per batch, in
 /// a fixed array).
@@ -145,6 +145,32 @@ impl Along {
     }
 }
 
+/// A plane contact pair's face at the batch's start: its normal's and its face point's
+/// [`Arm`]s, and the node's offset from the face point and from the reference node at t = 0
+/// (the model's `Contact`, as an increment reads it).
+#[derive(Debug, Clone, Copy)]
+struct Face<S: Space> {
+    /// The outward normal's arm.
+    normal: Arm<S>,
+    /// The face point's arm.
+    point: Arm<S>,
+    /// From the face point to the node at t = 0.
+    offset: S::V,
+    /// From the reference node to the node at t = 0.
+    arm0: S::V,
+}
+
+impl<S: Space> Face<S> {
+    fn zero() -> Self {
+        Face {
+            normal: Arm::zero(),
+            point: Arm::zero(),
+            offset: S::V::zero(),
+            arm0: S::V::zero(),
+        }
+    }
+}
+
 /// The state a batch carries in locals: the particle's displacement and velocity, the body's
 /// translation and velocity, its angular rate about g and its heading since the batch's start.
 struct State<S: Space> {
@@ -181,32 +207,80 @@ impl<S: Space> TurningStep<S> {
     /// [`TurningStep::advance`] with the turn about the axis since the batch's start (see the
     /// module's documentation). On an x86-64 processor with AVX the same increments are
     /// compiled a second time with its three-operand instructions, which drop the register
-    /// copies that SSE2's two-operand forms need (the arithmetic, and so every result, is the
-    /// same bit for bit: Rust neither fuses nor reorders floating-point operations).
+    /// copies that SSE2's two-operand forms need, and with AVX-512 (foundation and 128-bit
+    /// forms) a third time, for its 32 vector registers where AVX has 16: the increment's
+    /// parts fixed for the batch (arms, faces, the operator's coefficients) then stay in
+    /// registers instead of being reloaded from the stack. The arithmetic, and so every result,
+    /// is the same bit for bit: Rust neither fuses nor reorders floating-point operations.
     #[inline(never)]
     pub(super) fn advance_about_axis<const FINITE: bool>(
         &self,
         batch: Batch<'_, S, FINITE>,
     ) -> u64 {
         #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx512f")
+            && std::arch::is_x86_feature_detected!("avx512vl")
+        {
+            // SAFETY: the processor has AVX-512's foundation and its 128-bit forms, and the
+            // operating system saves their registers, as `is_x86_feature_detected!` checked just
+            // above; the callee needs nothing else.
+            return unsafe { self.about_axis_with_avx512(batch) };
+        }
+        #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx") {
             // SAFETY: the processor has AVX and the operating system saves its registers, as
             // `is_x86_feature_detected!` checked just above; the callee needs nothing else.
             return unsafe { self.about_axis_with_avx(batch) };
         }
-        self.step_about_axis(batch)
+        self.step_about_axis_shaped(batch)
     }
 
     /// [`TurningStep::step_about_axis`] compiled for AVX.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
     fn about_axis_with_avx<const FINITE: bool>(&self, batch: Batch<'_, S, FINITE>) -> u64 {
-        self.step_about_axis(batch)
+        self.step_about_axis_shaped(batch)
     }
 
-    /// The increments of [`TurningStep::advance_about_axis`].
+    /// [`TurningStep::step_about_axis`] compiled for AVX-512 (32 vector registers).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f,avx512vl")]
+    fn about_axis_with_avx512<const FINITE: bool>(&self, batch: Batch<'_, S, FINITE>) -> u64 {
+        self.step_about_axis_shaped(batch)
+    }
+
+    /// [`TurningStep::step_about_axis`] compiled for the batch's shape: whether the body's
+    /// translations are all held (`PINNED`), whether its mass centre is off its reference node
+    /// with a translation free (`OFF_CENTRE`: the solve on the axis then drags the
+    /// translations), and whether its centripetal terms act (`CENTRED`). Fixed for a batch, these
+    /// choose among the increment's branches; as constants they leave none of those tests in
+    /// the increment.
     #[inline(always)]
-    fn step_about_axis<const FINITE: bool>(&self, batch: Batch<'_, S, FINITE>) -> u64 {
+    fn step_about_axis_shaped<const FINITE: bool>(&self, batch: Batch<'_, S, FINITE>) -> u64 {
+        let pinned = batch.held.body_held_t[0].len() == S::DIM;
+        let off_centre = !pinned && self.centre != S::V::zero();
+        match (pinned, off_centre, self.centred) {
+            (true, _, false) => self.step_about_axis::<FINITE, true, false, false>(batch),
+            (true, _, true) => self.step_about_axis::<FINITE, true, false, true>(batch),
+            (false, false, false) => self.step_about_axis::<FINITE, false, false, false>(batch),
+            (false, false, true) => self.step_about_axis::<FINITE, false, false, true>(batch),
+            (false, true, false) => self.step_about_axis::<FINITE, false, true, false>(batch),
+            (false, true, true) => self.step_about_axis::<FINITE, false, true, true>(batch),
+        }
+    }
+
+    /// The increments of [`TurningStep::advance_about_axis`], for a batch of the shape
+    /// [`TurningStep::step_about_axis_shaped`] names.
+    #[inline(always)]
+    fn step_about_axis<
+        const FINITE: bool,
+        const PINNED: bool,
+        const OFF_CENTRE: bool,
+        const CENTRED: bool,
+    >(
+        &self,
+        batch: Batch<'_, S, FINITE>,
+    ) -> u64 {
         let Batch {
             model,
             held,
@@ -226,26 +300,18 @@ impl<S: Space> TurningStep<S> {
         for (arm, rho) in arms.iter_mut().zip(&self.points) {
             *arm = Arm::new(&r0, &g, rho);
         }
-        // The grounded springs and the loads sorted by what they act on, so that an increment
-        // loops over each kind without a match: a spring on a body point with its direction d
-        // as scalars ([`Along`]; each body point is one term's end), a spring on the particle,
-        // and the loads summed once (their forces are fixed, and the moment of a load on a
-        // body point is linear in (c, s): the loads' [`Along`]s add their `across` and
-        // `around` into one; a load has no stretch, so `turned` stays 0).
+        // The springs to the ground sorted by what they act on ([`TurningStep::of`]) and the
+        // loads summed, so that an increment loops over each kind without a match: a spring on
+        // a body point with its direction d as scalars ([`Along`]; each body point is one
+        // term's end), a spring on the particle, and the loads summed once (their forces are
+        // fixed, and the moment of a load on a body point is linear in (c, s): the loads'
+        // [`Along`]s add their `across` and `around` into one; a load has no stretch, so
+        // `turned` stays 0).
         let mut body_springs = [(Along::default(), S::V::zero(), 0.0); MAX_POINTS];
-        let mut on_body = 0;
-        for term in &self.grounded {
-            if let GroundedTerm::Along {
-                end: End::Body { point, .. },
-                direction,
-                c,
-            } = term
-            {
-                body_springs[on_body] = (Along::new(&arms[*point], direction), *direction, *c);
-                on_body += 1;
-            }
+        for (spring, (point, direction, c)) in body_springs.iter_mut().zip(&self.body_springs) {
+            *spring = (Along::new(&arms[*point], direction), *direction, *c);
         }
-        let body_springs = &body_springs[..on_body];
+        let body_springs = &body_springs[..self.body_springs.len()];
         let (mut load_on_particle, mut load_on_body) = (S::V::zero(), S::V::zero());
         let mut load_lever = Along::default();
         for (end, force) in &self.loads {
@@ -260,18 +326,26 @@ impl<S: Space> TurningStep<S> {
                 }
             }
         }
-        let mut faces = [(Arm::<S>::zero(), Arm::<S>::zero()); MAX_CONTACTS];
+        let mut faces = [Face::<S>::zero(); MAX_CONTACTS];
         for (face, c) in faces.iter_mut().zip(&self.planes) {
-            *face = (Arm::new(&r0, &g, &c.normal), Arm::new(&r0, &g, &c.face));
+            *face = Face {
+                normal: Arm::new(&r0, &g, &c.normal),
+                point: Arm::new(&r0, &g, &c.face),
+                offset: c.arm0 - c.face,
+                arm0: c.arm0,
+            };
         }
+        let faces = &faces[..self.planes.len()];
         // The body solve on the one free axis (`BodySolve::solve_on_axis`, closed): g·I g as
         // the body turns about g, the mass centre's drag through the free translations.
         let held_t = &held.body_held_t[0][..];
-        let pinned = held_t.len() == S::DIM;
+        let pinned = PINNED;
+        debug_assert_eq!(pinned, held_t.len() == S::DIM);
         let mass = start.mass;
         let axial = start.axial(&g);
         let centre = Arm::<S>::new(&r0, &g, &self.centre);
-        let off_centre = !pinned && self.centre != S::V::zero();
+        let off_centre = OFF_CENTRE;
+        debug_assert_eq!(off_centre, !pinned && self.centre != S::V::zero());
         let (drag_around, drag_across) = (
             project(held_t, centre.around),
             project(held_t, centre.across),
@@ -335,7 +409,7 @@ impl<S: Space> TurningStep<S> {
             for (direction, c) in &self.particle_springs {
                 f.p += *direction * (-c * direction.dot(&s.t.u));
             }
-            for term in self.line.iter().chain(&self.other) {
+            for term in &self.coupled {
                 let stretch = displacement(&term.b, &s) - displacement(&term.a, &s);
                 let force = term.direction * (term.c * term.direction.dot(&stretch));
                 f.apply(&term.a, &lever(&term.a), force);
@@ -348,18 +422,19 @@ impl<S: Space> TurningStep<S> {
             };
             // The contact pairs' normal forces (for the impacts).
             let mut normal_forces = [0.0; MAX_CONTACTS];
-            for (k, (c, (normal, face))) in self.planes.iter().zip(&faces).enumerate() {
+            for (k, face) in faces.iter().enumerate() {
                 // `Contact::plane_gap` and `Contact::arm`, with the normal and the face point
                 // turned by the heading.
                 let relative = s.t.u - s.t.bu;
-                let turned_normal = normal.rotated(v, sine);
-                let gap = turned_normal.dot(&((c.arm0 - c.face) + relative - face.turned(v, sine)));
+                let turned_normal = face.normal.rotated(v, sine);
+                let gap =
+                    turned_normal.dot(&((face.offset + relative) - face.point.turned(v, sine)));
                 let force = self.penalty * (-gap).max(0.0);
                 normal_forces[k] = force;
                 f.p += turned_normal * force;
                 f.b -= turned_normal * force;
                 // The general path's −g·(arm × n)·force, as arm·(g × n)·force.
-                f.moment += c.arm(relative).dot(&normal.lever(cosine, sine)) * force;
+                f.moment += (face.arm0 + relative).dot(&face.normal.lever(cosine, sine)) * force;
             }
             let num = if off_centre {
                 f.moment - f.b.dot(&drag)
@@ -393,7 +468,7 @@ impl<S: Space> TurningStep<S> {
             let (h_inverse, hh_inverse) = (h * inverse, (h * h) * inverse);
             // (h/2)·inverse, exactly 0.5·h_inverse, one product from the inverse.
             let half_h_inverse = (0.5 * h) * inverse;
-            let (ab, rate, turn) = if self.centred {
+            let (ab, rate, turn) = if CENTRED {
                 let p = num * inverse;
                 // The centripetal force at unit rate, −m g × (g × ρ_c) = m(c·a_c⊥ + s·(g × a_c))
                 // (the centre's part across g, turned), as its solve on g reads it: its
@@ -425,12 +500,7 @@ impl<S: Space> TurningStep<S> {
                 let ab = translation(&f.b, num * inverse);
                 (ab, s.rate + num * h_inverse, s.rate * h + num * hh_inverse)
             };
-            note_impacts(
-                pressed,
-                &normal_forces[..contacts],
-                (n + taken) as f64 * h,
-                impacts,
-            );
+            note_impacts(pressed, &normal_forces[..contacts], (n + taken, h), impacts);
             let a = motion.project(f.p * self.inverse_mass);
             s.t.advance(a, ab, h);
             s.rate = rate;

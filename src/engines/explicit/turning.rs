@@ -136,9 +136,10 @@ pub struct TurningStep<S: Space> {
     /// The grounded springs' terms, in the model's order.
     grounded: Vec<GroundedTerm<S>>,
     /// Springs of fixed direction whose ends are the particle or the ground (the model's line
-    /// springs, summed before the others).
+    /// springs; the general path sums them before the others).
     line: Vec<LineTerm<S>>,
-    /// The model's other springs, all of fixed direction.
+    /// The model's other springs, all of fixed direction (for the general path; the increments
+    /// about the axis take them as `body_springs` and `coupled`).
     other: Vec<LineTerm<S>>,
     /// Plane contact pairs (between the particle and the body's faces).
     planes: Vec<Contact<S>>,
@@ -359,7 +360,8 @@ impl<S: Space> TurningStep<S> {
                 .iter()
                 .all(|t| matches!(t, GroundedTerm::Along { .. }));
         // A line spring's force on the particle, d·(c·d·(u_b − u_a)) with the other end on
-        // the ground, is the grounded spring's d·(−c·d·u) bit for bit (negation is exact).
+        // the ground, is the grounded spring's d·(−c·d·u) bit for bit (negation is exact), up
+        // to the sign of a zero force.
         let particle_springs = grounded
             .iter()
             .filter_map(|t| match t {

@@ -19,15 +19,17 @@
 //!
 //! More is formed once per batch so that an increment does scalar arithmetic where the general
 //! path does vector arithmetic, and loops over its terms without a match on their kind:
-//! - a grounded spring's or a load's fixed direction d on its body point ([`Along`]): the
+//! - the fixed direction d of a spring to the ground or of a load, on its body point
+//!   ([`Along`]): the
 //!   stretch d·(R − 1)ρ and the moment arm d·(g × Rρ) are affine in (v, s), from three
 //!   scalars;
 //! - the mass centre's drag: |w|² and the centripetal unit force's dot with w are quadratic
 //!   forms in (cos θ, sin θ) with three coefficients (P is symmetric and idempotent), and the
 //!   unit force's free part is linear in them; the operator g·I g − m|w|² is a polynomial in
 //!   (cos θ − 1, sin θ) with six;
-//! - the grounded springs sorted by what they act on (a body point or the particle), and the
-//!   loads summed into one force on each and one moment arm (their forces are fixed).
+//! - the loads summed into one force on each end and one moment arm (their forces are fixed);
+//!   the springs to the ground (grounded, line and two-point) are sorted by what they act on
+//!   (a body point or the particle) once per step, in [`TurningStep::of`].
 //!
 //! And per increment, h·(g·I g − m w·w)⁻¹, h²·(…)⁻¹ and (h/2)·(…)⁻¹ are formed from the
 //! heading while the forces are summed, so that the moment reaches the rate and the turn h·rate
@@ -108,7 +110,7 @@ impl<S: Space> Arm<S> {
     }
 }
 
-/// A fixed direction d (a grounded spring's, or a load's force) on a body point's [`Arm`], as
+/// A fixed direction d (a spring's to the ground, or a load's force) on a body point's [`Arm`], as
 /// scalars: d·(R − 1)ρ = `turned` + v·`across` + s·`around` and d·(g × Rρ) =
 /// c·`around` − s·`across` (c = 1 + v), so the term's stretch and moment cost a few scalar
 /// products instead of turning the point and two dot products.
@@ -220,10 +222,14 @@ impl<S: Space> TurningStep<S> {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx512f")
             && std::arch::is_x86_feature_detected!("avx512vl")
+            && std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("fma")
+            && std::arch::is_x86_feature_detected!("f16c")
         {
             // SAFETY: the processor has AVX-512's foundation and its 128-bit forms, and the
             // operating system saves their registers, as `is_x86_feature_detected!` checked just
-            // above; the callee needs nothing else.
+            // above, with AVX2, FMA and F16C, which enabling `avx512f` also enables in the
+            // callee; it needs nothing else.
             return unsafe { self.about_axis_with_avx512(batch) };
         }
         #[cfg(target_arch = "x86_64")]

@@ -247,13 +247,7 @@ fn steps_it_does_not_qualify_for_take_the_general_path() {
 /// and a second dynamic step that holds the rotation, which the turning step declines,
 /// restarting after its batches.
 fn every_term(dim: u32, extra: &str) -> Scene {
-    let v = |x: &str| {
-        if dim == 2 {
-            format!("[{x}]")
-        } else {
-            format!("[{x}, 0.0]")
-        }
-    };
+    let v = |x: &str| in_plane(dim, x);
     let (held_o, held_n) = if dim == 2 {
         (r#""ux", "uy", "rz""#, r#""uy""#)
     } else {
@@ -347,6 +341,26 @@ fn every_term_agrees(scene: &Scene, seed: &str, agree: Agree) {
     assert!(max_diff(&turned[..400], &seed_turn[..400]) > 1e-3 * peak(&seed_turn));
 }
 
+/// [`every_term_agrees`] to round-off in 2D and in 3D, with `extra(dim)` added to the scene.
+fn every_term_agrees_in_2d_and_3d(extra: impl Fn(u32) -> String) {
+    for dim in [2, 3] {
+        every_term_agrees(
+            &every_term(dim, &extra(dim)),
+            &format!("rigid{dim}d_pin_lumped"),
+            Agree::RoundOff(ROUND_OFF),
+        );
+    }
+}
+
+/// A vector of the x–y plane as TOML, with the components `x` ("a, b"), in `dim` dimensions.
+fn in_plane(dim: u32, x: &str) -> String {
+    if dim == 2 {
+        format!("[{x}]")
+    } else {
+        format!("[{x}, 0.0]")
+    }
+}
+
 #[test]
 fn every_force_term_lagged_damping_and_a_second_step_are_the_general_path_to_round_off() {
     // The contact opens at once and first closes again at 0.00687 s (after row 28). Measured
@@ -398,28 +412,19 @@ fn several_loads_on_the_body_are_the_general_path_to_round_off() {
     // The turn about the axis sums the loads on body points into one force and one moment arm
     // per batch. Three more loads (on S1 and P, across and along the springs) make seven body
     // points, within the eight the step splits.
-    for dim in [2, 3] {
-        let v = |x: &str| {
-            if dim == 2 {
-                format!("[{x}]")
-            } else {
-                format!("[{x}, 0.0]")
-            }
-        };
-        let loads: String = [
+    every_term_agrees_in_2d_and_3d(|dim| {
+        [
             ("S1", "0.0, 3.0e4"),
             ("P", "2.0e4, -1.0e4"),
             ("S1", "-1.0e4, 0.0"),
         ]
         .iter()
-        .map(|(node, force)| format!("\n[[loads]]\nnode = \"{node}\"\nforce = {}\n", v(force)))
-        .collect();
-        every_term_agrees(
-            &every_term(dim, &loads),
-            &format!("rigid{dim}d_pin_lumped"),
-            Agree::RoundOff(ROUND_OFF),
-        );
-    }
+        .map(|(node, force)| {
+            let force = in_plane(dim, force);
+            format!("\n[[loads]]\nnode = \"{node}\"\nforce = {force}\n")
+        })
+        .collect()
+    });
 }
 
 #[test]
@@ -428,39 +433,21 @@ fn springs_between_two_nodes_with_one_on_the_ground_are_the_general_path_to_roun
     // grounded spring on the point, and one between the particle and the ground as a grounded
     // spring on the particle. Two such springs, the ground end first and oblique to the
     // seed's springs, so that their stretch and their moment read both components.
-    for dim in [2, 3] {
-        let v = |x: &str| {
-            if dim == 2 {
-                format!("[{x}]")
-            } else {
-                format!("[{x}, 0.0]")
-            }
-        };
-        let springs = format!(
-            r#"
-[[springs]]
-id = "ground-to-P"
-kind = "fixed_direction"
-nodes = ["G1", "P"]
-direction = {}
-stiffness = 1.5e5
-
-[[springs]]
-id = "ground-to-N"
-kind = "fixed_direction"
-nodes = ["G2", "N"]
-direction = {}
-stiffness = 2.5e5
-"#,
-            v("0.8, -0.6"),
-            v("0.6, 0.8"),
-        );
-        every_term_agrees(
-            &every_term(dim, &springs),
-            &format!("rigid{dim}d_pin_lumped"),
-            Agree::RoundOff(ROUND_OFF),
-        );
-    }
+    every_term_agrees_in_2d_and_3d(|dim| {
+        [
+            ("ground-to-P", "G1", "P", "0.8, -0.6", 1.5e5),
+            ("ground-to-N", "G2", "N", "0.6, 0.8", 2.5e5),
+        ]
+        .iter()
+        .map(|(id, a, b, direction, stiffness)| {
+            let direction = in_plane(dim, direction);
+            format!(
+                "\n[[springs]]\nid = \"{id}\"\nkind = \"fixed_direction\"\n\
+                 nodes = [\"{a}\", \"{b}\"]\ndirection = {direction}\nstiffness = {stiffness:e}\n"
+            )
+        })
+        .collect()
+    });
 }
 
 #[test]

@@ -567,8 +567,8 @@ pub fn integrate<S: Space, const FINITE: bool>(
                     },
                     &mut counters,
                 );
-                // None taken: the increment's centred rate has no real value, which the
-                // general path reports.
+                // None taken: the increment's centred rate has no real value, or its operator
+                // on the axis is not positive and finite, which the general path reports.
                 if taken > 0 {
                     last_power = 0.0;
                     next = n + taken;

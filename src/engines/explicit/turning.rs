@@ -33,7 +33,8 @@
 //! A batch runs the increments the affine step's batches run: up to the next output row, the
 //! step's last two increments (the last one's acceleration starts the next step) or the next
 //! look at the interruption flag (every 4096 increments), whichever comes first. An increment
-//! whose centred angular rate has no real value is left to the general path, which reports it.
+//! whose centred angular rate has no real value, or (about the axis) whose operator on the axis
+//! is not positive and finite, is left to the general path, which reports it.
 
 use super::integrate::note_impacts;
 use super::model::{Config, Constraints, Contact, Counters, Model, Point, Rates, centred_rate};
@@ -434,7 +435,8 @@ impl<S: Space> TurningStep<S> {
     /// the general path notes them: about the axis ([`about_axis`]; the same to round-off) or
     /// as the general path takes them (bit for bit), as the module's documentation says.
     /// Returns the increments taken: fewer than `count` only where an increment's centred
-    /// angular rate has no real value, which the general path then reports.
+    /// angular rate has no real value or its operator on the axis is not positive and finite,
+    /// which the general path then reports.
     #[inline]
     pub fn advance<const FINITE: bool>(
         &self,

@@ -20,9 +20,9 @@
 //! More is formed once per batch so that an increment does scalar arithmetic where the general
 //! path does vector arithmetic, and loops over its terms without a match on their kind:
 //! - the fixed direction d of a spring to the ground or of a load, on its body point
-//!   ([`Along`]): the
-//!   stretch d·(R − 1)ρ and the moment arm d·(g × Rρ) are affine in (v, s), from three
-//!   scalars;
+//!   ([`Along`]): the stretch d·(R − 1)ρ and the moment arm d·(g × Rρ) are affine in (v, s),
+//!   from three scalars, and so is the arm less d·w, the force's part of the solve's
+//!   numerator (moment − force·w, w the drag below, [`Along::less_drag`]);
 //! - the mass centre's drag: |w|² and the centripetal unit force's dot with w are quadratic
 //!   forms in (cos θ, sin θ) with three coefficients (P is symmetric and idempotent), and the
 //!   unit force's free part is linear in them; the operator g·I g − m|w|² is a polynomial in
@@ -33,7 +33,11 @@
 //!
 //! And per increment, h·(g·I g − m w·w)⁻¹, h²·(…)⁻¹ and (h/2)·(…)⁻¹ are formed from the
 //! heading while the forces are summed, so that the moment reaches the rate and the turn h·rate
-//! (advanced side by side, the heading from the latter) in two operations each.
+//! (advanced side by side, the heading from the latter) in two operations each. Each force on
+//! the body enters the numerator as one product and one sum (a contact pair's last, its normal
+//! force being the increment's latest value), not through the body's summed force and its dot
+//! with w; the operator's test (positive and finite) is a branch, not a select, so the inverse
+//! does not wait for it.
 //!
 //! Where the centripetal terms act, the centred rate enters only squared, and
 //! [`centred_square_factor`] forms the factor C(z)² that turns γ² into its square, from the
@@ -137,6 +141,17 @@ impl Along {
     #[inline(always)]
     fn turned(&self, v: f64, s: f64) -> f64 {
         self.turned + (self.across * v + self.around * s)
+    }
+
+    /// The same with the part d·drag = c·`around_drag` − s·`across_drag` taken from the arm,
+    /// `around_drag` = d·d_r and `across_drag` = d·d_x: [`Along::lever`] then gives the
+    /// force d's part of the solve's numerator, moment − force·drag.
+    fn less_drag(self, around_drag: f64, across_drag: f64) -> Self {
+        Along {
+            turned: self.turned,
+            across: self.across - across_drag,
+            around: self.around - around_drag,
+        }
     }
 
     /// d·(g × Rρ) at the heading (c = 1 + v, s): the moment about g of the force d at the
@@ -306,32 +321,6 @@ impl<S: Space> TurningStep<S> {
         for (arm, rho) in arms.iter_mut().zip(&self.points) {
             *arm = Arm::new(&r0, &g, rho);
         }
-        // The springs to the ground sorted by what they act on ([`TurningStep::of`]) and the
-        // loads summed, so that an increment loops over each kind without a match: a spring on
-        // a body point with its direction d as scalars ([`Along`]; each body point is one
-        // term's end), a spring on the particle, and the loads summed once (their forces are
-        // fixed, and the moment of a load on a body point is linear in (c, s): the loads'
-        // [`Along`]s add their `across` and `around` into one; a load has no stretch, so
-        // `turned` stays 0).
-        let mut body_springs = [(Along::default(), S::V::zero(), 0.0); MAX_POINTS];
-        for (spring, (point, direction, c)) in body_springs.iter_mut().zip(&self.body_springs) {
-            *spring = (Along::new(&arms[*point], direction), *direction, *c);
-        }
-        let body_springs = &body_springs[..self.body_springs.len()];
-        let (mut load_on_particle, mut load_on_body) = (S::V::zero(), S::V::zero());
-        let mut load_lever = Along::default();
-        for (end, force) in &self.loads {
-            match end {
-                End::Ground => {}
-                End::Particle => load_on_particle += *force,
-                End::Body { point, .. } => {
-                    load_on_body += *force;
-                    let along = Along::new(&arms[*point], force);
-                    load_lever.across += along.across;
-                    load_lever.around += along.around;
-                }
-            }
-        }
         let mut faces = [Face::<S>::zero(); MAX_CONTACTS];
         for (face, c) in faces.iter_mut().zip(&self.planes) {
             *face = Face {
@@ -369,6 +358,49 @@ impl<S: Space> TurningStep<S> {
         // g·I g − m·rr, its linear part −2m(rr·v − rx·s), its quadratic part
         // −m(rr·v² − 2rx·vs + xx·s²); from the heading it takes five dependent steps where
         // forming c and its square first takes seven.
+        // The springs to the ground sorted by what they act on ([`TurningStep::of`]) and the
+        // loads summed, so that an increment loops over each kind without a match: a spring on
+        // a body point with its direction d as scalars ([`Along`]; each body point is one
+        // term's end), a spring on the particle, and the loads summed once (their forces are
+        // fixed, and the moment of a load on a body point is linear in (c, s): the loads'
+        // [`Along`]s add their `across` and `around` into one; a load has no stretch, so
+        // `turned` stays 0).
+        //
+        // A force f on the body enters the solve's numerator, moment − force·drag, as
+        // f·(g × Rρ) − f·drag. The drag c·d_r − s·d_x is linear in (c, s) as the moment arm
+        // is, so for a fixed direction d its part d·drag folds into the arm's coefficients once
+        // per batch ([`Along::less_drag`]), and a body term enters the numerator as one product
+        // and one sum: the body's force, summed for the translations, is not on the way from
+        // the heading to the next one.
+        let less_drag = |along: Along, d: &S::V| {
+            if OFF_CENTRE {
+                along.less_drag(d.dot(&drag_around), d.dot(&drag_across))
+            } else {
+                along
+            }
+        };
+        let mut body_springs =
+            [(Along::default(), Along::default(), S::V::zero(), 0.0); MAX_POINTS];
+        for (spring, (point, direction, c)) in body_springs.iter_mut().zip(&self.body_springs) {
+            let along = Along::new(&arms[*point], direction);
+            *spring = (along, less_drag(along, direction), *direction, *c);
+        }
+        let body_springs = &body_springs[..self.body_springs.len()];
+        let (mut load_on_particle, mut load_on_body) = (S::V::zero(), S::V::zero());
+        let mut load_lever = Along::default();
+        for (end, force) in &self.loads {
+            match end {
+                End::Ground => {}
+                End::Particle => load_on_particle += *force,
+                End::Body { point, .. } => {
+                    load_on_body += *force;
+                    let along = Along::new(&arms[*point], force);
+                    load_lever.across += along.across;
+                    load_lever.around += along.around;
+                }
+            }
+        }
+        let load_lever = less_drag(load_lever, &load_on_body);
         let operator_at_start = axial - mass * rr;
         let (operator_v, operator_s) = (-2.0 * mass * rr, 2.0 * mass * rx);
         let (operator_vv, operator_vs, operator_ss) = (-mass * rr, 2.0 * mass * rx, -mass * xx);
@@ -400,32 +432,49 @@ impl<S: Space> TurningStep<S> {
             let mut f = Sums::<S> {
                 p: load_on_particle,
                 b: load_on_body,
-                moment: load_lever.lever(cosine, sine),
+                moment: 0.0,
             };
-            let lever = |end: &End<S>| match end {
-                End::Body { point, .. } => arms[*point].lever(cosine, sine),
-                _ => S::V::zero(),
-            };
-            for (d, direction, c) in body_springs {
-                let u = direction.dot(&s.t.bu) + d.turned(v, sine);
-                let tension = -c * u;
-                f.b += *direction * tension;
-                f.moment += tension * d.lever(cosine, sine);
-            }
-            for (direction, c) in &self.particle_springs {
-                f.p += *direction * (-c * direction.dot(&s.t.u));
-            }
-            for term in &self.coupled {
-                let stretch = displacement(&term.b, &s) - displacement(&term.a, &s);
-                let force = term.direction * (term.c * term.direction.dot(&stretch));
-                f.apply(&term.a, &lever(&term.a), force);
-                f.apply(&term.b, &lever(&term.b), -force);
-            }
             let drag = if off_centre {
                 drag_around * cosine - drag_across * sine
             } else {
                 S::V::zero()
             };
+            // The solve's numerator, moment − force·drag (above), from the loads on.
+            let mut num = load_lever.lever(cosine, sine);
+            let lever = |end: &End<S>| match end {
+                End::Body { point, .. } => arms[*point].lever(cosine, sine),
+                _ => S::V::zero(),
+            };
+            for (d, numerator, direction, c) in body_springs {
+                let u = direction.dot(&s.t.bu) + d.turned(v, sine);
+                let tension = -c * u;
+                f.b += *direction * tension;
+                num += tension * numerator.lever(cosine, sine);
+            }
+            for (direction, c) in &self.particle_springs {
+                f.p += *direction * (-c * direction.dot(&s.t.u));
+            }
+            if !self.coupled.is_empty() {
+                // Forces of other directions on the body: summed first, moment and force apart.
+                let mut on_body = Sums::<S> {
+                    p: S::V::zero(),
+                    b: S::V::zero(),
+                    moment: 0.0,
+                };
+                for term in &self.coupled {
+                    let stretch = displacement(&term.b, &s) - displacement(&term.a, &s);
+                    let force = term.direction * (term.c * term.direction.dot(&stretch));
+                    on_body.apply(&term.a, &lever(&term.a), force);
+                    on_body.apply(&term.b, &lever(&term.b), -force);
+                }
+                f.p += on_body.p;
+                f.b += on_body.b;
+                num += if off_centre {
+                    on_body.moment - on_body.b.dot(&drag)
+                } else {
+                    on_body.moment
+                };
+            }
             // The contact pairs' normal forces (for the impacts).
             let mut normal_forces = [0.0; MAX_CONTACTS];
             for (k, face) in faces.iter().enumerate() {
@@ -435,25 +484,35 @@ impl<S: Space> TurningStep<S> {
                 let turned_normal = face.normal.rotated(v, sine);
                 let gap =
                     turned_normal.dot(&((face.offset + relative) - face.point.turned(v, sine)));
+                // The general path's moment −g·(arm × n) of the unit normal force, as
+                // arm·(g × n); with the push −n on the body, the pair's part of the numerator
+                // per unit force is that moment plus n·drag.
+                let moment = (face.arm0 + relative).dot(&face.normal.lever(cosine, sine));
+                let leverage = if off_centre {
+                    moment + turned_normal.dot(&drag)
+                } else {
+                    moment
+                };
                 let force = self.penalty * (-gap).max(0.0);
                 normal_forces[k] = force;
                 f.p += turned_normal * force;
                 f.b -= turned_normal * force;
-                // The general path's −g·(arm × n)·force, as arm·(g × n)·force.
-                f.moment += (face.arm0 + relative).dot(&face.normal.lever(cosine, sine)) * force;
+                num += leverage * force;
             }
-            let num = if off_centre {
-                f.moment - f.b.dot(&drag)
-            } else {
-                f.moment
-            };
             let (cc, cs, ss) = (cosine * cosine, cosine * sine, sine * sine);
             let inverse = if off_centre {
-                pivot_reciprocal(
-                    (operator_at_start + (operator_v * v + operator_s * sine))
-                        + ((operator_vv * v) * v
-                            + ((operator_vs * v) * sine + (operator_ss * sine) * sine)),
-                )
+                let operator = (operator_at_start + (operator_v * v + operator_s * sine))
+                    + ((operator_vv * v) * v
+                        + ((operator_vs * v) * sine + (operator_ss * sine) * sine));
+                let inverse = 1.0 / operator;
+                // `pivot_reciprocal`'s test (positive and finite) as a branch, not a select:
+                // the inverse then does not wait for the test on its way to the next heading.
+                // An increment whose operator fails it is left to the general path, which
+                // reports it.
+                if !((operator > 0.0) & (inverse > 0.0)) {
+                    break;
+                }
+                inverse
             } else {
                 fixed_inverse
             };
@@ -514,8 +573,8 @@ impl<S: Space> TurningStep<S> {
             taken += 1;
         }
         if taken == 0 {
-            // The first increment's centred rate has no real value: the state is as it was,
-            // for the general path to report.
+            // The first increment's centred rate has no real value, or its operator is not
+            // positive and finite: the state is as it was, for the general path to report.
             return 0;
         }
         s.t.write(particle, cfg, carry, v_half);

@@ -32,12 +32,13 @@
 //!   (a body point or the particle) once per step, in [`TurningStep::of`].
 //!
 //! And per increment, h·(g·I g − m w·w)⁻¹, h²·(…)⁻¹ and (h/2)·(…)⁻¹ are formed from the
-//! heading while the forces are summed, so that the moment reaches the rate and the turn h·rate
-//! (advanced side by side, the heading from the latter) in two operations each. Each force on
-//! the body enters the numerator as one product and one sum (a contact pair's last, its normal
-//! force being the increment's latest value), not through the body's summed force and its dot
-//! with w; the operator's test (positive and finite) is a branch, not a select, so the inverse
-//! does not wait for it.
+//! heading while the forces are summed, so that the solve's numerator reaches the rate and the
+//! turn h·rate (advanced side by side, the heading from the latter) in two operations each.
+//! Each force of a fixed direction on the body enters the numerator as one product and one sum
+//! (a contact pair's last, its normal force being the increment's latest value), not through
+//! the body's summed force and its dot with w (the springs with other ends are summed first);
+//! the operator's test (positive and finite) is a branch, not a select, so the inverse does not
+//! wait for it.
 //!
 //! Where the centripetal terms act, the centred rate enters only squared, and
 //! [`centred_square_factor`] forms the factor C(z)² that turns γ² into its square, from the
@@ -143,9 +144,9 @@ impl Along {
         self.turned + (self.across * v + self.around * s)
     }
 
-    /// The same with the part d·drag = c·`around_drag` − s·`across_drag` taken from the arm,
-    /// `around_drag` = d·d_r and `across_drag` = d·d_x: [`Along::lever`] then gives the
-    /// force d's part of the solve's numerator, moment − force·drag.
+    /// This direction's scalars with the part d·drag = c·`around_drag` − s·`across_drag` taken
+    /// from the arm, `around_drag` = d·d_r and `across_drag` = d·d_x: [`Along::lever`] then
+    /// gives the force d's part of the solve's numerator, moment − force·drag.
     fn less_drag(self, around_drag: f64, across_drag: f64) -> Self {
         Along {
             turned: self.turned,
@@ -197,27 +198,11 @@ struct State<S: Space> {
     heading_carry: [f64; 2],
 }
 
-/// The forces of one increment: on the particle, on the body, and the body's moment about g.
+/// The forces of one increment: on the particle and on the body (for the translations; the
+/// body's moment about g goes into the solve's numerator directly).
 struct Sums<S: Space> {
     p: S::V,
     b: S::V,
-    moment: f64,
-}
-
-impl<S: Space> Sums<S> {
-    /// Force `f` at `end`, whose lever about g (g × its position from the reference node) is
-    /// `lever` where it is a body point.
-    #[inline(always)]
-    fn apply(&mut self, end: &End<S>, lever: &S::V, f: S::V) {
-        match end {
-            End::Ground => {}
-            End::Particle => self.p += f,
-            End::Body { .. } => {
-                self.b += f;
-                self.moment += f.dot(lever);
-            }
-        }
-    }
 }
 
 impl<S: Space> TurningStep<S> {
@@ -354,10 +339,6 @@ impl<S: Space> TurningStep<S> {
             drag_across.dot(&drag_across),
             drag_around.dot(&drag_across),
         );
-        // The operator g·I g − m|drag|² as a polynomial in (v, s), c = 1 + v: its constant
-        // g·I g − m·rr, its linear part −2m(rr·v − rx·s), its quadratic part
-        // −m(rr·v² − 2rx·vs + xx·s²); from the heading it takes five dependent steps where
-        // forming c and its square first takes seven.
         // The springs to the ground sorted by what they act on ([`TurningStep::of`]) and the
         // loads summed, so that an increment loops over each kind without a match: a spring on
         // a body point with its direction d as scalars ([`Along`]; each body point is one
@@ -401,10 +382,19 @@ impl<S: Space> TurningStep<S> {
             }
         }
         let load_lever = less_drag(load_lever, &load_on_body);
+        // The operator g·I g − m|drag|² as a polynomial in (v, s), c = 1 + v: its constant
+        // g·I g − m·rr, its linear part −2m(rr·v − rx·s), its quadratic part
+        // −m(rr·v² − 2rx·vs + xx·s²); from the heading it takes five dependent steps where
+        // forming c and its square first takes seven.
         let operator_at_start = axial - mass * rr;
         let (operator_v, operator_s) = (-2.0 * mass * rr, 2.0 * mass * rx);
         let (operator_vv, operator_vs, operator_ss) = (-mass * rr, 2.0 * mass * rx, -mass * xx);
         let fixed_inverse = pivot_reciprocal(axial);
+        if !off_centre && fixed_inverse.is_nan() {
+            // The operator on the axis is not positive and finite (fixed for the batch): the
+            // first increment is left to the general path, which reports it.
+            return 0;
+        }
         let particle = !model.particles.is_empty();
         let w0 = v_half.w[0];
         let rate0 = g.dot(&w0);
@@ -432,7 +422,6 @@ impl<S: Space> TurningStep<S> {
             let mut f = Sums::<S> {
                 p: load_on_particle,
                 b: load_on_body,
-                moment: 0.0,
             };
             let drag = if off_centre {
                 drag_around * cosine - drag_across * sine
@@ -455,25 +444,28 @@ impl<S: Space> TurningStep<S> {
                 f.p += *direction * (-c * direction.dot(&s.t.u));
             }
             if !self.coupled.is_empty() {
-                // Forces of other directions on the body: summed first, moment and force apart.
-                let mut on_body = Sums::<S> {
-                    p: S::V::zero(),
-                    b: S::V::zero(),
-                    moment: 0.0,
-                };
+                // Springs of other ends: each end's force added to the particle's or the body's
+                // and its moment to the numerator as it comes (the general path's order); on an
+                // off-centre body their force's dot with the drag once, from its sum.
+                let mut on_body = S::V::zero();
                 for term in &self.coupled {
                     let stretch = displacement(&term.b, &s) - displacement(&term.a, &s);
                     let force = term.direction * (term.c * term.direction.dot(&stretch));
-                    on_body.apply(&term.a, &lever(&term.a), force);
-                    on_body.apply(&term.b, &lever(&term.b), -force);
+                    for (end, force) in [(&term.a, force), (&term.b, -force)] {
+                        match end {
+                            End::Ground => {}
+                            End::Particle => f.p += force,
+                            End::Body { .. } => {
+                                f.b += force;
+                                num += force.dot(&lever(end));
+                                on_body += force;
+                            }
+                        }
+                    }
                 }
-                f.p += on_body.p;
-                f.b += on_body.b;
-                num += if off_centre {
-                    on_body.moment - on_body.b.dot(&drag)
-                } else {
-                    on_body.moment
-                };
+                if off_centre {
+                    num -= on_body.dot(&drag);
+                }
             }
             // The contact pairs' normal forces (for the impacts).
             let mut normal_forces = [0.0; MAX_CONTACTS];

@@ -939,6 +939,11 @@ pub fn integrate<S: Space, const FINITE: bool>(
 /// Note which contact pairs press at increment `n`, time n·`h` (normal forces `contact`) in
 /// `pressed`, and an impact where one that did not press at the last increment noted starts
 /// to (the time is formed only then).
+///
+/// The increment loops call this at every increment, and an impact is rare: the test is
+/// inlined and the noting ([`note_start`]) is a cold call, so that the loop neither forms
+/// the time nor keeps its registers on the stack around a call it seldom makes.
+#[inline(always)]
 pub(super) fn note_impacts(
     pressed: &mut [Option<bool>],
     contact: &[f64],
@@ -948,10 +953,17 @@ pub(super) fn note_impacts(
     for (was, force) in pressed.iter_mut().zip(contact) {
         let now = *force > 0.0;
         if now && *was == Some(false) {
-            impacts.push(n as f64 * h);
+            note_start((n, h), impacts);
         }
         *was = Some(now);
     }
+}
+
+/// An impact [`note_impacts`] found: a pair starts to press at increment `n`, time n·`h`.
+#[cold]
+#[inline(never)]
+fn note_start((n, h): (u64, f64), impacts: &mut Vec<f64>) {
+    impacts.push(n as f64 * h);
 }
 
 /// Turns the rows of increments into output rows: on increments that fall on the output times,

@@ -5,8 +5,14 @@
 //! configuration takes the same, through the job planner; its default configuration keeps
 //! 1/60 s), with criterion's throughput set to the increments the run takes, so the report's
 //! "elem/s" is increments per second (ns per increment = 1e9 / that). The runs are 10^5 to
-//! 2·10^5 increments long, so the setup (measured apart below, at most a few µs) and the 501
-//! output rows are spread over them. `analytic` is left out: it does not step in time.
+//! 2·10^5 increments long, so the setup (measured apart below, at most a few µs) is spread
+//! over them; the 501 output rows are not spread as thin (`increment_long` below). `analytic` is left out: it does not step in time.
+//!
+//! `increment_long/<case>/<engine>`: the same at a hundredth of the case's increment (10^6 to
+//! 2·10^6 increments), `explicit` and `explicit_small` only. An output row costs far more than
+//! an increment (the increment that writes it takes the general path, and the batch of
+//! increments between rows starts and ends around it), so with ten times as many increments
+//! between the same rows, the difference from `increment/…` is what the rows add there.
 //!
 //! `setup/<case>/explicit`: the explicit engine's stable-increment analysis, which compiles the
 //! scene, runs its static steps and linearises it (what a run does before stepping).
@@ -39,23 +45,23 @@ fn seed_cases() -> Vec<crosscheck::scene::Scene> {
         .collect()
 }
 
-fn increment(c: &mut Criterion) {
-    let mut group = c.benchmark_group("increment");
+/// Whole runs of every seed case by the engines `chosen` at the case's increment divided by
+/// `refinement` (the default configurations keep their own 1/60 s), in the group `name`, with
+/// criterion's throughput set to the increments each run takes.
+fn whole_runs(c: &mut Criterion, name: &str, refinement: f64, chosen: impl Fn(&str) -> bool) {
+    let mut group = c.benchmark_group(name);
     group
         .sample_size(10)
         .warm_up_time(Duration::from_millis(300))
         .measurement_time(Duration::from_secs(2));
     for scene in seed_cases() {
         for engine in engines::all() {
-            if engine.name() == "analytic" {
+            if engine.name() == "analytic" || !chosen(engine.name()) {
                 continue;
             }
-            // A tenth of the case's increment (10^5 to 2·10^5 increments), so the setup and
-            // the 501 output rows are spread thin; the default configurations keep their own
-            // 1/60 s.
             let finer = match scene.settings.increment {
                 IncrementRule::Given(h) if !engine.name().ends_with("_default") => RunSettings {
-                    increment: Some(IncrementRule::Given(h / REFINEMENT)),
+                    increment: Some(IncrementRule::Given(h / refinement)),
                     ..RunSettings::default()
                 },
                 _ => RunSettings::default(),
@@ -73,6 +79,21 @@ fn increment(c: &mut Criterion) {
         }
     }
     group.finish();
+}
+
+/// A tenth of the case's increment (10^5 to 2·10^5 increments), so the setup is spread thin;
+/// every engine.
+fn increment(c: &mut Criterion) {
+    whole_runs(c, "increment", REFINEMENT, |_| true);
+}
+
+/// A hundredth of the case's increment (10^6 to 2·10^6 increments), the explicit engines only:
+/// ten times as many increments between the same 501 output rows, so the difference from
+/// `increment/…` is what the rows cost.
+fn increment_long(c: &mut Criterion) {
+    whole_runs(c, "increment_long", 10.0 * REFINEMENT, |name| {
+        name.starts_with("explicit")
+    });
 }
 
 fn setup(c: &mut Criterion) {
@@ -118,5 +139,5 @@ fn floor(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, increment, setup, floor);
+criterion_group!(benches, increment, increment_long, setup, floor);
 criterion_main!(benches);

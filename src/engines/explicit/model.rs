@@ -2442,8 +2442,9 @@ const SQUARE_SIX: f64 = 6e-4;
 /// factors of its own: those can take γ² before the factor is ready, so the chain of dependent
 /// operations from γ is shorter than the root's and its square's. With z = βγ and
 /// C(z) = 1 + z·C(z)², C(z)² = (C(z) − 1)/z = Σ Cₙ₊₁ zⁿ (1, 2, 5, 14, 42, 132, …); the series'
-/// coefficients times z are formed as (k·β)·γ, from β, which is ready before γ. From γ the
-/// factor takes four or five steps (βγ, z², z⁴ beyond [`SQUARE_FOUR`], the bracket, the sum).
+/// coefficients times z are formed as (k·β)·γ, from β, which is ready before γ, each fused
+/// with the constant it is added to. From γ the factor takes three or four steps (βγ, z², z⁴
+/// beyond [`SQUARE_FOUR`], the last fused step).
 /// Beyond [`SQUARE_SIX`], (2/(1 + √(1 − 4z)))². None where [`centred_rate`] is.
 #[inline(always)]
 pub fn centred_square_factor(beta: f64, gamma: f64) -> Option<f64> {
@@ -2451,11 +2452,14 @@ pub fn centred_square_factor(beta: f64, gamma: f64) -> Option<f64> {
     let magnitude = z.abs();
     if magnitude < SQUARE_SIX {
         let z2 = z * z;
-        let low = (1.0 + (2.0 * beta) * gamma) + z2 * (5.0 + (14.0 * beta) * gamma);
+        let low = z2.mul_add(
+            (14.0 * beta).mul_add(gamma, 5.0),
+            (2.0 * beta).mul_add(gamma, 1.0),
+        );
         return Some(if magnitude < SQUARE_FOUR {
             low
         } else {
-            low + (z2 * z2) * (42.0 + (132.0 * beta) * gamma)
+            (z2 * z2).mul_add((132.0 * beta).mul_add(gamma, 42.0), low)
         });
     }
     let discriminant = 1.0 - 4.0 * z;

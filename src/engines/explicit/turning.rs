@@ -38,7 +38,7 @@
 
 use super::integrate::note_impacts;
 use super::model::{Config, Constraints, Contact, Counters, Model, Point, Rates, centred_rate};
-use super::space::{Lin, Space, compensated_add};
+use super::space::{Lin, Space, compensated_add, compensated_add_fused};
 use crate::scene::DampingTreatment;
 
 mod about_axis;
@@ -205,6 +205,18 @@ impl<S: Space> Translations<S> {
         self.v += a * h;
         compensated_add(&mut self.u, &mut self.u_carry, self.v * h);
         compensated_add(&mut self.bu, &mut self.bu_carry, self.vb * h);
+    }
+
+    /// [`Translations::advance`] with each product fused into the sum it feeds (the
+    /// velocities' h·a, the displacements' h·v into Kahan's difference): to round-off the
+    /// same, and from the acceleration to the displacements three dependent operations
+    /// instead of five.
+    #[inline(always)]
+    fn advance_fused(&mut self, a: S::V, ab: S::V, h: f64) {
+        self.vb = ab.fused(h, self.vb);
+        self.v = a.fused(h, self.v);
+        compensated_add_fused(&mut self.u, &mut self.u_carry, self.v, h);
+        compensated_add_fused(&mut self.bu, &mut self.bu_carry, self.vb, h);
     }
 
     /// Back into the configuration, its carries and its half-step velocities.

@@ -44,6 +44,17 @@
 //! [`centred_square_factor`] forms the factor C(z)² that turns γ² into its square, from the
 //! series of C(z)².
 //!
+//! Where a product feeds a sum whose other term is ready first, the two are one fused
+//! multiply-add (`mul_add`, rounded once): the moments into the solve's numerator, the
+//! centred rate, the rate and the turn, the forces along the contact's normal, the
+//! projections onto the free translations, the operator on the axis (as
+//! (c₀ + s·(o_s + o_ss·s)) + v·((o_v + o_vs·s) + o_vv·v)), the velocities' and the
+//! displacements' increments ([`Translations::advance_fused`]) and the heading's series
+//! ([`Heading::advanced_fused`]). On this path's chain of dependent operations a fused step
+//! takes the latency of a product alone (4 cycles on current x86 cores) where a product and
+//! a sum take 6 to 8. A sum of two products that arrive together stays unfused: fusing it
+//! would put the products one after the other.
+//!
 //! The arithmetic is the general path's to round-off, not bit for bit: `tests/turning.rs`
 //! holds the two paths together within bounds that follow from the round-off and the
 //! penalty's leverage. At the batch's end the heading's angle θ turns R₀ by the general path's
@@ -51,7 +62,7 @@
 
 use super::super::integrate::note_impacts;
 use super::super::model::{Motion, centred_square_factor};
-use super::super::space::{Heading, Lin, Planar, Space, pivot_reciprocal, project};
+use super::super::space::{Heading, Lin, Space, pivot_reciprocal, project};
 use super::{Batch, End, MAX_CONTACTS, Translations, TurningStep};
 
 /// At most this many body points in the step's terms (their [`Arm`]s are formed per batch, in
@@ -207,13 +218,16 @@ struct Sums<S: Space> {
 
 impl<S: Space> TurningStep<S> {
     /// [`TurningStep::advance`] with the turn about the axis since the batch's start (see the
-    /// module's documentation). On an x86-64 processor with AVX the same increments are
-    /// compiled a second time with its three-operand instructions, which drop the register
-    /// copies that SSE2's two-operand forms need, and with AVX-512 (foundation and 128-bit
-    /// forms) a third time, for its 32 vector registers where AVX has 16: the increment's
-    /// parts fixed for the batch (arms, faces, the operator's coefficients) then stay in
-    /// registers instead of being reloaded from the stack. The arithmetic, and so every result,
-    /// is the same bit for bit: Rust neither fuses nor reorders floating-point operations.
+    /// module's documentation). On an x86-64 processor with AVX and FMA the same increments
+    /// are compiled a second time with AVX's three-operand instructions, which drop the
+    /// register copies that SSE2's two-operand forms need, and FMA's fused multiply-adds, and
+    /// with AVX-512 (foundation and 128-bit forms) a third time, for its 32 vector registers
+    /// where AVX has 16: the increment's parts fixed for the batch (arms, faces, the
+    /// operator's coefficients) then stay in registers instead of being reloaded from the
+    /// stack. The arithmetic, and so every result, is the same bit for bit: Rust neither fuses
+    /// nor reorders floating-point operations, and the multiply-adds fused here (`mul_add`)
+    /// are rounded once on every path (without FMA, by the C library's `fma`, which is slower
+    /// but exact in the same way).
     #[inline(never)]
     pub(super) fn advance_about_axis<const FINITE: bool>(
         &self,
@@ -233,17 +247,19 @@ impl<S: Space> TurningStep<S> {
             return unsafe { self.about_axis_with_avx512(batch) };
         }
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
-            // SAFETY: the processor has AVX and the operating system saves its registers, as
-            // `is_x86_feature_detected!` checked just above; the callee needs nothing else.
+        if std::arch::is_x86_feature_detected!("avx") && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: the processor has AVX and FMA and the operating system saves their
+            // registers, as `is_x86_feature_detected!` checked just above; the callee needs
+            // nothing else.
             return unsafe { self.about_axis_with_avx(batch) };
         }
         self.step_about_axis_shaped(batch)
     }
 
-    /// [`TurningStep::step_about_axis`] compiled for AVX.
+    /// [`TurningStep::step_about_axis`] compiled for AVX, with FMA's fused multiply-adds.
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
+    #[target_feature(enable = "avx,fma")]
     fn about_axis_with_avx<const FINITE: bool>(&self, batch: Batch<'_, S, FINITE>) -> u64 {
         self.step_about_axis_shaped(batch)
     }
@@ -384,8 +400,8 @@ impl<S: Space> TurningStep<S> {
         let load_lever = less_drag(load_lever, &load_on_body);
         // The operator g·I g − m|drag|² as a polynomial in (v, s), c = 1 + v: its constant
         // g·I g − m·rr, its linear part −2m(rr·v − rx·s), its quadratic part
-        // −m(rr·v² − 2rx·vs + xx·s²); from the heading it takes five dependent steps where
-        // forming c and its square first takes seven.
+        // −m(rr·v² − 2rx·vs + xx·s²); from the heading it takes three dependent fused steps
+        // (in the loop) where forming c and its square first takes seven.
         let operator_at_start = axial - mass * rr;
         let (operator_v, operator_s) = (-2.0 * mass * rr, 2.0 * mass * rx);
         let (operator_vv, operator_vs, operator_ss) = (-mass * rr, 2.0 * mass * rx, -mass * xx);
@@ -438,7 +454,7 @@ impl<S: Space> TurningStep<S> {
                 let u = direction.dot(&s.t.bu) + d.turned(v, sine);
                 let tension = -c * u;
                 f.b += *direction * tension;
-                num += tension * numerator.lever(cosine, sine);
+                num = tension.mul_add(numerator.lever(cosine, sine), num);
             }
             for (direction, c) in &self.particle_springs {
                 f.p += *direction * (-c * direction.dot(&s.t.u));
@@ -487,15 +503,18 @@ impl<S: Space> TurningStep<S> {
                 };
                 let force = self.penalty * (-gap).max(0.0);
                 normal_forces[k] = force;
-                f.p += turned_normal * force;
-                f.b -= turned_normal * force;
-                num += leverage * force;
+                f.p = turned_normal.fused(force, f.p);
+                f.b = turned_normal.fused(-force, f.b);
+                num = leverage.mul_add(force, num);
             }
             let (cc, cs, ss) = (cosine * cosine, cosine * sine, sine * sine);
             let inverse = if off_centre {
-                let operator = (operator_at_start + (operator_v * v + operator_s * sine))
-                    + ((operator_vv * v) * v
-                        + ((operator_vs * v) * sine + (operator_ss * sine) * sine));
+                // In fused steps: (c₀ + s·(o_s + o_ss·s)) + v·((o_v + o_vs·s) + o_vv·v).
+                let on_sine = operator_ss
+                    .mul_add(sine, operator_s)
+                    .mul_add(sine, operator_at_start);
+                let on_versine = operator_vv.mul_add(v, operator_vs.mul_add(sine, operator_v));
+                let operator = on_versine.mul_add(v, on_sine);
                 let inverse = 1.0 / operator;
                 // `pivot_reciprocal`'s test (positive and finite) as a branch, not a select:
                 // the inverse then does not wait for the test on its way to the next heading.
@@ -515,7 +534,7 @@ impl<S: Space> TurningStep<S> {
                 if pinned {
                     S::V::zero()
                 } else {
-                    project(held_t, *force) * (1.0 / mass) - drag * alpha
+                    drag.fused(-alpha, project_fused(held_t, *force) * (1.0 / mass))
                 }
             };
             // h·inverse and h²·inverse depend only on the heading: formed while the forces
@@ -531,8 +550,9 @@ impl<S: Space> TurningStep<S> {
                 // (the centre's part across g, turned), as its solve on g reads it: its
                 // moment about g is 0, its dot with the drag m(rx(c² − s²) + (rr − xx)cs),
                 // its P/m c·d_x + s·d_r.
+                let centripetal = rx * (cc - ss) + (rr - xx) * cs;
                 let q = if off_centre {
-                    -(mass * (rx * (cc - ss) + (rr - xx) * cs)) * inverse
+                    -(mass * centripetal) * inverse
                 } else {
                     0.0
                 };
@@ -541,27 +561,37 @@ impl<S: Space> TurningStep<S> {
                 } else {
                     (drag_across * cosine + drag_around * sine) - drag * q
                 };
-                let beta = 0.5 * h * q;
-                let gamma = s.rate + num * half_h_inverse;
+                // 0.5·h·q, with the factors that do not wait for the inverse taken first.
+                let beta = if off_centre {
+                    (-(0.5 * h * mass) * centripetal) * inverse
+                } else {
+                    0.0
+                };
+                let gamma = num.mul_add(half_h_inverse, s.rate);
                 let Some(factor) = centred_square_factor(beta, gamma) else {
                     break;
                 };
                 // s² = γ²·factor: γ² takes its products while the factor is formed.
                 let gamma2 = gamma * gamma;
-                let ab = translation(&f.b, p) + unit_translation * (gamma2 * factor);
+                let ab = unit_translation.fused(gamma2 * factor, translation(&f.b, p));
                 // rate + h·(p + q·s²), and h times it.
-                let rate = (s.rate + num * h_inverse) + ((h * q) * gamma2) * factor;
-                let turn = (s.rate * h + num * hh_inverse) + (((h * h) * q) * gamma2) * factor;
+                let rate = ((h * q) * gamma2).mul_add(factor, num.mul_add(h_inverse, s.rate));
+                let turn =
+                    (((h * h) * q) * gamma2).mul_add(factor, num.mul_add(hh_inverse, s.rate * h));
                 (ab, rate, turn)
             } else {
                 let ab = translation(&f.b, num * inverse);
-                (ab, s.rate + num * h_inverse, s.rate * h + num * hh_inverse)
+                (
+                    ab,
+                    num.mul_add(h_inverse, s.rate),
+                    num.mul_add(hh_inverse, s.rate * h),
+                )
             };
             note_impacts(pressed, &normal_forces[..contacts], (n + taken, h), impacts);
-            let a = motion.project(f.p * self.inverse_mass);
-            s.t.advance(a, ab, h);
+            let a = motion_fused(motion, f.p * self.inverse_mass);
+            s.t.advance_fused(a, ab, h);
             s.rate = rate;
-            s.heading = Planar::advance_compensated(&s.heading, &mut s.heading_carry, &turn);
+            s.heading = s.heading.advanced_fused(&mut s.heading_carry, turn);
             taken += 1;
         }
         if taken == 0 {
@@ -585,5 +615,29 @@ impl<S: Space> TurningStep<S> {
         cfg.br[0] = r;
         cfg.inertia[0] = model.oriented(0, &r);
         taken
+    }
+}
+
+/// [`project`] with each step's product fused into its difference.
+#[inline(always)]
+fn project_fused<V: Lin>(held: &[V], v: V) -> V {
+    let mut v = v;
+    for d in held {
+        v = d.fused(-d.dot(&v), v);
+    }
+    v
+}
+
+/// [`Motion::project`] with each step's product fused into its difference.
+#[inline(always)]
+fn motion_fused<V: Lin>(motion: Motion<V>, a: V) -> V {
+    match motion {
+        Motion::Free => a,
+        Motion::Held => V::zero(),
+        Motion::Across(d) => d.fused(-d.dot(&a), a),
+        Motion::AcrossTwo(d, e) => {
+            let a = d.fused(-d.dot(&a), a);
+            e.fused(-e.dot(&a), a)
+        }
     }
 }

@@ -6,7 +6,8 @@
 //! 1/60 s), with criterion's throughput set to the increments the run takes, so the report's
 //! "elem/s" is increments per second (ns per increment = 1e9 / that). The runs are 10^5 to
 //! 2·10^5 increments long, so the setup (measured apart below, at most a few µs) is spread
-//! over them; the 501 output rows are not spread as thin (`increment_long` below). `analytic` is left out: it does not step in time.
+//! over them; the 501 output rows are not spread as thin (`increment_long` below). `analytic`
+//! is left out: it does not step in time.
 //!
 //! `increment_long/<case>/<engine>`: the same at a hundredth of the case's increment (10^6 to
 //! 2·10^6 increments), `explicit` and `explicit_small` only. An output row costs far more than

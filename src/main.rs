@@ -628,6 +628,7 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
         return interrupted();
     }
     let budgets = discrepancy::measure(&plan, &outcome, Depth::Basic, !args.quiet);
+    let attributions = comparison::attribution::measure(&plan, &outcome, !args.quiet);
     let budgeted = started.elapsed().as_secs_f64();
     if interrupt::requested() {
         return interrupted();
@@ -684,7 +685,7 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
     let mut parts = vec![
         ("load and check", loaded),
         ("jobs", ran - loaded),
-        ("discrepancy budget", budgeted - ran),
+        ("discrepancy budget and controls", budgeted - ran),
     ];
     if args.sweep {
         parts.push(("sweep", swept - budgeted));
@@ -697,6 +698,7 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
     }
     let study = report::Study {
         budgets: &budgets,
+        attributions: &attributions,
         sweeps: &sweeps,
         stability: &maps,
         requests: &requests,
@@ -723,11 +725,11 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
     out.print(&outcome.table());
     let checks = summary.tolerance_checks();
     out.print(&format!(
-        "{} job(s), {} failed; report: {} ({} of {} tolerances met)\n",
+        "{} job(s), {} failed; report: {} ({} of {} cells meet their tolerance)\n",
         outcome.jobs.len(),
         outcome.failures(),
         report::report_path(&args.out).display(),
-        checks.iter().filter(|c| c.met).count(),
+        checks.iter().filter(|c| c.met()).count(),
         checks.len()
     ));
     out.print(&format!(

@@ -58,7 +58,9 @@ fn achieved(
         },
     )?;
     assert_eq!(out.info.measures.get("requested_tolerance"), Some(&eps));
-    Ok(compare(scene, exact, &out.history).worst_max)
+    Ok(compare(scene, exact, &out.history)
+        .worst_max
+        .expect("a compared column"))
 }
 
 fn exact_for(scene: &Scene, engine: &str) -> crosscheck::engines::History {
@@ -158,7 +160,9 @@ fn a_case_file_can_ask_for_a_tolerance() {
     let engine = engines::named("explicit").unwrap();
     let exact = exact_for(&scene, "explicit");
     let out = engine.run(&scene, &RunSettings::default()).unwrap();
-    let e = compare(&scene, &exact, &out.history).worst_max;
+    let e = compare(&scene, &exact, &out.history)
+        .worst_max
+        .expect("a compared column");
     assert!((1e-5..=1e-4).contains(&e), "{e:e}");
     assert!(out.info.counters["pilot_increments"] > 0);
 }

@@ -11,7 +11,7 @@ use crosscheck::engines::rapier::backend::Record;
 use crosscheck::engines::rapier::plan::BodyState;
 use crosscheck::engines::rapier::record::Recorder;
 use crosscheck::engines::rapier::{
-    Configuration, MatchedSettings, Precision, RapierEngine, engines,
+    Configuration, MatchedSettings, Precision, RapierEngine, controls, engines,
 };
 use crosscheck::engines::reference::ReferenceEngine;
 use crosscheck::engines::{Engine, EngineError, History, RunSettings};
@@ -147,17 +147,34 @@ fn node_to_node_b_c_agree() {
 /// f64, measured ≤ 6e-9: rapier3d solves the same motion with quaternions, angular locks on x
 /// and y and a 3D ball–cuboid manifold; the held DOFs leak at ~1e-10 through the locks' soft
 /// constraints and the operations differ. 1e-7 leaves a factor 10.
-/// f32, measured ≤ 7.8e-3: besides round-off, rapier3d's per-substep gyroscopic correction
-/// (ω rotated into the principal frame and back in f32 every substep) pumps energy even about a
-/// principal axis where the gyroscopic torque is exactly zero: the pinned lumped body gains
-/// 61 J over 0.1 s (balance −68 J against −129 J in 2D). 2e-2 bounds it.
+/// f32 with restitution 0 on the closed pair, measured ≤ 7.8e-3: besides round-off,
+/// rapier3d's per-substep gyroscopic correction (ω rotated into the principal frame and back in
+/// f32 every substep) pumps energy even about a principal axis where the gyroscopic torque is
+/// exactly zero: the pinned lumped body gains 61 J over 0.1 s (balance −68 J against −129 J in
+/// 2D). 2e-2 bounds it. With the case's restitution (1), the two also bounce differently off
+/// what round-off leaves of their resting contact (`tests/fair.rs`): measured 6.8e-2 on the
+/// pinned lumped contact force, bounded by 0.1 (f64's contact does not bounce: its bound is
+/// the first).
 #[test]
 fn three_d_equals_two_d() {
-    for (p, tolerance) in [(Precision::F64, 1e-7), (Precision::F32, 2e-2)] {
+    let scene_of = |id: &str, inelastic: bool| {
+        let s = scene(id);
+        if inelastic {
+            controls::closed_pairs_inelastic(&s).unwrap()
+        } else {
+            s
+        }
+    };
+    for (p, inelastic, tolerance) in [
+        (Precision::F64, false, 1e-7),
+        (Precision::F32, true, 2e-2),
+        (Precision::F32, false, 1e-1),
+    ] {
         let e = RapierEngine::matched(p);
         for v in VARIANTS {
-            let two = cached(&format!("rigid2d_{v}"), &e);
-            let three = cached(&format!("rigid3d_{v}"), &e);
+            let settings = RunSettings::default();
+            let two = run(&e, &scene_of(&format!("rigid2d_{v}"), inelastic), settings);
+            let three = run(&e, &scene_of(&format!("rigid3d_{v}"), inelastic), settings);
             let rz = peak(&col(&two, "rz"));
             for (name, scale) in [
                 ("rz", rz),
@@ -178,7 +195,7 @@ fn three_d_equals_two_d() {
 }
 
 /// (3) Regression bounds of `rapier_f64` (matched), frozen per case at measured × 1.5 + 1e-6:
-/// against the closed form (`compare(..).worst_max`) and against the explicit engine (finite
+/// against the closed form (`compare(..).worst_max.expect("a compared column")`) and against the explicit engine (finite
 /// rotation), which isolates rapier's own error from the small-rotation model's.
 ///
 /// Measured (worst contract column over its analytic peak):
@@ -216,8 +233,12 @@ fn regression_bounds_of_rapier_f64() {
     for (id, analytic, explicit) in frozen {
         let s = scene(id);
         let h = cached(id, &e);
-        let a = compare(&s, &cached(id, &AnalyticEngine), &h).worst_max;
-        let x = compare(&s, &cached(id, &ExplicitEngine::finite()), &h).worst_max;
+        let a = compare(&s, &cached(id, &AnalyticEngine), &h)
+            .worst_max
+            .expect("a compared column");
+        let x = compare(&s, &cached(id, &ExplicitEngine::finite()), &h)
+            .worst_max
+            .expect("a compared column");
         println!(
             "{id:22} vs analytic {a:.3e} (bound {:.3e}), vs explicit {x:.3e} (bound {:.3e})",
             analytic * 1.5 + 1e-6,
@@ -238,14 +259,15 @@ fn regression_bounds_of_rapier_f64() {
 }
 
 /// rapier resolves contact by impulses, so the contact force it reports at t = 0 is its first
-/// increment's normal impulse over the increment. On the pinned case that is low, and lower at a
-/// smaller increment (measured 83 %, 77 % and 56 % of the reference's initial force at 1e-5,
-/// 2.5e-6 and 1e-6 s): a soft contact building up over a time of its own, not a discretisation
-/// error that refining removes. From the first output row (t = 2e-4 s) on, the force is within
-/// 2e-4 of the peak at every one of those increments. The comparison therefore measures the t = 0
-/// value apart (`initial_errors`) and the rest from the first increment on; this test holds both
-/// readings to what was measured (fractions ±5 points, later rows to 2e-3 of the peak: rapier's
-/// first-order error at 1e-5 s is 7.7e-3 over the whole run, far less this early).
+/// increment's normal impulse over the increment. On the pinned case that is low by the same
+/// fraction at every increment (measured 88.7 %, 88.6 % and 88.5 % of the reference's initial
+/// force at 1e-5, 2.5e-6 and 1e-6 s, the body's pin a lock): what the first step misses does not
+/// shrink with the increment, so it is not a discretisation error that refining removes. From the
+/// first output row (t = 2e-4 s) on, the force is within 2e-4 of the peak at every one of those
+/// increments. The comparison therefore measures the t = 0 value apart (`initial_errors`) and the
+/// rest from the first increment on; this test holds both readings to what was measured
+/// (fractions ±5 points, later rows to 2e-3 of the peak: rapier's first-order error at 1e-5 s is
+/// 7.7e-3 over the whole run, far less this early).
 #[test]
 fn the_t0_contact_force_is_the_first_increments_and_builds_up() {
     let id = "rigid2d_pin_lumped";
@@ -255,7 +277,7 @@ fn the_t0_contact_force_is_the_first_increments_and_builds_up() {
     let peak = peak(&exact);
     let e = RapierEngine::matched(Precision::F64);
     let mut fractions = Vec::new();
-    for (h, expected) in [(1e-5, 0.83), (2.5e-6, 0.77), (1e-6, 0.56)] {
+    for (h, expected) in [(1e-5, 0.887), (2.5e-6, 0.886), (1e-6, 0.885)] {
         let run = run(
             &e,
             &s,
@@ -278,14 +300,15 @@ fn the_t0_contact_force_is_the_first_increments_and_builds_up() {
         assert!(next <= 2e-3, "h = {h:e}: row 1 off by {next:e} of the peak");
         fractions.push(fraction);
     }
-    assert!(
-        fractions.windows(2).all(|w| w[1] < w[0]),
-        "the first-increment force should fall as the increment shrinks: {fractions:?}"
-    );
+    // The same at every increment, to a point of the force.
+    let spread = fractions
+        .iter()
+        .fold(0.0f64, |m, f| m.max((f - fractions[0]).abs()));
+    assert!(spread <= 0.01, "{fractions:?}");
     // The comparison leaves t = 0 out of the contact force's errors and keeps it apart.
     let c = compare(&s, &reference, &cached(id, &e));
     let initial = c.initial_errors["contact_force"];
-    assert!((initial - (0.83 - 1.0) * exact[0] / peak).abs() <= 0.05 * exact[0] / peak);
+    assert!((initial - (0.887 - 1.0) * exact[0] / peak).abs() <= 0.05 * exact[0] / peak);
     let force = c
         .columns
         .iter()
@@ -517,22 +540,29 @@ fn memory_is_independent_of_the_number_of_steps() {
                 contact_force: force,
             })
             .unwrap();
-        most_middles = most_middles.max(recorder.middles_held());
+        most_middles = most_middles.max(recorder.edges_held());
     }
     assert_eq!(recorder.row_capacity(), scene.output_rows);
     assert!(recorder.most_pending() <= 2, "{}", recorder.most_pending());
     assert!(most_middles <= 3, "{most_middles}");
     let (history, _) = recorder.finish().unwrap();
     assert_eq!(history.rows.len(), scene.output_rows);
-    // The force is k at the middle (k − ½)·dt of step k: at output time t it is t/dt + ½
-    // (held at the last middle's value at the end).
+    // The force is k over step k, ((k − 1)·dt, k·dt]: its mean over a row's window, half an
+    // output interval on each side of the row at t (both edges on step boundaries here), is
+    // t/dt + ½ to round-off; the first row has the first step's force (1), the last the last
+    // step's (the number of steps).
     let col = history
         .columns
         .iter()
         .position(|c| c == "contact_force")
         .unwrap();
-    for row in &history.rows[..history.rows.len() - 1] {
-        let expected = (row[0] / dt + 0.5).max(1.0);
+    let n = history.rows.len();
+    for (j, row) in history.rows.iter().enumerate() {
+        let expected = match j {
+            0 => 1.0,
+            _ if j == n - 1 => f64::from(steps),
+            _ => row[0] / dt + 0.5,
+        };
         assert!((row[col] - expected).abs() <= 1e-6 * expected, "{row:?}");
     }
 }

@@ -76,7 +76,10 @@ fn rapier_springs_lose_energy_as_backward_euler_predicts() {
     }
 }
 
-/// `rigid2d_pin_lumped` with every point of the scene moved by (d, d).
+/// `rigid2d_pin_lumped` with every point of the scene moved by (d, d), and restitution 0 on its
+/// resting contact: with the case's restitution (1) rapier_f32 bounces off the round-off
+/// separations of that contact (`tests/fair.rs`), which would mix a second round-off effect
+/// into this one (its error at the origin 4.0e-2, at d = 0.01 1.2e-2).
 fn translated(d: f64) -> crosscheck::scene::Scene {
     let text =
         std::fs::read_to_string(crosscheck::case::cases_dir().join("rigid2d_pin_lumped.toml"))
@@ -92,7 +95,8 @@ fn translated(d: f64) -> crosscheck::scene::Scene {
         out.push('\n');
     }
     let path = crosscheck::case::cases_dir().join("rigid2d_pin_lumped.toml");
-    crosscheck::case::parse(&out, &path).unwrap_or_else(|e| panic!("{e}"))
+    let scene = crosscheck::case::parse(&out, &path).unwrap_or_else(|e| panic!("{e}"));
+    crosscheck::engines::rapier::controls::closed_pairs_inelastic(&scene).expect("a closed pair")
 }
 
 #[test]
@@ -109,7 +113,9 @@ fn f32_loses_the_pinned_case_far_from_the_origin() {
         let out = RapierEngine::matched(precision)
             .run(&scene, &RunSettings::default())
             .unwrap();
-        compare(&origin, &exact, &out.history).worst_max
+        compare(&origin, &exact, &out.history)
+            .worst_max
+            .expect("a compared column")
     };
     let base32 = error(0.0, Precision::F32);
     let base64 = error(0.0, Precision::F64);
@@ -128,9 +134,11 @@ fn f32_loses_the_pinned_case_far_from_the_origin() {
         // f64 does not notice: its round-off at 1e5 is 1e5 · 1.1e-16 = 1e-11, against motions
         // of 1e-3 and more.
         assert!((e64 / base64 - 1.0).abs() < 0.01, "f64 at {d:e}: {e64:e}");
-        // Close to the origin f32 does not either: its round-off on coordinates of ~3 is 2e-7.
-        if d <= 0.1 {
-            assert!((e32 / base32 - 1.0).abs() < 0.05, "f32 at {d:e}: {e32:e}");
+        // Close to the origin f32 hardly does: its round-off on coordinates of ~3 is 2e-7, and
+        // its error stays within 1.5× f64's (measured 1.18e-2 and 1.56e-2 by turns up to
+        // d = 0.32, against 1.19e-2).
+        if d <= 0.32 {
+            assert!(e32 <= 1.5 * e64, "f32 at {d:e}: {e32:e}");
         }
         if doubled_at.is_none() && e32 >= 2.0 * base32 {
             doubled_at = Some(d);
@@ -142,7 +150,7 @@ fn f32_loses_the_pinned_case_far_from_the_origin() {
     // At 1e5 an f32 coordinate is a multiple of 2^-7 = 7.8e-3, so a position is off by up to
     // 3.9e-3: 19 % of the contact node's peak displacement (2.1e-2), and the penalty-like
     // contact turns such offsets into forces. The error cannot stay below 0.1 of the peak
-    // (measured: 268, the run is lost).
+    // (measured: 26, the run is lost).
     assert!(far >= 0.1, "f32 at 1e5: error {far:e}");
 }
 
@@ -198,26 +206,34 @@ fn ending(engine: &dyn Engine, speed: f64) -> Ending {
 type Shots<'a> = &'a [(f64, Ending)];
 
 /// Rapier's tunnelling through a cuboid 2 mm thick, with and without its continuous collision
-/// detection (CCD), frozen as measured with rapier 0.36 (f64; f32 the same), and the explicit
-/// engine on the same shots: held or refused, never through.
+/// detection (CCD), frozen as measured with rapier 0.36 (f64), and the explicit engine on the
+/// same shots: held or refused, never through.
 ///
-/// - Matched (h = 1e-4 s): held up to 21 m/s, through at 22 m/s: a node that moves more
-///   than the thickness and the contact's prediction distance in one step is not seen inside
-///   it. Above that the ending depends on where the steps fall (held at 25, 40, 50, 100 and
-///   200 m/s; through at 30, 70, and from 300 on). With f64's former 3 kHz contact it went
-///   through from 21 m/s.
-/// - Matched with CCD: held at every speed tried, up to 3000 m/s.
-/// - Default (1/60 s): through from 2 m/s (v·h = 3.3e-2); at 1.5 m/s it ends inside.
-/// - Default with CCD: still through at 2 and 2.5 m/s (its soft contact cannot stop the node
-///   within the step CCD puts it at the surface), held from 10 m/s up.
+/// The cuboid's body is held in every DOF, so it is a fixed rapier body, and rapier 0.36 runs
+/// CCD on fast dynamic bodies against fixed colliders whatever a body's own CCD flag (it caps
+/// speeds at 400 m/s too, `normalized_max_linear_velocity`):
+/// - Matched (h = 1e-4 s): held at every speed tried, 1 to 3000 m/s.
+/// - Default (1/60 s): held at 1 to 2.4, 2.6 and from 5 m/s up; through at 2.5 and 3 m/s
+///   (unexplained: v·h is 4e-2 to 5e-2 m there, and the automatic CCD does not catch it); its
+///   own CCD changes none of it.
+///
+/// Control: the cuboid a dynamic body held by a joint (the construct a held body had before),
+/// which the automatic CCD does not see: matched through from 22 m/s (the ending then depends
+/// on where the steps fall: held at 25, 40, 50, 100, 200; through at 30, 70 and from 300 on),
+/// default through from 2 m/s. The tunnelling those speeds showed was the construct's.
 #[test]
 fn rapier_tunnels_where_a_step_outruns_the_thickness_and_explicit_never_does() {
     use Ending::*;
+    let joints = |e: RapierEngine| e.held_by_joints();
     let matched = RapierEngine::matched(Precision::F64);
     let default = RapierEngine::default_configuration(Precision::F64);
-    let cases: [(&dyn Engine, Shots); 4] = [
+    let cases: [(&dyn Engine, Shots); 6] = [
         (
             &matched,
+            &[(21.0, Held), (22.0, Held), (300.0, Held), (3000.0, Held)],
+        ),
+        (
+            &joints(RapierEngine::matched(Precision::F64)),
             &[
                 (21.0, Held),
                 (22.0, Through),
@@ -232,15 +248,20 @@ fn rapier_tunnels_where_a_step_outruns_the_thickness_and_explicit_never_does() {
         (
             &default,
             &[
-                (1.5, Inside),
-                (2.0, Through),
-                (30.0, Through),
-                (3000.0, Through),
+                (2.4, Held),
+                (2.5, Through),
+                (3.0, Through),
+                (5.0, Held),
+                (3000.0, Held),
             ],
         ),
         (
+            &joints(RapierEngine::default_configuration(Precision::F64)),
+            &[(2.0, Through), (30.0, Through), (3000.0, Through)],
+        ),
+        (
             &RapierEngine::default_configuration(Precision::F64).with_ccd(),
-            &[(2.0, Through), (2.5, Through), (21.0, Held), (3000.0, Held)],
+            &[(2.5, Through), (3.0, Through), (21.0, Held), (3000.0, Held)],
         ),
     ];
     for (engine, expected) in cases {

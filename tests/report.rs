@@ -106,7 +106,6 @@ fn summary_and_report_agree() {
     // closes).
     assert_eq!(summary.cases.len(), 35);
 
-    let mut checked = 0;
     for c in &summary.cases {
         let scene = case::load(&case::resolve(&c.id, &case::cases_dir()).unwrap()).unwrap();
         let csv = |engine: &str| {
@@ -158,39 +157,32 @@ fn summary_and_report_agree() {
                 r.engine
             );
             // REPORT.md's accuracy row shows the same worst error, increment and steps.
+            let Some(worst) = judged.worst_max else {
+                continue;
+            };
+            // An exact solution's row shows the model-form gap as such.
+            let model_form = if comparison::EXACT_SOLUTIONS.contains(&r.engine.as_str()) {
+                "model form "
+            } else {
+                ""
+            };
             let prefix = format!(
-                "| {} | {} | {baseline} | {} (",
+                "| {} | {} | {baseline} | {model_form}{} (",
                 c.id,
                 r.engine,
-                sci(judged.worst_max)
+                sci(worst)
             );
             let row = report
                 .lines()
                 .find(|l| l.starts_with(&prefix))
                 .unwrap_or_else(|| panic!("no report row starting {prefix}"));
-            assert!(row.contains(&format!("| {} |", sci(a.worst_max))), "{row}");
+            if let Some(total) = a.worst_max {
+                assert!(row.contains(&format!("| {} |", sci(total))), "{row}");
+            }
             if r.increment.unwrap() > 0.0 {
                 assert!(row.contains(&sci(r.increment.unwrap())), "{row}");
                 assert!(row.contains(&format!("| {} |", r.steps.unwrap())), "{row}");
             }
-            // ...and its tolerance line the same verdict.
-            let Some(tol) = r.tolerance else {
-                continue;
-            };
-            let verdict = if r.meets_tolerance.unwrap() {
-                "meets"
-            } else {
-                "**FAILS**"
-            };
-            let line = format!(
-                "| {} | {} | {baseline} | {} | {} | {verdict} |",
-                c.id,
-                r.engine,
-                sci(tol),
-                sci(judged.worst_max)
-            );
-            assert!(report.contains(&line), "missing: {line}");
-            checked += 1;
         }
         if let Some(m) = &c.contact {
             assert!(
@@ -200,16 +192,18 @@ fn summary_and_report_agree() {
             );
         }
     }
-    // Every declared tolerance: explicit and explicit_small on the 13 seed and 8 stress cases,
-    // explicit on the 3 spins, rapier_f64 on the 13 seed cases.
-    assert_eq!(
-        checked, 58,
-        "every run with a declared tolerance is in the report"
-    );
+    // Every judged cell has a tolerance: 35 cases × 6 judged engines (every engine but the two
+    // exact solutions), less the 11 cells with nothing to compare: `explicit_small` does not
+    // apply to contact_balls_oblique, has no closed form on the other 9 cases whose contact
+    // strikes (5 drops, the tetrahedron, the wedge, the rattle, the ball slide) and is compared
+    // over no rows on contact_reopen (its closed form is valid at no row).
+    let checks = summary.tolerance_checks();
+    assert_eq!(checks.len(), 35 * 6 - 11);
+    assert!(checks.iter().all(|c| c.tolerance.is_some()));
     assert!(report.contains(&format!(
-        "{} of {} declared tolerances met",
-        summary.tolerance_checks().iter().filter(|c| c.met).count(),
-        summary.tolerance_checks().len()
+        "**{} of {} cells meet their tolerance.**",
+        checks.iter().filter(|c| c.met()).count(),
+        checks.len()
     )));
 }
 
@@ -220,10 +214,10 @@ fn summary_and_report_agree() {
 fn verdict_matrix_equals_the_summary_and_every_link_resolves() {
     let (out, summary, report) = run_into_temporary_directory();
     let matrix = report
-        .split("## Verdicts")
+        .split("### Every cell")
         .nth(1)
-        .expect("a verdict section")
-        .split("\n## ")
+        .expect("a verdict matrix")
+        .split("\n### ")
         .next()
         .unwrap();
     let mut lines = matrix.lines().filter(|l| l.starts_with('|'));
@@ -258,17 +252,27 @@ fn verdict_matrix_equals_the_summary_and_every_link_resolves() {
                 cells += 1;
                 continue;
             };
-            let figure = sci(judged.worst_max);
+            let Some(worst) = judged.worst_max else {
+                assert_eq!(judged.rows, 0, "{} / {engine}", case.id);
+                assert_eq!(row[k], "no rows compared", "{} / {engine}", case.id);
+                cells += 1;
+                continue;
+            };
+            let figure = sci(worst);
             let expected = match run.meets_tolerance {
                 Some(true) => format!("✓ {figure}"),
                 Some(false) => format!("✗ {figure}"),
-                None => figure,
+                None => format!("{figure} (no tolerance)"),
             };
             assert_eq!(row[k], expected, "{} / {engine}", case.id);
             cells += 1;
         }
     }
-    assert_eq!(cells, 35 * 7, "every case × engine but the closed form");
+    assert_eq!(
+        cells,
+        35 * 6,
+        "every case × engine but the two exact solutions"
+    );
     let mut links = 0;
     for piece in report.split("](").skip(1) {
         let target = piece.split(')').next().unwrap();

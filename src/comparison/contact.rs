@@ -130,11 +130,15 @@ fn rebound(scene: &Scene, history: &History, times: &[f64]) -> Option<f64> {
     let x = history.column("ux_node")?;
     let first = *times.first()?;
     let until = times.get(1).copied().unwrap_or(f64::INFINITY);
+    // The highest row between the first impact and the next; where the next follows within a
+    // row (a node that does not leave the face), the first row after the impact.
+    let after = t.iter().position(|t| *t > first)?;
     let apex = t
         .iter()
         .zip(&x)
-        .filter(|(t, _)| **t > first && **t < until)
+        .skip(after)
+        .take_while(|(t, _)| **t < until)
         .map(|(_, x)| sign * x)
-        .fold(f64::NEG_INFINITY, f64::max);
+        .fold(sign * x[after], f64::max);
     apex.is_finite().then(|| (drop + apex) / drop)
 }

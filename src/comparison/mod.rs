@@ -7,16 +7,20 @@
 //! - `rms`: the root-mean-square error divided by the same peak;
 //! - `end`: the error at the last valid row divided by the same peak.
 //!
-//! A column whose reference peak is zero, or below 1e-6 of the candidate's (a held DOF that a
-//! soft joint lets drift), is compared in absolute terms. The energy balance error of an engine
-//! that writes `e_balance` is its largest magnitude divided by the largest kinetic + elastic
-//! energy of the run.
+//! A column whose exact solution is identically zero over its window (a held DOF, a contact
+//! force before the first impact) has no peak to divide by: it is compared in its own
+//! unit ([`ColumnError::relative`] false, [`ColumnError::unit`]) and never enters
+//! [`Comparison::worst_max`], the largest *relative* error, which is what tolerances apply to.
+//! A comparison over no rows (the exact solution is invalid from the start) has no worst
+//! error at all. The energy balance error of an engine that writes `e_balance` is its largest
+//! magnitude divided by the largest kinetic + elastic energy of the run.
 //!
 //! A contact force is compared from the first increment on ([`first_compared_row`]): an engine
 //! that resolves contact by impulses (rapier) can only report at t = 0 the mean force of its
 //! first increment, not the instantaneous force of the initial state, so the t = 0 value is
 //! measured separately (`initial_errors`) and reported beside the others, not mixed into them.
 
+pub mod attribution;
 pub mod contact;
 pub mod discrepancy;
 pub mod equivalence;
@@ -46,8 +50,12 @@ pub fn against_own_model(
     engine: &str,
     h: &History,
 ) -> Option<f64> {
-    Some(compare(scene, outcome.history(&scene.id, baseline(engine)?)?, h).worst_max)
+    compare(scene, outcome.history(&scene.id, baseline(engine)?)?, h).worst_max
 }
+
+/// The exact solutions: the engines every other is judged against, and that are not judged
+/// themselves (the gap between the two is model form, reported apart).
+pub const EXACT_SOLUTIONS: [&str; 2] = [CLOSED_FORM, FINITE_ROTATION_REFERENCE];
 
 /// The exact solution an engine is judged against: that of its own model. `explicit_small`
 /// (the small-rotation idealisation) and `reference` (whose gap to it is model form) against
@@ -66,9 +74,11 @@ pub fn baseline(engine: &str) -> Option<&'static str> {
 pub struct ColumnError {
     /// Column name.
     pub column: String,
-    /// Peak |value| of the analytic column.
+    /// Peak |value| of the exact solution's column over its window: the rows where it is
+    /// valid (a contact force's up to the first impact, its t = 0 row included, which is
+    /// measured apart in [`Comparison::initial_errors`]).
     pub peak: f64,
-    /// Max |error| / peak (absolute when the peak is 0).
+    /// Max |error| / peak (absolute, in [`ColumnError::unit`], when the peak is 0).
     pub max: f64,
     /// RMS error / peak (absolute when the peak is 0).
     pub rms: f64,
@@ -76,6 +86,9 @@ pub struct ColumnError {
     pub end: f64,
     /// Whether the errors are relative to the peak (false: absolute, the peak being 0).
     pub relative: bool,
+    /// The column's unit (m, m/s, rad, N), what an absolute error is in.
+    #[serde(default)]
+    pub unit: String,
 }
 
 /// One engine's history against the analytic one, for one case.
@@ -83,9 +96,10 @@ pub struct ColumnError {
 pub struct Comparison {
     /// Per contract column.
     pub columns: Vec<ColumnError>,
-    /// The largest `max` over the columns (the figure tolerances apply to).
-    pub worst_max: f64,
-    /// Rows compared (where the analytic solution is valid).
+    /// The largest relative `max` over the columns (the figure tolerances apply to); `None`
+    /// where no row was compared or no column has a peak.
+    pub worst_max: Option<f64>,
+    /// Rows compared (where the exact solution is valid).
     pub rows: usize,
     /// Energy balance error, for engines that keep energies.
     pub energy_balance: Option<f64>,
@@ -148,13 +162,17 @@ pub fn compare(scene: &Scene, reference: &History, candidate: &History) -> Compa
             } else {
                 n
             };
+            let first = first_compared_row(scene, name);
+            if n <= first {
+                // No row of this column is compared.
+                return None;
+            }
             let (a, b) = (&a[..n], &b[..n]);
-            let (peak, candidate_peak) = (peak(a), peak(b));
-            // A reference that is (numerically) zero, such as a held DOF that a soft joint lets
-            // drift by 1e-9, has no meaningful peak: compare in absolute terms.
-            let relative = peak > 0.0 && peak >= 1e-6 * candidate_peak;
+            let peak = peak(a);
+            // An exact solution that is zero over the rows compared (a held DOF, a contact
+            // force before the first impact) has no peak: compare in the column's unit.
+            let relative = peak > 0.0;
             let scale = if relative { peak } else { 1.0 };
-            let first = first_compared_row(scene, name).min(n);
             if first > 0 {
                 initial_errors.insert(name.to_string(), (b[0] - a[0]) / scale);
             }
@@ -173,16 +191,38 @@ pub fn compare(scene: &Scene, reference: &History, candidate: &History) -> Compa
                 rms: rms / scale,
                 end: errors.last().copied().unwrap_or(0.0) / scale,
                 relative,
+                unit: unit(scene, name).to_string(),
             })
         })
         .collect();
-    let worst_max = columns.iter().fold(0.0f64, |m, c| m.max(c.max));
+    let worst_max = columns
+        .iter()
+        .filter(|c| c.relative)
+        .map(|c| c.max)
+        .reduce(f64::max);
     Comparison {
         worst_max,
         rows: n,
         energy_balance: energy_balance(candidate),
         initial_errors,
         columns,
+    }
+}
+
+/// The unit of a contract column: what the scene's probe measures (m, m/s, rad, N; "" for an
+/// identically zero column).
+pub fn unit(scene: &Scene, column: &str) -> &'static str {
+    match scene
+        .columns
+        .iter()
+        .find(|c| c.name == column)
+        .map(|c| &c.probe)
+    {
+        Some(Probe::Displacement { .. } | Probe::Gap { .. }) => "m",
+        Some(Probe::Velocity { .. }) => "m/s",
+        Some(Probe::Rotation { .. }) => "rad",
+        Some(Probe::ContactForce { .. }) => "N",
+        Some(Probe::Zero { .. }) | None => "",
     }
 }
 

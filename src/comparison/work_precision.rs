@@ -184,8 +184,12 @@ pub fn measure(
     let error_of = |scene: &Scene, engine: &str, h: &History| {
         let own = history(&scene.id, baseline(engine)?)?;
         let c = compare(scene, own, h);
-        let rms = c.columns.iter().fold(0.0f64, |m, c| m.max(c.rms));
-        Some((c.worst_max, rms))
+        let rms = c
+            .columns
+            .iter()
+            .filter(|c| c.relative)
+            .fold(0.0f64, |m, c| m.max(c.rms));
+        Some((c.worst_max?, rms))
     };
     // Per case, the engines asked for whose own model's exact solution ran.
     let scenes: Vec<(&Scene, Vec<&str>)> = plan

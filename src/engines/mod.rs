@@ -110,6 +110,41 @@ pub trait Engine: Send + Sync {
     }
     /// Run a scene.
     fn run(&self, scene: &Scene, settings: &RunSettings) -> Result<RunOutput, EngineError>;
+    /// Control experiments of this engine's own on `scene` (beyond the time step and the
+    /// penalty stiffness, which the comparison varies on any engine): each varies one thing
+    /// the exact solution does not depend on, so that a discrepancy can be traced to it.
+    fn controls(&self, _scene: &Scene) -> Vec<Control> {
+        Vec::new()
+    }
+}
+
+/// What a control experiment varies: the suspected cause of a discrepancy.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ControlKind {
+    /// The time increment.
+    TimeStep,
+    /// The penalty stiffness of a penalty contact.
+    Penalty,
+    /// The floating-point precision (f64 for f32).
+    Precision,
+    /// The softness of a constraint-based contact.
+    ContactSoftness,
+    /// The restitution of contact pairs that start closed and never strike.
+    Restitution,
+}
+
+/// A control experiment an engine offers ([`Engine::controls`]): the same run with one thing
+/// varied.
+pub struct Control {
+    /// What is varied.
+    pub kind: ControlKind,
+    /// The variation in words (for example "`contact_softness` 1e5 Hz instead of 1e4 Hz").
+    pub change: String,
+    /// The engine that runs it (`None`: the same engine).
+    pub engine: Option<Box<dyn Engine>>,
+    /// The varied scene (`None`: the same scene).
+    pub scene: Option<Scene>,
 }
 
 /// Every engine crosscheck has, in report order.

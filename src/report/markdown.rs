@@ -20,13 +20,17 @@ fn opt(x: Option<f64>) -> String {
 /// own model): (name, max, rms, end).
 fn worst(r: &EngineSummary) -> Option<(&str, f64, f64, f64)> {
     let c = r.against_baseline.as_ref()?;
-    let w = c.columns.iter().max_by(|a, b| a.max.total_cmp(&b.max))?;
+    let w = c
+        .columns
+        .iter()
+        .filter(|c| c.relative)
+        .max_by(|a, b| a.max.total_cmp(&b.max))?;
     Some((w.column.as_str(), w.max, w.rms, w.end))
 }
 
 /// The worst max error of an engine against the closed form (model form included).
 fn total(r: &EngineSummary) -> Option<f64> {
-    r.against_analytic.as_ref().map(|c| c.worst_max)
+    r.against_analytic.as_ref().and_then(|c| c.worst_max)
 }
 
 /// Render the report.
@@ -74,39 +78,19 @@ pub fn render(
     let _ = writeln!(
         w,
         "**Metrics.** Every engine is judged against the exact solution of its own model (*against*): \
-         `explicit` and rapier against `reference` (finite rotation), `explicit_small` and `reference` \
-         against `analytic` (small rotation); where `reference` did not run, the closed form. Per \
-         contract column, over the rows where that solution is valid: the largest absolute error divided \
-         by the peak of its column (*max*), the RMS error over the same peak (*rms*) and the error at the \
-         last row over the peak (*end*); tables show the worst column. *vs closed form* is the worst \
-         *max* against `analytic`, model form included. *Energy balance*: the largest |kinetic + elastic \
+         `explicit` and rapier against `reference` (finite rotation), `explicit_small` against \
+         `analytic` (small rotation); where `reference` did not run, the closed form. `reference` \
+         against `analytic` is the model-form gap, no engine's error. Per contract column, over the \
+         rows where that solution is valid: the largest absolute error divided by the peak of its \
+         column (*max*), the RMS error over the same peak (*rms*) and the error at the last row over \
+         the peak (*end*); tables show the worst column with a peak (a column whose exact solution is \
+         zero over those rows is compared in its unit, in the case's section). *vs closed form* is the \
+         worst *max* against `analytic`, model form included. *Energy balance*: the largest |kinetic + elastic \
          + dissipated − external work − initial| over the largest kinetic + elastic energy. Tolerances \
          are declared per case and engine in `cases/<id>.toml` and apply to the worst *max* against the \
          engine's own model.\n"
     );
 
-    // Tolerances.
-    let checks = s.tolerance_checks();
-    let met = checks.iter().filter(|c| c.met).count();
-    let _ = writeln!(w, "## Tolerances\n");
-    let _ = writeln!(w, "{met} of {} declared tolerances met.\n", checks.len());
-    let _ = writeln!(
-        w,
-        "| case | engine | against | tolerance | measured | verdict |"
-    );
-    let _ = writeln!(w, "|---|---|---|---:|---:|---|");
-    for c in &checks {
-        let verdict = if c.met { "meets" } else { "**FAILS**" };
-        let _ = writeln!(
-            w,
-            "| {} | {} | {} | {} | {} | {verdict} |",
-            c.case,
-            c.engine,
-            c.baseline,
-            sci(c.tolerance),
-            sci(c.measured)
-        );
-    }
     for (title, applicable) in [("Failed runs", true), ("Engines that do not apply", false)] {
         let listed: Vec<String> = s
             .cases
@@ -126,7 +110,11 @@ pub fn render(
     }
 
     // Accuracy and cost.
-    let _ = writeln!(w, "\n## Accuracy and cost\n");
+    let _ = writeln!(
+        w,
+        "\n## Accuracy and cost\n\n{}\n",
+        super::provenance::RAPIER_BUILD
+    );
     let _ = writeln!(
         w,
         "| case | engine | against | max (column) | rms | end | vs closed form | energy balance | contact margin | dt | steps | k_p | wall [ms] |"
@@ -139,12 +127,26 @@ pub fn render(
         let margin = c.contact.as_ref().map_or("–".into(), |m| sci(m.margin));
         for r in &c.runs {
             let (max, rms, end) = match worst(r) {
+                // An exact solution against the other: the model-form gap, no engine's error.
+                Some((col, max, rms, end))
+                    if crate::comparison::EXACT_SOLUTIONS.contains(&r.engine.as_str()) =>
+                {
+                    (
+                        format!("model form {} ({col})", sci(max)),
+                        sci(rms),
+                        sci(end),
+                    )
+                }
                 Some((col, max, rms, end)) => (format!("{} ({col})", sci(max)), sci(rms), sci(end)),
                 None if r.error.as_deref().is_some_and(not_applicable) => {
                     ("n/a".into(), "–".into(), "–".into())
                 }
                 None if r.error.is_some() => ("failed".into(), "–".into(), "–".into()),
-                None => ("closed form".into(), "–".into(), "–".into()),
+                None => match &r.against_baseline {
+                    Some(a) if a.rows == 0 => ("no rows compared".into(), "–".into(), "–".into()),
+                    Some(_) => ("no column with a peak".into(), "–".into(), "–".into()),
+                    None => ("closed form".into(), "–".into(), "–".into()),
+                },
             };
             let against = r.baseline.as_deref().unwrap_or("–");
             let closed = opt(total(r));
@@ -259,7 +261,7 @@ fn cross_check_section(w: &mut String, s: &Summary) {
             sci(model),
             sci(ex),
             sci(er),
-            sci(d.worst_max)
+            opt(d.worst_max)
         );
     }
 }
@@ -308,17 +310,13 @@ fn engine_notes(c: &CaseSummary, r: &EngineSummary) -> String {
                 sci(max)
             );
             if gap > 0.0 {
-                let _ = write!(
-                    out,
-                    "; it opens by up to {} (the closed form keeps it shut)",
-                    sci(gap)
-                );
+                let _ = write!(out, "; its largest separation {}", sci(gap));
             }
             out.push('.');
         }
     }
     let shift = |candidate: &str, reference: &str| {
-        Summary::cross(c, candidate, reference).map(|x| x.worst_max)
+        Summary::cross(c, candidate, reference).and_then(|x| x.worst_max)
     };
     if r.engine == "rapier_f32"
         && let Some(g) = shift("rapier_f32", "rapier_f64")
@@ -381,6 +379,16 @@ fn case_section(w: &mut String, c: &CaseSummary) {
         let Some((col, max, _, _)) = worst(r) else {
             continue;
         };
+        if crate::comparison::EXACT_SOLUTIONS.contains(&r.engine.as_str()) {
+            let _ = writeln!(
+                w,
+                "- `{}` against `{}`: {} of the peak (`{col}`), the model-form gap, no engine's error.",
+                r.engine,
+                r.baseline.as_deref().unwrap_or("–"),
+                sci(max)
+            );
+            continue;
+        }
         let verdict = match (r.tolerance, r.meets_tolerance) {
             (Some(t), Some(true)) => format!("meets its tolerance {}", sci(t)),
             (Some(t), Some(false)) => format!("**does not meet** its tolerance {}", sci(t)),
@@ -402,16 +410,16 @@ fn case_section(w: &mut String, c: &CaseSummary) {
         .and_then(worst);
     let finite = total_of(c, "explicit");
     if let (Some(gap), Some(small), Some(finite)) = (
-        Summary::cross(c, "explicit", "explicit_small"),
+        Summary::cross(c, "explicit", "explicit_small").and_then(|g| g.worst_max),
         small,
         finite,
     ) {
-        let kind = if gap.worst_max > 10.0 * small.1 {
+        let kind = if gap > 10.0 * small.1 {
             format!(
                 "The finite-rotation run differs from the small-rotation one by {} of the peak while the \
                  small-rotation run is within {} of the closed form: the {} gap between `explicit` and \
                  `analytic` is model form (the closed form linearises the rotation), not solver error{}.",
-                sci(gap.worst_max),
+                sci(gap),
                 sci(small.1),
                 sci(finite),
                 match (total_of(c, "reference"), error_of(c, "explicit")) {
@@ -428,7 +436,7 @@ fn case_section(w: &mut String, c: &CaseSummary) {
             format!(
                 "Finite and small rotation agree to {} of the peak here (no rotation, or too little to matter): \
                  the remaining error is discretisation{}.",
-                sci(gap.worst_max),
+                sci(gap),
                 if c.contact.is_some() {
                     " and penalty compliance"
                 } else {
@@ -448,14 +456,18 @@ fn case_section(w: &mut String, c: &CaseSummary) {
         let against = r.baseline.as_deref().unwrap_or("–");
         if let Some(a) = &r.against_baseline {
             for col in &a.columns {
-                let peak = if col.relative {
-                    sci(col.peak)
+                // A column without a peak: its errors in its unit.
+                let (peak, unit) = if col.relative {
+                    (sci(col.peak), String::new())
                 } else {
-                    "0 (absolute errors)".into()
+                    (
+                        format!("0 (errors in {})", col.unit),
+                        format!(" {}", col.unit),
+                    )
                 };
                 let _ = writeln!(
                     w,
-                    "| {} | {against} | {} | {peak} | {} | {} | {} |",
+                    "| {} | {against} | {} | {peak} | {}{unit} | {}{unit} | {}{unit} |",
                     r.engine,
                     col.column,
                     sci(col.max),
@@ -477,7 +489,7 @@ fn on_request(w: &mut String, c: &CaseSummary) {
         .iter()
         .filter_map(|r| {
             let eps = *r.measures.get("requested_tolerance")?;
-            let achieved = r.against_baseline.as_ref()?.worst_max;
+            let achieved = r.against_baseline.as_ref()?.worst_max?;
             let verdict = if achieved <= eps && achieved >= eps / 10.0 {
                 "within [ε/10, ε]"
             } else if achieved > eps {
@@ -613,7 +625,8 @@ fn budget_table(w: &mut String, c: &CaseSummary) {
 fn at_a_glance(w: &mut String, s: &Summary, p: &Provenance, parts: &[(&str, f64)]) {
     let _ = writeln!(
         w,
-        "**What was run.** {}; {}; {}. Machine: {}. Date (UTC): {}. Settings: {}.\n",
+        "**What was run.** {}; {}; {} (built with `enhanced-determinism`: see *Accuracy and \
+         cost*). Machine: {}. Date (UTC): {}. Settings: {}.\n",
         p.version, p.rustc, p.rapier, p.machine, p.date, p.settings
     );
     if !parts.is_empty() {
@@ -628,25 +641,13 @@ fn at_a_glance(w: &mut String, s: &Summary, p: &Provenance, parts: &[(&str, f64)
             list.join(", ")
         );
     }
-    let engines: Vec<&String> = s.engines.iter().filter(|e| *e != "analytic").collect();
-    let _ = writeln!(
-        w,
-        "## Verdicts\n\nEach cell: the engine's worst error against the exact solution of its own model \
-         (largest error over the column's peak, worst column; `reference` and `explicit_small` against \
-         `analytic`, `explicit` and rapier against `reference`), marked ✓ where it meets the case's declared \
-         tolerance, ✗ where it does not, and unmarked where the case declares none.\n"
-    );
-    engine_table_header(w, &engines, "---:|");
-    for c in &s.cases {
-        let cells: Vec<String> = engines
-            .iter()
-            .map(|e| match c.runs.iter().find(|r| &&r.engine == e) {
-                None => "–".into(),
-                Some(r) => verdict_cell(r),
-            })
-            .collect();
-        let _ = writeln!(w, "| {} | {} |", c.id, cells.join(" | "));
-    }
+    super::verdicts::section(w, s);
+    // Every engine but the closed form (which the equivalence table shows first).
+    let engines: Vec<&String> = s
+        .engines
+        .iter()
+        .filter(|e| *e != crate::comparison::CLOSED_FORM)
+        .collect();
     equivalence_table(w, s, &engines);
     let stepping: Vec<&String> = engines
         .iter()
@@ -707,6 +708,7 @@ fn at_a_glance(w: &mut String, s: &Summary, p: &Provenance, parts: &[(&str, f64)
         .filter(|c| c.runs.iter().any(|r| r.budget.is_some()))
         .map(|c| c.family.as_str())
         .collect();
+    families.sort_unstable();
     families.dedup();
     for f in families {
         let _ = writeln!(
@@ -759,27 +761,12 @@ fn equivalence_table(w: &mut String, s: &Summary, engines: &[&String]) {
 }
 
 /// Whether a run's error says its engine does not apply to the scene.
-fn not_applicable(error: &str) -> bool {
+pub(super) fn not_applicable(error: &str) -> bool {
     error.starts_with(crate::run::NOT_APPLICABLE)
 }
 
-/// A verdict matrix cell: ✓/✗ and the worst error against the engine's own model.
-pub fn verdict_cell(r: &EngineSummary) -> String {
-    if let Some(e) = &r.error {
-        return if not_applicable(e) { "n/a" } else { "failed" }.into();
-    }
-    let Some(a) = &r.against_baseline else {
-        return "–".into();
-    };
-    match r.meets_tolerance {
-        Some(true) => format!("✓ {}", sci(a.worst_max)),
-        Some(false) => format!("✗ {}", sci(a.worst_max)),
-        None => sci(a.worst_max),
-    }
-}
-
 /// The header of a cases × engines table: `case`, then each engine, cells aligned by `align`.
-fn engine_table_header(w: &mut String, engines: &[&String], align: &str) {
+pub(super) fn engine_table_header(w: &mut String, engines: &[&String], align: &str) {
     let names: Vec<String> = engines.iter().map(|e| format!("`{e}`")).collect();
     let _ = writeln!(w, "| case | {} |", names.join(" | "));
     let _ = writeln!(w, "|---|{}", align.repeat(engines.len()));

@@ -27,6 +27,7 @@ pub mod sketch;
 pub mod stability;
 pub mod staging;
 pub mod summary;
+pub mod verdicts;
 pub mod work_precision;
 
 use crate::comparison::discrepancy::JobBudget;
@@ -56,6 +57,8 @@ pub const ENTRIES: [&str; 8] = [
 pub struct Study<'a> {
     /// Each job's discrepancy budget.
     pub budgets: &'a [JobBudget],
+    /// The cells that needed a cause, with their controls.
+    pub attributions: &'a [crate::comparison::attribution::Attribution],
     /// Each case's sweep (what accuracy costs).
     pub sweeps: &'a [CaseSweep],
     /// The stability map's runs (empty when it did not run).
@@ -90,6 +93,7 @@ pub fn write(
     checkpoint("summary")?;
     let mut summary = Summary::build(plan, outcome, out);
     summary.attach_budgets(study.budgets);
+    summary.attach_attributions(study.attributions);
     summary.attach_sweeps(study.sweeps);
     let mut timings: Timings = read_json(&timings_path(previous)).unwrap_or_default();
     if let Some(old) = read_json::<Summary>(&summary_path(previous)) {

@@ -1,6 +1,7 @@
 //! `summary.json`: every metric of a run, per case and engine, with what each run used and
 //! cost. REPORT.md is rendered from the same [`Summary`], so their numbers agree.
 
+use crate::comparison::attribution::Attribution;
 use crate::comparison::contact::{self, Impacts};
 use crate::comparison::discrepancy::{ColumnBudget, JobBudget, PARTS};
 use crate::comparison::equivalence::{self, Equivalence};
@@ -130,6 +131,10 @@ pub struct EngineSummary {
     /// ([`comparison::contact`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub impacts: Option<Impacts>,
+    /// Why this cell misses its tolerance, or is far from `explicit`: its controls and the
+    /// cause they show ([`crate::comparison::attribution`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub attribution: Option<Attribution>,
 }
 
 impl EngineSummary {
@@ -287,16 +292,19 @@ impl Summary {
         }
     }
 
+    /// The run entry of `engine` on `case`, where there is one.
+    fn run_mut(&mut self, case: &str, engine: &str) -> Option<&mut EngineSummary> {
+        self.cases
+            .iter_mut()
+            .filter(|c| c.id == case)
+            .flat_map(|c| c.runs.iter_mut())
+            .find(|r| r.engine == engine)
+    }
+
     /// Put each job's budget norms (or why it has none) on its run entry.
     pub fn attach_budgets(&mut self, budgets: &[JobBudget]) {
         for b in budgets {
-            let run = self
-                .cases
-                .iter_mut()
-                .filter(|c| c.id == b.case)
-                .flat_map(|c| c.runs.iter_mut())
-                .find(|r| r.engine == b.engine);
-            if let Some(run) = run {
+            if let Some(run) = self.run_mut(&b.case, &b.engine) {
                 match &b.result {
                     Ok((basic, _)) => run.budget = Some(basic.columns.clone()),
                     Err(e) => run.budget_error = Some(e.clone()),
@@ -305,17 +313,20 @@ impl Summary {
         }
     }
 
+    /// Put each attributed cell's controls and cause on its run entry.
+    pub fn attach_attributions(&mut self, attributions: &[Attribution]) {
+        for a in attributions {
+            if let Some(run) = self.run_mut(&a.case, &a.engine) {
+                run.attribution = Some(a.clone());
+            }
+        }
+    }
+
     /// Put each engine's observed order and floor from the sweeps on its run entry.
     pub fn attach_sweeps(&mut self, sweeps: &[CaseSweep]) {
         for sweep in sweeps {
             for fit in &sweep.fits {
-                let run = self
-                    .cases
-                    .iter_mut()
-                    .filter(|c| c.id == sweep.case)
-                    .flat_map(|c| c.runs.iter_mut())
-                    .find(|r| r.engine == fit.engine);
-                if let Some(run) = run {
+                if let Some(run) = self.run_mut(&sweep.case, &fit.engine) {
                     run.observed_order = fit.observed_order.as_ref().map(|o| o.value);
                     run.order_fit = fit.observed_order.clone();
                     run.floor = fit.floor.clone();
@@ -341,19 +352,33 @@ impl Summary {
         serde_json::to_string_pretty(self).expect("a summary serialises") + "\n"
     }
 
-    /// Every declared tolerance, checked.
+    /// Every cell that is judged, checked against its tolerance: each engine that is not an
+    /// exact solution ([`comparison::EXACT_SOLUTIONS`]) on each case where it applies, i.e.
+    /// where it ran and rows were compared against its baseline, or where it failed. A cell
+    /// whose case declares no tolerance for the engine is counted too, as such.
     pub fn tolerance_checks(&self) -> Vec<ToleranceCheck<'_>> {
         self.cases
             .iter()
             .flat_map(|c| {
                 c.runs.iter().filter_map(move |r| {
+                    if comparison::EXACT_SOLUTIONS.contains(&r.engine.as_str()) {
+                        return None;
+                    }
+                    // Compared over no row: the engine does not apply there. A cell compared
+                    // over rows but with no column with a peak is counted, unjudged.
+                    let measured = match (&r.error, &r.against_baseline) {
+                        (Some(e), _) if e.starts_with(crate::run::NOT_APPLICABLE) => return None,
+                        (Some(_), _) => None,
+                        (None, Some(a)) if a.rows > 0 => a.worst_max,
+                        (None, _) => return None,
+                    };
                     Some(ToleranceCheck {
                         case: &c.id,
                         engine: &r.engine,
                         baseline: r.baseline.as_deref()?,
-                        tolerance: r.tolerance?,
-                        measured: r.against_baseline.as_ref()?.worst_max,
-                        met: r.meets_tolerance?,
+                        tolerance: r.tolerance,
+                        measured,
+                        met: r.meets_tolerance,
                     })
                 })
             })
@@ -361,7 +386,7 @@ impl Summary {
     }
 }
 
-/// One declared tolerance, checked.
+/// One judged cell, checked against its tolerance.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ToleranceCheck<'a> {
     /// Case id.
@@ -370,12 +395,20 @@ pub struct ToleranceCheck<'a> {
     pub engine: &'a str,
     /// The exact solution the error is measured against.
     pub baseline: &'a str,
-    /// Declared tolerance (max error over the peak).
-    pub tolerance: f64,
-    /// Measured worst max error over the peak.
-    pub measured: f64,
-    /// Whether measured ≤ tolerance.
-    pub met: bool,
+    /// Declared tolerance (max error over the peak), if the case declares one.
+    pub tolerance: Option<f64>,
+    /// Measured worst max error over the peak (`None`: the run failed, or no column compared
+    /// has a peak).
+    pub measured: Option<f64>,
+    /// Whether measured ≤ tolerance (`None`: no tolerance declared).
+    pub met: Option<bool>,
+}
+
+impl ToleranceCheck<'_> {
+    /// Whether the cell meets a declared tolerance.
+    pub fn met(&self) -> bool {
+        self.met == Some(true)
+    }
 }
 
 fn engine_summary(
@@ -411,6 +444,7 @@ fn engine_summary(
             order_fit: None,
             floor: None,
             impacts: None,
+            attribution: None,
         },
         Ok(s) => {
             let against = (job.engine != CLOSED_FORM)
@@ -418,7 +452,7 @@ fn engine_summary(
                 .flatten();
             let judged = baseline.map(|(_, b)| comparison::compare(scene, b, &s.history));
             let meets = match (&judged, tolerance) {
-                (Some(c), Some(t)) => Some(c.worst_max <= t),
+                (Some(c), Some(t)) => c.worst_max.map(|w| w <= t),
                 _ => None,
             };
             EngineSummary {
@@ -441,6 +475,7 @@ fn engine_summary(
                 order_fit: None,
                 floor: None,
                 impacts: contact::measure(scene, &s.history, &s.info.measures, s.info.increment),
+                attribution: None,
             }
         }
     }

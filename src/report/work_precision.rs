@@ -423,11 +423,12 @@ pub fn overview(w: &mut String, s: &crate::report::summary::Summary, sweeps: &Sw
          {:.0e} increments (rapier: {:.0e} substeps). Errors are against the exact solution of \
          the engine's own model, as in the verdicts; CPU time is the running thread's, setup \
          included, per simulated second, the minimum of {} runs (one for points over a tenth of \
-         the budget).\n",
+         the budget). {}\n",
         grid.stall,
         grid.max_increments,
         grid.max_increments * crate::run::sweep::RAPIER_SHARE,
-        grid.repeat
+        grid.repeat,
+        crate::report::provenance::RAPIER_BUILD
     );
     let _ = writeln!(
         w,

@@ -21,11 +21,14 @@
 //! - [`refinement`]: a job's engine rerun at other increments and penalties (for the
 //!   discrepancy budget the comparison takes);
 //! - [`budget`]: each job's increments, rows and memory estimated and bounded before it runs;
+//! - [`controls`]: a job rerun with one suspected cause of its discrepancy varied (for the
+//!   comparison's attribution of causes);
 //! - [`floor`]: the arithmetic floor of one increment, the simplest seed scene's recurrence
 //!   written out by hand (for the benchmarks);
 //! - this module: the jobs, run in parallel, their results in plan order.
 
 pub mod budget;
+pub mod controls;
 pub mod floor;
 pub mod load;
 pub mod matching;

@@ -26,6 +26,10 @@ pub struct Run {
     /// Continuous collision detection on the particles (rapier's CCD; off in both
     /// configurations, on for the tunnelling study).
     pub ccd: bool,
+    /// A contact softness (Hz, damping ratio 1, for contacts with dynamic and fixed bodies
+    /// alike) in place of rapier's default one, for the default configuration's control
+    /// experiment (`None`: rapier's own).
+    pub default_softness: Option<f64>,
 }
 
 /// The state after a step (or at the start of a dynamic step).
@@ -166,8 +170,8 @@ macro_rules! backend {
             use nalgebra::{UnitQuaternion, Vector3};
             use rp::dynamics::{
                 GenericJoint, GenericJointBuilder, ImpulseJointHandle, IntegrationParameters,
-                JointAxesMask, JointAxis, MassProperties, MotorModel, RigidBodyBuilder,
-                RigidBodyHandle, SpringCoefficients, SpringJointBuilder,
+                JointAxesMask, JointAxis, LockedAxes, MassProperties, MotorModel, RigidBodyBuilder,
+                RigidBodyHandle, RigidBodyType, SpringCoefficients, SpringJointBuilder,
             };
             use rp::geometry::{
                 ColliderBuilder, ColliderHandle, Group, InteractionGroups, InteractionTestMode,
@@ -177,6 +181,16 @@ macro_rules! backend {
             use $krate as rp;
 
             dimension_helpers!($dim);
+
+            /// rapier's lock of each world axis: translations x, y, z, rotations x, y, z.
+            const LOCKS: [LockedAxes; 6] = [
+                LockedAxes::TRANSLATION_LOCKED_X,
+                LockedAxes::TRANSLATION_LOCKED_Y,
+                LockedAxes::TRANSLATION_LOCKED_Z,
+                LockedAxes::ROTATION_LOCKED_X,
+                LockedAxes::ROTATION_LOCKED_Y,
+                LockedAxes::ROTATION_LOCKED_Z,
+            ];
 
             fn pose(frame: &Frame) -> rp::math::Pose {
                 rp::math::Pose::from_parts(vector(&frame.origin), rotation(&frame.rotation))
@@ -240,6 +254,10 @@ macro_rules! backend {
                     p.normalized_allowed_linear_error = m.allowed_linear_error as Real;
                     p.normalized_prediction_distance = m.prediction_distance as Real;
                     p.contact_recycling = m.contact_recycling;
+                } else if let Some(hz) = run.default_softness {
+                    let softness = SpringCoefficients::new(hz as Real, 1.0);
+                    p.contact_softness = softness;
+                    p.static_contact_softness = softness;
                 }
                 p
             }
@@ -371,12 +389,30 @@ macro_rules! backend {
                             true,
                         ));
                     }
-                    // Zero what the step holds.
+                    // A body the step holds in every DOF is fixed for its duration (which
+                    // zeroes its velocity); the others are dynamic, with what the step holds
+                    // zeroed.
                     for (b, spec) in plan.bodies.iter().enumerate() {
                         if spec.kind == BodyKind::Ground {
                             continue;
                         }
                         let rb = &mut world.bodies[handles[b]];
+                        if step.fixed[b] {
+                            rb.set_body_type(RigidBodyType::Fixed, true);
+                            continue;
+                        }
+                        rb.set_body_type(RigidBodyType::Dynamic, true);
+                        let mut axes = if spec.kind == BodyKind::Particle {
+                            LockedAxes::ROTATION_LOCKED
+                        } else {
+                            LockedAxes::empty()
+                        };
+                        for (k, flag) in LOCKS.iter().enumerate() {
+                            if step.locks[b][k] {
+                                axes |= *flag;
+                            }
+                        }
+                        rb.set_locked_axes(axes, true);
                         let mut s = state(rb);
                         s.hold(&spec.com, &step.held, b);
                         rb.set_linvel(vector(&s.linvel), true);

@@ -39,9 +39,10 @@
 //! pair during step 1 and that step gets no contact at all. In f32 the rounded initial geometry
 //! leaves a gap of ~1.5e-8, so the first step carries no contact impulse either way.
 //!
-//! The contact force reported is the normal impulse the step applied (summed over its
-//! substeps, from the narrow phase) divided by the step, attributed to the middle of the step
-//! and interpolated linearly to the output times (held constant before the first middle).
+//! The contact force reported at a row is the normal impulse rapier applied over the output
+//! interval around it (each step's impulse, summed over its substeps from the narrow phase,
+//! spread evenly over the step) divided by the interval ([`record`]): a contact that carries
+//! little load is not pressed in every step, and one step's impulse would alias that.
 //!
 //! Rapier keeps gyroscopic forces on (its default; a 3D body needs them in general). In f32 its
 //! per-substep gyroscopic correction, which rotates ω into the principal frame and back, pumps
@@ -57,10 +58,12 @@
 //! an oscillator: that is a model change, not solver accuracy). Gravity is 0.
 
 pub mod backend;
+pub mod controls;
 pub mod plan;
 pub mod record;
+pub mod steps;
 
-use super::{Engine, EngineError, Needs, RunInfo, RunOutput, RunSettings};
+use super::{Control, Engine, EngineError, Needs, RunInfo, RunOutput, RunSettings};
 use crate::scene::{Dimension, IncrementRule, Scene};
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -181,6 +184,10 @@ pub struct RapierEngine {
     precision: Precision,
     configuration: Configuration,
     ccd: bool,
+    /// The default configuration with another contact softness (a control experiment).
+    default_softness: Option<f64>,
+    /// How bodies held in every DOF are made ([`plan::Holding::Joints`]: a control experiment).
+    holding: plan::Holding,
 }
 
 impl RapierEngine {
@@ -212,6 +219,8 @@ impl RapierEngine {
             precision,
             configuration,
             ccd: false,
+            default_softness: None,
+            holding: plan::Holding::Fixed,
         }
     }
 
@@ -220,6 +229,15 @@ impl RapierEngine {
     pub fn with_ccd(mut self) -> Self {
         self.ccd = true;
         self.name.push_str("_ccd");
+        self
+    }
+
+    /// The same engine with every body held in every DOF made a dynamic body held by joints
+    /// instead of a fixed body (a control experiment: what the construct costs at an impact),
+    /// named with a `_joints` suffix.
+    pub fn held_by_joints(mut self) -> Self {
+        self.holding = plan::Holding::Joints;
+        self.name.push_str("_joints");
         self
     }
 
@@ -235,7 +253,7 @@ impl RapierEngine {
         settings: &RunSettings,
     ) -> Result<(RunOutput, record::Diagnostics), EngineError> {
         let start = Instant::now();
-        let plan = plan::plan(scene)?;
+        let plan = plan::plan_with(scene, self.holding)?;
         let (dt, solver) = match self.configuration {
             Configuration::Matched(m) => (own_increment(scene, settings), Some(m)),
             Configuration::Default => (default_increment(settings), None),
@@ -244,6 +262,7 @@ impl RapierEngine {
             dt,
             matched: solver,
             ccd: self.ccd,
+            default_softness: self.default_softness,
         };
         let mut recorder = record::Recorder::new(scene, &plan);
         let mut sink = |r: backend::Record| recorder.push(r);
@@ -296,6 +315,9 @@ impl RapierEngine {
 impl Engine for RapierEngine {
     fn name(&self) -> &str {
         &self.name
+    }
+    fn controls(&self, scene: &Scene) -> Vec<Control> {
+        controls::of(self, scene)
     }
     fn needs(&self) -> Needs {
         match self.configuration {

@@ -9,25 +9,33 @@
 //! Body 0 is the ground: one fixed rigid body at the origin with the identity pose, carrying
 //! every ground node (free, massless and held in every translation in every step) at its
 //! position. Every other free node with mass is a *particle*: a dynamic body with that mass
-//! whose rotations are locked, with its origin at the node. Every scene body is a dynamic body
+//! whose rotations are locked, with its origin at the node. Every scene body is a rigid body
 //! whose origin is its reference node O and whose local axes are the world axes at t = 0, with
 //! the scene's mass properties exactly: mass, local centre of mass = `centre_offset`, inertia
 //! about the centre of mass I_G = I_O − m(|c|²1 − c cᵀ) (2D: I_G = I_O,zz − m|c|²). Colliders
 //! never contribute mass (density 0).
 //!
-//! # Joints
+//! # What a step holds
 //!
-//! Per dynamic step, every node that is held or carries a grounded spring or dashpot gets a
-//! *ground joint*: body 1 the ground, body 2 the node's body, both joint frames with the node's
-//! frame axes, anchored at the node. It locks exactly the DOFs the step holds (a pinned
-//! reference node gives a revolute joint, a sliding one a joint freeing x and rz), and carries a
-//! force-based motor on each free DOF with grounded elements (target 0 at the undeformed
-//! geometry: the ground frame's origin is the node's position at t = 0, moved along the held
-//! axes by whatever displacement the static steps left there, so a held DOF is held where it
-//! is). A DOF held again after an earlier dynamic step left it free is held where that step
-//! left it: the joint is fitted to the body's pose when its step starts
-//! ([`JointSpec::fitted`]); beside a rotational motor on two free rotations it cannot be, and
-//! the scene is unsupported.
+//! Per dynamic step, in order of faithfulness ([`super::steps`]):
+//!
+//! - a body the step holds in every DOF is a **fixed body** for the step: it moves no more than
+//!   the ground, and no impulse reaches its mass;
+//! - a body whose held DOFs are all at its centre of mass along world axes (a particle's node;
+//!   a rigid body pinned or sliding at its centre of mass; in 3D, rotations held about all but
+//!   one principal axis) has them **locked** (`LockedAxes`), which every rapier solve sees;
+//! - otherwise every node that is held gets a *ground joint*: body 1 the ground, body 2 the
+//!   node's body, both joint frames with the node's frame axes, anchored at the node, locking
+//!   exactly the DOFs the step holds (a pinned reference node gives a revolute joint, a sliding
+//!   one a joint freeing x and rz). A DOF held again after an earlier dynamic step left it free
+//!   is held where that step left it: the joint is fitted to the body's pose when its step
+//!   starts ([`JointSpec::fitted`]); beside a rotational motor on two free rotations it cannot
+//!   be, and the scene is unsupported.
+//!
+//! A node that carries a grounded spring or dashpot on a free DOF gets a ground joint with a
+//! force-based motor on that DOF (target 0 at the undeformed geometry: the ground frame's
+//! origin is the node's position at t = 0, moved along the held axes by whatever displacement
+//! the static steps left there, so a held DOF is held where it is).
 //!
 //! Fixed-direction elements become a motor on a joint whose first frame is fixed to the ground
 //! (or to a particle, which never rotates) with its x axis along the direction and its origin at
@@ -44,9 +52,8 @@
 //! r = 1e-3 `size` on the node's body, centred on the node, the slab moved back by r so the
 //! two touch exactly at t = 0. A solid (ball, cuboid, capsule) is the parry shape the scene
 //! names, shrunk by r so the node itself touches where the solid's surface is (corners rounded
-//! by r). Friction 0. Restitution: the pair's for a pair that starts open; 0 for one that
-//! starts closed (the benchmark's persistent contact: node and face move together from t = 0
-//! with no impact, and rapier never lets a contact of restitution 1 rest).
+//! by r). Friction 0. Restitution: the pair's, whether it starts open or closed (rapier
+//! cannot rest a closed pair of restitution 1: the report shows it with its control).
 //!
 //! # Steps
 //!
@@ -57,10 +64,10 @@
 //! scene defines them (the first one after the scene's initial velocities are applied,
 //! converted to centre-of-mass velocities v_G = v_O + ω × (R c); [`BodyState::hold`]).
 
+use super::steps::{Placement, groups, held_in_every_dof, locked_axes, static_check};
 use crate::engines::EngineError;
 use crate::scene::{
-    Attachment, BodyId, Connection, ContactState, Dimension, Dof, NodeId, Scene, Solid, StepKind,
-    Surface,
+    Attachment, BodyId, Connection, Dimension, Dof, NodeId, Scene, Solid, StepKind, Surface,
 };
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
@@ -237,6 +244,13 @@ pub struct StepSpec {
     pub joints: Vec<JointSpec>,
     /// Held velocity components, zeroed at the start.
     pub held: Vec<HeldVelocity>,
+    /// Per plan body: held in every DOF in this step, so a rapier fixed body for its duration
+    /// (the ground always is).
+    pub fixed: Vec<bool>,
+    /// Per plan body: the world axes its `LockedAxes` lock in this step (0–2 translations of the
+    /// centre of mass, 3–5 rotations; [`super::steps::locked_axes`]), what it holds that way
+    /// rather than by a joint.
+    pub locks: Vec<[bool; 6]>,
 }
 
 /// A collider shape.
@@ -415,7 +429,7 @@ fn joint_axis(dof: Dof) -> usize {
     }
 }
 
-fn unsupported<T>(message: impl Into<String>) -> Result<T, EngineError> {
+pub(super) fn unsupported<T>(message: impl Into<String>) -> Result<T, EngineError> {
     Err(EngineError::Unsupported(format!(
         "rapier: {}",
         message.into()
@@ -435,86 +449,25 @@ pub fn is_ground(scene: &Scene, node: NodeId) -> bool {
         })
 }
 
-/// A spring or dashpot group: the stiffness and damping summed over elements that act alike.
-#[derive(Debug, Clone)]
-struct Group {
-    connection: Connection,
-    stiffness: f64,
-    damping: f64,
-}
-
-fn same_direction(a: &Vector3<f64>, b: &Vector3<f64>) -> bool {
-    (a - b).norm() <= 1e-12 || (a + b).norm() <= 1e-12
-}
-
-fn same_action(a: &Connection, b: &Connection) -> bool {
-    match (a, b) {
-        (
-            Connection::Grounded { node: n1, dof: d1 },
-            Connection::Grounded { node: n2, dof: d2 },
-        ) => n1 == n2 && d1 == d2,
-        (
-            Connection::FixedDirection {
-                nodes: a,
-                direction: da,
-            },
-            Connection::FixedDirection {
-                nodes: b,
-                direction: db,
-            },
-        ) => {
-            ((a[0] == b[0] && a[1] == b[1]) || (a[0] == b[1] && a[1] == b[0]))
-                && same_direction(da, db)
-        }
-        (Connection::Axial { nodes: a }, Connection::Axial { nodes: b }) => {
-            (a[0] == b[0] && a[1] == b[1]) || (a[0] == b[1] && a[1] == b[0])
-        }
-        _ => false,
-    }
-}
-
-fn groups(scene: &Scene) -> Vec<Group> {
-    let mut out: Vec<Group> = Vec::new();
-    for (list, spring) in [(&scene.springs, true), (&scene.dashpots, false)] {
-        for e in list {
-            let g = match out
-                .iter_mut()
-                .position(|g| same_action(&g.connection, &e.connection))
-            {
-                Some(i) => &mut out[i],
-                None => {
-                    out.push(Group {
-                        connection: e.connection.clone(),
-                        stiffness: 0.0,
-                        damping: 0.0,
-                    });
-                    out.last_mut().expect("just pushed")
-                }
-            };
-            if spring {
-                g.stiffness += e.coefficient;
-            } else {
-                g.damping += e.coefficient;
-            }
-        }
-    }
-    out
-}
-
-/// Displacement state during the static steps: per plan body, origin and orientation.
-struct Placement {
-    position: Vec<Vector3<f64>>,
-    rotation: Vec<UnitQuaternion<f64>>,
-}
-
-impl Placement {
-    fn point(&self, r: &NodeRef) -> Vector3<f64> {
-        self.position[r.body] + self.rotation[r.body] * r.local
-    }
+/// How a body held in every DOF of a step becomes a rapier body.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Holding {
+    /// A fixed body for the step: what it is, and what the engines run.
+    #[default]
+    Fixed,
+    /// A dynamic body held by a joint to the ground, as any other held DOF: a control
+    /// experiment, showing what the joint costs at an impact (rapier's restitution pass solves
+    /// the contact without the joint, so the body takes a free body's share of the impulse).
+    Joints,
 }
 
 /// Build the plan of a scene.
 pub fn plan(scene: &Scene) -> Result<Plan, EngineError> {
+    plan_with(scene, Holding::Fixed)
+}
+
+/// Build the plan of a scene, with bodies held in every DOF made as `holding` says.
+pub fn plan_with(scene: &Scene, holding: Holding) -> Result<Plan, EngineError> {
     let dim = scene.dimension;
     let first_dynamic = scene
         .steps
@@ -780,7 +733,7 @@ pub fn plan(scene: &Scene) -> Result<Plan, EngineError> {
         }
     }
 
-    // Dynamic steps: ground joints (holds + grounded motors) and held velocities.
+    // Dynamic steps: fixed bodies, ground joints (holds + grounded motors), held velocities.
     let mut steps = Vec::new();
     // Per node, the joint axes some earlier dynamic step left free.
     let mut was_free = vec![[false; 6]; scene.nodes.len()];
@@ -790,14 +743,26 @@ pub fn plan(scene: &Scene) -> Result<Plan, EngineError> {
         };
         let mut joints = Vec::new();
         let mut held = Vec::new();
+        let (fixed, locks) = match holding {
+            Holding::Fixed => (
+                held_in_every_dof(scene, step, &nodes, &bodies, &placement),
+                locked_axes(scene, step, &nodes, &bodies, &placement),
+            ),
+            Holding::Joints => (
+                bodies.iter().map(|b| b.kind == BodyKind::Ground).collect(),
+                vec![None; bodies.len()],
+            ),
+        };
         for (id, node) in scene.nodes.iter().enumerate() {
             let r = nodes[id];
-            if r.body == 0 {
+            if r.body == 0 || fixed[r.body] {
+                // The ground and a fixed body need no joint, and their velocity is zero.
                 continue;
             }
-            let mut locked = [false; 6];
+            // The DOFs the step holds here; a joint locks them unless the body's locked axes do.
+            let mut held_here = [false; 6];
             for c in step.conditions.iter().filter(|c| c.node == id) {
-                locked[joint_axis(c.dof)] = true;
+                held_here[joint_axis(c.dof)] = true;
                 match c.dof {
                     Dof::Translation(i) => held.push(HeldVelocity::Translation {
                         body: r.body,
@@ -812,11 +777,16 @@ pub fn plan(scene: &Scene) -> Result<Plan, EngineError> {
             }
             // A particle never rotates: its rotations are not the joint's business.
             if bodies[r.body].kind == BodyKind::Particle {
-                locked[3..].fill(false);
+                held_here[3..].fill(false);
             }
+            let locked = if locks[r.body].is_some() {
+                [false; 6]
+            } else {
+                held_here
+            };
             let refit: [bool; 6] = std::array::from_fn(|i| locked[i] && was_free[id][i]);
-            for (free, l) in was_free[id].iter_mut().zip(locked) {
-                *free |= !l;
+            for (free, h) in was_free[id].iter_mut().zip(held_here) {
+                *free |= !h;
             }
             let motors: Vec<Motor> = element_groups
                 .iter()
@@ -828,7 +798,7 @@ pub fn plan(scene: &Scene) -> Result<Plan, EngineError> {
                     }),
                     _ => None,
                 })
-                .filter(|m| !locked[m.axis])
+                .filter(|m| !held_here[m.axis])
                 .collect();
             if !locked.iter().any(|&l| l) && motors.is_empty() {
                 continue;
@@ -880,6 +850,8 @@ pub fn plan(scene: &Scene) -> Result<Plan, EngineError> {
             duration,
             joints,
             held,
+            fixed,
+            locks: locks.into_iter().map(Option::unwrap_or_default).collect(),
         });
     }
 
@@ -983,10 +955,7 @@ pub fn plan(scene: &Scene) -> Result<Plan, EngineError> {
             node: pair.node,
             body: face_body,
             surface,
-            restitution: match pair.initially {
-                ContactState::Open => pair.restitution,
-                ContactState::Closed => 0.0,
-            },
+            restitution: pair.restitution,
         });
     }
 
@@ -1011,125 +980,4 @@ pub fn plan(scene: &Scene) -> Result<Plan, EngineError> {
         contacts,
         loads,
     })
-}
-
-/// After a static step's prescriptions: every DOF the step leaves free must carry no force.
-fn static_check(
-    scene: &Scene,
-    step: &crate::scene::Step,
-    nodes: &[NodeRef],
-    placement: &Placement,
-    element_groups: &[Group],
-    reference_of: &dyn Fn(usize) -> Option<(BodyId, NodeId)>,
-) -> Result<(), EngineError> {
-    let point = |n: NodeId| placement.point(&nodes[n]);
-    let nb = placement.position.len();
-    let mut force = vec![Vector3::<f64>::zeros(); nb];
-    let mut moment = vec![Vector3::<f64>::zeros(); nb];
-    let mut scale = 0.0f64;
-    let apply = |n: NodeId,
-                 f: Vector3<f64>,
-                 force: &mut Vec<Vector3<f64>>,
-                 moment: &mut Vec<Vector3<f64>>| {
-        let r = nodes[n];
-        force[r.body] += f;
-        moment[r.body] += (point(n) - placement.position[r.body]).cross(&f);
-    };
-    for g in element_groups {
-        let k = g.stiffness;
-        if k == 0.0 {
-            continue;
-        }
-        match &g.connection {
-            Connection::Grounded {
-                node,
-                dof: Dof::Translation(i),
-            } => {
-                let e: Vector3<f64> = scene.nodes[*node].frame.column(*i).into_owned();
-                let f = -k * e.dot(&(point(*node) - scene.nodes[*node].position));
-                scale += f.abs();
-                apply(*node, e * f, &mut force, &mut moment);
-            }
-            Connection::Grounded {
-                node,
-                dof: Dof::Rotation(i),
-            } => {
-                let a: Vector3<f64> = scene.nodes[*node].frame.column(*i).into_owned();
-                let b = nodes[*node].body;
-                let m = -k * twist(&placement.rotation[b], &a);
-                scale += m.abs();
-                moment[b] += a * m;
-            }
-            Connection::FixedDirection {
-                nodes: [a, b],
-                direction,
-            } => {
-                let ua = point(*a) - scene.nodes[*a].position;
-                let ub = point(*b) - scene.nodes[*b].position;
-                let f = -k * direction.dot(&(ub - ua));
-                scale += f.abs();
-                apply(*b, direction * f, &mut force, &mut moment);
-                apply(*a, -direction * f, &mut force, &mut moment);
-            }
-            Connection::Axial { nodes: [a, b] } => {
-                let d = point(*b) - point(*a);
-                let rest = (scene.nodes[*b].position - scene.nodes[*a].position).norm();
-                let f = -k * (d.norm() - rest);
-                scale += f.abs();
-                let n = d / d.norm().max(f64::MIN_POSITIVE);
-                apply(*b, n * f, &mut force, &mut moment);
-                apply(*a, -n * f, &mut force, &mut moment);
-            }
-        }
-    }
-    for l in &scene.loads {
-        scale += l.force.norm();
-        apply(l.node, l.force, &mut force, &mut moment);
-    }
-    if scale == 0.0 {
-        return Ok(());
-    }
-    let lever = scene
-        .nodes
-        .iter()
-        .map(|n| n.position.norm())
-        .fold(1.0f64, f64::max);
-    let tol = 1e-9 * scale;
-    for (b, _) in force.iter().enumerate().skip(1) {
-        // The node carrying this body's DOFs: the particle's node or the reference node.
-        let carrier = match reference_of(b) {
-            Some((_, reference)) => reference,
-            None => match nodes.iter().position(|r| r.body == b) {
-                Some(n) => n,
-                None => continue,
-            },
-        };
-        let is_rigid = reference_of(b).is_some();
-        for dof in Dof::all(scene.dimension, is_rigid) {
-            if step
-                .conditions
-                .iter()
-                .any(|c| c.node == carrier && c.dof == dof)
-            {
-                continue;
-            }
-            let (value, limit) = match dof {
-                Dof::Translation(i) => (
-                    force[b].dot(&scene.nodes[carrier].frame.column(i).into_owned()),
-                    tol,
-                ),
-                Dof::Rotation(i) => (
-                    moment[b].dot(&scene.nodes[carrier].frame.column(i).into_owned()),
-                    tol * lever,
-                ),
-            };
-            if value.abs() > limit {
-                return unsupported(format!(
-                    "the static step leaves {dof} of node `{}` free with a resulting force {value:e} (rapier has no static solve; hold or prescribe it)",
-                    scene.nodes[carrier].name
-                ));
-            }
-        }
-    }
-    Ok(())
 }

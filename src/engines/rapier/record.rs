@@ -16,9 +16,18 @@
 //! kinetic + elastic + viscous − work − (kinetic + elastic at the start). Since rapier's springs
 //! are implicit, the balance drifts negative: that drift is rapier's numerical energy loss.
 //!
+//! A contact force is what rapier's impulses deliver over a window centred on the row: each
+//! step's normal impulse is spread evenly over the step, and a row at t carries the impulse
+//! over [t − w, t + w] divided by 2w, with w half the shorter of the output intervals on either
+//! side (so that a force that changes linearly is read without bias). The first and last rows
+//! have no room on one side: they carry the mean force of the step that holds them. Rapier
+//! resolves contact by impulses, which come step by step and, where a contact carries little
+//! load, not in every step; a row that sampled one step's impulse would alias them.
+//!
 //! The [`Recorder`] receives the stepped states one at a time and keeps no per-step data: the
-//! previous state, running totals, the output rows, and the few rows whose contact force waits
-//! for the next step's middle. Its memory is that of the output, whatever the number of steps.
+//! previous state, running totals (the impulse delivered so far among them), the output rows,
+//! and the impulse at the window edges that rows still need. Its memory is that of the output,
+//! whatever the number of steps.
 
 use super::backend::Record;
 use super::plan::{BodyState, Plan, twist};
@@ -38,7 +47,7 @@ pub struct Diagnostics {
     pub max_separation: Vec<f64>,
     /// Impact times, every pair's in the order they came: the middle of each step where a
     /// pair that had no contact impulse in the step before gets one (rapier's impulse acts
-    /// somewhere within that step; the contact-force column places it at the middle too).
+    /// somewhere within that step; the contact-force column spreads it over the step).
     pub impacts: Vec<f64>,
 }
 
@@ -173,11 +182,19 @@ pub struct Recorder<'a> {
     start: Option<(Vec<BodyState>, f64)>,
     /// The previous record, its dissipated energy and dissipation rate.
     previous: Option<(Record, f64, f64)>,
-    /// Contact-force samples (step middle, force per contact) that rows may still need.
-    middles: std::collections::VecDeque<(f64, Vec<f64>)>,
-    /// Whether a middle has been dropped (so the front one is not the first of the run).
-    dropped: bool,
-    /// Rows (indices) whose contact-force columns await a later middle.
+    /// Per contact, the impulse delivered from the start to the previous record.
+    impulse: Vec<f64>,
+    /// Per contact, the mean force of the last step.
+    last_force: Vec<f64>,
+    /// The edges of the rows' windows: row j's is [edges[2j], edges[2j + 1]] (of no length at
+    /// the first and last rows).
+    edges: Vec<f64>,
+    /// Index of the next edge whose impulse is still unknown.
+    next_edge: usize,
+    /// At the edges passed whose rows are not filled yet, per contact: the impulse delivered up
+    /// to the edge, and the mean force of the step that holds it.
+    at_edges: std::collections::VecDeque<(Vec<f64>, Vec<f64>)>,
+    /// Rows (indices) whose contact-force columns await the impulse at their window's end.
     pending: std::collections::VecDeque<usize>,
     /// The most rows ever pending at once.
     most_pending: usize,
@@ -210,17 +227,29 @@ impl<'a> Recorder<'a> {
             })
             .collect();
         let nc = plan.contacts.len();
+        let times = scene.output_times();
+        let edges: Vec<f64> = (0..times.len())
+            .flat_map(|j| {
+                let left = if j > 0 { times[j] - times[j - 1] } else { 0.0 };
+                let right = times.get(j + 1).map_or(0.0, |t| t - times[j]);
+                let w = 0.5 * left.min(right);
+                [times[j] - w, times[j] + w]
+            })
+            .collect();
         Recorder {
             k: Kinematics { scene, plan },
             columns,
-            times: scene.output_times(),
+            times,
             next: 0,
             tol: 1e-9 * scene.duration().max(f64::MIN_POSITIVE),
             rows: Vec::with_capacity(scene.output_rows),
             start: None,
             previous: None,
-            middles: std::collections::VecDeque::new(),
-            dropped: false,
+            impulse: vec![0.0; nc],
+            last_force: vec![0.0; nc],
+            edges,
+            next_edge: 0,
+            at_edges: std::collections::VecDeque::new(),
             pending: std::collections::VecDeque::new(),
             most_pending: 0,
             contact_columns,
@@ -261,7 +290,25 @@ impl<'a> Recorder<'a> {
                 }
                 *was = Some(now);
             }
-            self.middles.push_back((middle, f.clone()));
+            // The impulse at each window edge this step passes, the step's spread evenly.
+            while !self.contact_columns.is_empty()
+                && self.next_edge < self.edges.len()
+                && self.edges[self.next_edge] <= record.time + self.tol
+            {
+                let into = (self.edges[self.next_edge] - p.time).clamp(0.0, record.time - p.time);
+                let at: Vec<f64> = self
+                    .impulse
+                    .iter()
+                    .zip(f)
+                    .map(|(i, f)| i + f * into)
+                    .collect();
+                self.at_edges.push_back((at, f.clone()));
+                self.next_edge += 1;
+            }
+            for (i, f) in self.impulse.iter_mut().zip(f) {
+                *i += f * (record.time - p.time);
+            }
+            self.last_force.clone_from(f);
         }
         // Rows the new record has passed: the previous record is the last at or before them.
         while self.next < self.times.len() && record.time > self.times[self.next] + self.tol {
@@ -333,52 +380,36 @@ impl<'a> Recorder<'a> {
         }
     }
 
-    /// Fill the contact-force columns of pending rows that the known middles bracket (all of
-    /// them at the end of the run), then drop middles no row can need any more.
-    ///
-    /// The value at t is the force interpolated linearly between the step middles around t,
-    /// held constant before the first middle and after the last (the last middle at or before
-    /// t, then the next; exactly that middle's force when t falls on it).
+    /// Fill the contact-force columns of pending rows whose window's end the steps have passed
+    /// (all of them at the end of the run, where the edges left take the impulse delivered and
+    /// the last step's force): the impulse over the window divided by its length, or where the
+    /// window has none, the force of the step that holds the row.
     fn resolve(&mut self, at_end: bool) {
+        if at_end && !self.contact_columns.is_empty() {
+            let last = self.last_force.clone();
+            while self.next_edge < self.edges.len() {
+                self.at_edges
+                    .push_back((self.impulse.clone(), last.clone()));
+                self.next_edge += 1;
+            }
+        }
         while let Some(&row) = self.pending.front() {
-            let t = self.rows[row][0];
-            let Some(last) = self.middles.back() else {
-                if at_end {
-                    for &(col, _) in &self.contact_columns {
-                        self.rows[row][col] = 0.0; // no contact step at all
-                    }
-                    self.pending.pop_front();
-                    continue;
-                }
+            // The row's two edges are at the front.
+            let (Some((low, _)), Some((high, force))) =
+                (self.at_edges.front(), self.at_edges.get(1))
+            else {
                 break;
             };
-            if !(at_end || last.0 > t) {
-                break;
-            }
-            let i = self.middles.partition_point(|m| m.0 <= t);
+            let length = self.edges[2 * row + 1] - self.edges[2 * row];
             for &(col, contact) in &self.contact_columns {
-                let y = |j: usize| self.middles[j].1[contact];
-                self.rows[row][col] = if i == 0 {
-                    debug_assert!(!self.dropped, "the middle before t was kept");
-                    y(0)
-                } else if i == self.middles.len() {
-                    y(i - 1)
+                self.rows[row][col] = if length > self.tol {
+                    (high[contact] - low[contact]) / length
                 } else {
-                    let (x0, x1) = (self.middles[i - 1].0, self.middles[i].0);
-                    let s = (t - x0) / (x1 - x0);
-                    y(i - 1) + s * (y(i) - y(i - 1))
+                    force[contact]
                 };
             }
             self.pending.pop_front();
-        }
-        // Keep the last middle at or before the earliest time still to be filled.
-        let earliest = match self.pending.front() {
-            Some(&row) => self.rows[row][0],
-            None => self.times.get(self.next).copied().unwrap_or(f64::INFINITY),
-        };
-        while self.middles.len() >= 2 && self.middles[1].0 <= earliest {
-            self.middles.pop_front();
-            self.dropped = true;
+            self.at_edges.drain(..2);
         }
     }
 
@@ -392,9 +423,9 @@ impl<'a> Recorder<'a> {
         self.rows.capacity()
     }
 
-    /// Contact-force samples held now.
-    pub fn middles_held(&self) -> usize {
-        self.middles.len()
+    /// Impulse samples (at window edges) held now.
+    pub fn edges_held(&self) -> usize {
+        self.at_edges.len()
     }
 
     /// The history and the contact diagnostics.

@@ -1,0 +1,87 @@
+//! rapier's control experiments (`Engine::controls`): the same run with one suspected cause of
+//! a discrepancy varied, each something the exact solution does not depend on: f64 for f32, a
+//! stiffer contact softness, restitution 0 on pairs that start closed and never strike.
+
+use super::{Configuration, MatchedSettings, Precision, RapierEngine};
+use crate::engines::{Control, ControlKind};
+use crate::scene::{ContactPair, ContactState, Scene};
+
+/// The control experiments of `engine` on `scene`.
+pub fn of(engine: &RapierEngine, scene: &Scene) -> Vec<Control> {
+    let mut out = Vec::new();
+    if engine.precision == Precision::F32 {
+        out.push(Control {
+            kind: ControlKind::Precision,
+            change: "rapier in f64 with the same settings".into(),
+            engine: Some(Box::new(RapierEngine {
+                name: format!("{}_in_f64", engine.name),
+                precision: Precision::F64,
+                ..engine.clone()
+            })),
+            scene: None,
+        });
+    }
+    if scene.contacts.is_empty() {
+        return out;
+    }
+    if let Configuration::Matched(m) = engine.configuration {
+        let stiffer = MatchedSettings {
+            contact_frequency: 10.0 * m.contact_frequency,
+            ..m
+        };
+        out.push(Control {
+            kind: ControlKind::ContactSoftness,
+            change: format!(
+                "`contact_softness` {:.0e} Hz instead of {:.0e} Hz",
+                stiffer.contact_frequency, m.contact_frequency
+            ),
+            engine: Some(Box::new(RapierEngine {
+                name: format!("{}_stiffer_contact", engine.name),
+                configuration: Configuration::Matched(stiffer),
+                ..engine.clone()
+            })),
+            scene: None,
+        });
+    }
+    if engine.configuration == Configuration::Default {
+        let hz = MatchedSettings::chosen(engine.precision).contact_frequency;
+        out.push(Control {
+            kind: ControlKind::ContactSoftness,
+            change: format!(
+                "`contact_softness` {hz:.0e} Hz, damping ratio 1 (the matched configuration's) \
+                 instead of rapier's 30 Hz and 60 Hz, damping ratio 10"
+            ),
+            engine: Some(Box::new(RapierEngine {
+                name: format!("{}_matched_softness", engine.name),
+                default_softness: Some(hz),
+                ..engine.clone()
+            })),
+            scene: None,
+        });
+    }
+    if let Some(varied) = closed_pairs_inelastic(scene) {
+        out.push(Control {
+            kind: ControlKind::Restitution,
+            change: "restitution 0 on the pairs that start closed".into(),
+            engine: None,
+            scene: Some(varied),
+        });
+    }
+    out
+}
+
+/// The scene with restitution 0 on every contact pair that starts closed, where one has a
+/// restitution above 0 (`None` otherwise): a control for how rapier treats the restitution of a
+/// resting contact. It changes nothing the exact solution sees as long as that pair never
+/// strikes (the comparison checks that its exact solution has no impact).
+pub fn closed_pairs_inelastic(scene: &Scene) -> Option<Scene> {
+    let closed = |c: &ContactPair| c.initially == ContactState::Closed && c.restitution > 0.0;
+    if !scene.contacts.iter().any(closed) {
+        return None;
+    }
+    let mut varied = scene.clone();
+    for c in varied.contacts.iter_mut().filter(|c| closed(c)) {
+        c.restitution = 0.0;
+    }
+    Some(varied)
+}

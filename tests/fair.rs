@@ -411,3 +411,28 @@ fn the_run_names_each_cause_with_its_control() {
     assert_eq!(cause("explicit"), Some(ControlKind::Penalty));
     assert_eq!(cause("rapier_f32"), Some(ControlKind::Precision));
 }
+
+#[test]
+fn a_body_an_earlier_step_let_turn_is_held_by_a_joint() {
+    // Fixed bodies and locks are judged at the pose the static steps leave; after a dynamic
+    // step in which the body turned it is elsewhere, and a joint fitted where the step starts
+    // holds it. contact_reopen's body, pinned at its centre (locked) for 0.05 s, then held in
+    // every DOF: a joint, not a fixed body, in the second step.
+    let path = case::stress_dir(&case::cases_dir()).join("contact_reopen.toml");
+    let text = std::fs::read_to_string(&path).unwrap().replace(
+        "[[steps]]\nkind = \"dynamic\"\nduration = 0.1\n",
+        "[[steps]]\nkind = \"dynamic\"\nduration = 0.05\nhold = [\n    { node = \"O\", dofs = [\"ux\", \"uy\"] },\n    { node = \"N\", dofs = [\"uy\"] },\n]\n\n[[steps]]\nkind = \"dynamic\"\nduration = 0.05\nhold = [\n    { node = \"O\", dofs = [\"ux\", \"uy\", \"rz\"] },\n    { node = \"N\", dofs = [\"uy\"] },\n]\n\n[[unused]]\n",
+    );
+    let text = text[..text.find("[[unused]]").unwrap()].to_string();
+    let s = case::parse(&text, &path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.steps.len(), 2);
+    let p = plan::plan(&s).unwrap();
+    let body = p.nodes[s.node_named("O").unwrap()].body;
+    assert_eq!(
+        p.steps[0].locks[body],
+        [true, true, false, false, false, false]
+    );
+    assert!(!p.steps[1].fixed[body]);
+    assert_eq!(p.steps[1].locks[body], [false; 6]);
+    assert!(p.steps[1].joints.iter().any(|j| j.body2 == body));
+}

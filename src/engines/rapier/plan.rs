@@ -24,6 +24,9 @@
 //! - a body whose held DOFs are all at its centre of mass along world axes (a particle's node;
 //!   a rigid body pinned or sliding at its centre of mass; in 3D, rotations held about all but
 //!   one principal axis) has them **locked** (`LockedAxes`), which every rapier solve sees;
+//!   both are judged at the pose the static steps leave, so a body that an earlier dynamic
+//!   step let turn (or, in 3D, that the static steps turned and that carries a grounded
+//!   rotational element) is held by joints instead;
 //! - otherwise every node that is held gets a *ground joint*: body 1 the ground, body 2 the
 //!   node's body, both joint frames with the node's frame axes, anchored at the node, locking
 //!   exactly the DOFs the step holds (a pinned reference node gives a revolute joint, a sliding
@@ -737,13 +740,15 @@ pub fn plan_with(scene: &Scene, holding: Holding) -> Result<Plan, EngineError> {
     let mut steps = Vec::new();
     // Per node, the joint axes some earlier dynamic step left free.
     let mut was_free = vec![[false; 6]; scene.nodes.len()];
+    // Per plan body, whether an earlier dynamic step let it turn.
+    let mut turned = vec![false; bodies.len()];
     for step in &scene.steps[first_dynamic..] {
         let StepKind::Dynamic { duration } = step.kind else {
             unreachable!("checked above")
         };
         let mut joints = Vec::new();
         let mut held = Vec::new();
-        let (fixed, locks) = match holding {
+        let (mut fixed, mut locks) = match holding {
             Holding::Fixed => (
                 held_in_every_dof(scene, step, &nodes, &bodies, &placement),
                 locked_axes(scene, step, &nodes, &bodies, &placement),
@@ -753,6 +758,22 @@ pub fn plan_with(scene: &Scene, holding: Holding) -> Result<Plan, EngineError> {
                 vec![None; bodies.len()],
             ),
         };
+        // Both are judged at the pose the static steps left; a body an earlier dynamic step let
+        // turn is elsewhere now, and a joint (fitted where the step starts) holds it instead. So
+        // does a 3D body with a grounded rotational spring or dashpot that the static steps
+        // turned: its motor reads the twist only from a joint fitted to the turn.
+        for b in 1..bodies.len() {
+            let turned_statically = scene.dimension == Dimension::Three
+                && placement.rotation[b].angle() > 0.0
+                && element_groups.iter().any(|g| {
+                    matches!(g.connection, Connection::Grounded { node, dof: Dof::Rotation(_) }
+                        if nodes[node].body == b)
+                });
+            if turned[b] || turned_statically {
+                fixed[b] = false;
+                locks[b] = None;
+            }
+        }
         for (id, node) in scene.nodes.iter().enumerate() {
             let r = nodes[id];
             if r.body == 0 || fixed[r.body] {
@@ -845,6 +866,22 @@ pub fn plan_with(scene: &Scene, holding: Holding) -> Result<Plan, EngineError> {
                 kind: JointKind::Generic { locked, motors },
                 refit,
             });
+        }
+        // A rigid body turns in this step unless it is fixed or every rotation of its reference
+        // node is held.
+        for (b, spec) in bodies.iter().enumerate() {
+            let reference = scene
+                .bodies
+                .iter()
+                .find(|sb| nodes[sb.reference].body == b)
+                .map(|sb| sb.reference);
+            if let (BodyKind::Rigid, Some(o)) = (spec.kind, reference) {
+                let held = Dof::all(dim, true)
+                    .into_iter()
+                    .filter(|d| matches!(d, Dof::Rotation(_)))
+                    .all(|d| step.conditions.iter().any(|c| c.node == o && c.dof == d));
+                turned[b] |= !fixed[b] && !held;
+            }
         }
         steps.push(StepSpec {
             duration,

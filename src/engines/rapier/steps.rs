@@ -277,7 +277,8 @@ pub(super) fn locked_axes(
     bodies: &[BodySpec],
     placement: &Placement,
 ) -> Vec<Option<[bool; 6]>> {
-    let world_axis = |e: &Vector3<f64>| (0..3).find(|&k| e[k].abs() > 1.0 - 1e-12);
+    // Along a world axis to round-off: a lock holds the world axis exactly.
+    let world_axis = |e: &Vector3<f64>| (0..3).find(|&k| e[k].abs() >= 1.0 - 4.0 * f64::EPSILON);
     (0..bodies.len())
         .map(|b| {
             let spec = &bodies[b];

@@ -83,12 +83,6 @@ struct Cell<'a> {
     flag: Flag,
 }
 
-/// The worst error of a job against its own model's exact solution in `outcome`.
-fn judged(outcome: &Outcome, scene: &Scene, engine: &str) -> Option<f64> {
-    let own = outcome.history(&scene.id, baseline(engine)?)?;
-    compare(scene, own, outcome.history(&scene.id, engine)?).worst_max
-}
-
 /// The cells of `outcome` that need a cause.
 fn cells<'a>(plan: &'a Plan, outcome: &'a Outcome) -> Vec<Cell<'a>> {
     let mut out = Vec::new();
@@ -107,7 +101,9 @@ fn cells<'a>(plan: &'a Plan, outcome: &'a Outcome) -> Vec<Cell<'a>> {
         let Some(error) = compare(scene, exact, &success.history).worst_max else {
             continue;
         };
-        let explicit = judged(outcome, scene, "explicit");
+        let explicit = outcome
+            .history(&scene.id, "explicit")
+            .and_then(|h| super::against_own_model(outcome, scene, "explicit", h));
         let flag = match (tolerance(scene, &job.engine), explicit) {
             (Some(t), _) if error > t => Flag::MissesTolerance(t),
             (_, Some(x)) if job.engine.starts_with("rapier") && error > FLAG_RATIO * x => {

@@ -50,16 +50,24 @@ pub fn section(w: &mut String, s: &Summary) {
 /// The count of cells that meet their tolerance, of every cell judged.
 fn headline(w: &mut String, checks: &[ToleranceCheck]) {
     let met = checks.iter().filter(|c| c.met()).count();
-    let missing: Vec<String> = checks
-        .iter()
-        .filter(|c| c.tolerance.is_none())
-        .map(|c| format!("{} / {}", c.case, c.engine))
-        .collect();
-    let unjudged: Vec<String> = checks
-        .iter()
-        .filter(|c| c.measured.is_none() && c.met.is_none() && c.tolerance.is_some())
-        .map(|c| format!("{} / {}", c.case, c.engine))
-        .collect();
+    // The cells a condition picks, listed after what they have in common.
+    let listed = |what: &str, pick: &dyn Fn(&ToleranceCheck) -> bool| {
+        let cells: Vec<String> = checks
+            .iter()
+            .filter(|c| pick(c))
+            .map(|c| format!("{} / {}", c.case, c.engine))
+            .collect();
+        if cells.is_empty() {
+            String::new()
+        } else {
+            format!(" {} cells {what}: {}.", cells.len(), cells.join(", "))
+        }
+    };
+    let missing = listed("have no tolerance declared", &|c| c.tolerance.is_none());
+    let unjudged = listed(
+        "have no compared column with a peak, so nothing to judge",
+        &|c| c.measured.is_none() && c.met.is_none() && c.tolerance.is_some(),
+    );
     let _ = writeln!(
         w,
         "## Verdicts\n\n**{met} of {} cells meet their tolerance.** A cell is one engine on one case \
@@ -67,26 +75,8 @@ fn headline(w: &mut String, checks: &[ToleranceCheck]) {
          least one row, or it failed. Each error is the largest over the compared rows, over the \
          peak of its column, worst column; a column whose exact solution is zero over those rows \
          (a held DOF, a contact force before the first impact) has no peak and is shown in its \
-         unit in the case's section, never mixed in.{}{}\n",
+         unit in the case's section, never mixed in.{missing}{unjudged}\n",
         checks.len(),
-        if missing.is_empty() {
-            String::new()
-        } else {
-            format!(
-                " {} cells have no tolerance declared: {}.",
-                missing.len(),
-                missing.join(", ")
-            )
-        },
-        if unjudged.is_empty() {
-            String::new()
-        } else {
-            format!(
-                " {} cells have no compared column with a peak, so nothing to judge: {}.",
-                unjudged.len(),
-                unjudged.join(", ")
-            )
-        }
     );
 }
 

@@ -38,7 +38,7 @@ pub const STEPS: u64 = 400;
 const WORK_PER_POINT: f64 = 2.0e7;
 
 /// Every timed run is repeated at least this often (the fastest repeat counts): at N = 10^6 a
-/// single run's time moved by up to 1.8× from one study to the next on this machine.
+/// single run's time can move by up to 1.8× from one study to the next (measured on a 2-core VM).
 pub const MIN_REPEATS: u64 = 3;
 
 /// One measured point.

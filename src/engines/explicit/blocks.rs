@@ -25,7 +25,7 @@ pub(super) struct LineSpring<V: Lin> {
 pub(super) const GROUND: u32 = u32::MAX;
 
 /// Particles from which the time loop steps a scene by blocks ([`Model::step_by_blocks`])
-/// where it can: about 45 MB of a 2D chain's data, past this machine's 32 MB third-level
+/// where it can: about 45 MB of a 2D chain's data, past a 32 MB third-level
 /// cache. Measured on the chain of the scaling study in one build, by blocks against the
 /// force pass and update: 8 % slower from 10^3 to 10^5 particles, where the data stay in
 /// cache and the blocks only add bookkeeping; 22 % faster at 10^6, where the second pass

@@ -67,7 +67,7 @@
 //! scene defines them (the first one after the scene's initial velocities are applied,
 //! converted to centre-of-mass velocities v_G = v_O + ω × (R c); [`BodyState::hold`]).
 
-use super::steps::{Placement, groups, held_in_every_dof, locked_axes, static_check};
+use super::steps::{Placement, groups, held_in_every_dof, locked_axes, moved, static_check, turns};
 use crate::engines::EngineError;
 use crate::scene::{
     Attachment, BodyId, Connection, Dimension, Dof, NodeId, Scene, Solid, StepKind, Surface,
@@ -758,21 +758,11 @@ pub fn plan_with(scene: &Scene, holding: Holding) -> Result<Plan, EngineError> {
                 vec![None; bodies.len()],
             ),
         };
-        // Both are judged at the pose the static steps left; a body an earlier dynamic step let
-        // turn is elsewhere now, and a joint (fitted where the step starts) holds it instead. So
-        // does a 3D body with a grounded rotational spring or dashpot that the static steps
-        // turned: its motor reads the twist only from a joint fitted to the turn.
-        for b in 1..bodies.len() {
-            let turned_statically = scene.dimension == Dimension::Three
-                && placement.rotation[b].angle() > 0.0
-                && element_groups.iter().any(|g| {
-                    matches!(g.connection, Connection::Grounded { node, dof: Dof::Rotation(_) }
-                        if nodes[node].body == b)
-                });
-            if turned[b] || turned_statically {
-                fixed[b] = false;
-                locks[b] = None;
-            }
+        for b in (1..bodies.len())
+            .filter(|&b| moved(scene, &nodes, &element_groups, &placement, &turned, b))
+        {
+            fixed[b] = false;
+            locks[b] = None;
         }
         for (id, node) in scene.nodes.iter().enumerate() {
             let r = nodes[id];
@@ -867,21 +857,8 @@ pub fn plan_with(scene: &Scene, holding: Holding) -> Result<Plan, EngineError> {
                 refit,
             });
         }
-        // A rigid body turns in this step unless it is fixed or every rotation of its reference
-        // node is held.
-        for (b, spec) in bodies.iter().enumerate() {
-            let reference = scene
-                .bodies
-                .iter()
-                .find(|sb| nodes[sb.reference].body == b)
-                .map(|sb| sb.reference);
-            if let (BodyKind::Rigid, Some(o)) = (spec.kind, reference) {
-                let held = Dof::all(dim, true)
-                    .into_iter()
-                    .filter(|d| matches!(d, Dof::Rotation(_)))
-                    .all(|d| step.conditions.iter().any(|c| c.node == o && c.dof == d));
-                turned[b] |= !fixed[b] && !held;
-            }
+        for (b, t) in turned.iter_mut().enumerate() {
+            *t |= !fixed[b] && turns(scene, step, &nodes, &bodies, b);
         }
         steps.push(StepSpec {
             duration,

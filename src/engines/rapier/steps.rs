@@ -330,3 +330,49 @@ pub(super) fn locked_axes(
         })
         .collect()
 }
+
+/// Whether plan body `b` may be somewhere other than where the static steps left it when a
+/// dynamic step starts, so that a fixed body or locks judged at that pose do not apply and
+/// joints fitted where the step starts hold it: an earlier dynamic step let it turn
+/// (`turned`), or, in 3D, the static steps turned it and it carries a grounded rotational
+/// spring or dashpot (whose motor reads the twist only from a joint fitted to the turn).
+pub(super) fn moved(
+    scene: &Scene,
+    nodes: &[NodeRef],
+    groups: &[Group],
+    placement: &Placement,
+    turned: &[bool],
+    b: usize,
+) -> bool {
+    let turned_statically = scene.dimension == Dimension::Three
+        && placement.rotation[b].angle() > 0.0
+        && groups.iter().any(|g| {
+            matches!(g.connection, Connection::Grounded { node, dof: Dof::Rotation(_) }
+                if nodes[node].body == b)
+        });
+    turned[b] || turned_statically
+}
+
+/// Whether plan body `b`, not fixed in `step`, turns in it: a rigid body whose reference node
+/// the step leaves a rotation free.
+pub(super) fn turns(
+    scene: &Scene,
+    step: &Step,
+    nodes: &[NodeRef],
+    bodies: &[BodySpec],
+    b: usize,
+) -> bool {
+    let Some(o) = scene
+        .bodies
+        .iter()
+        .find(|sb| nodes[sb.reference].body == b)
+        .map(|sb| sb.reference)
+    else {
+        return false;
+    };
+    bodies[b].kind == BodyKind::Rigid
+        && Dof::all(scene.dimension, true)
+            .into_iter()
+            .filter(|d| matches!(d, Dof::Rotation(_)))
+            .any(|d| !step.conditions.iter().any(|c| c.node == o && c.dof == d))
+}

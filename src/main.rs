@@ -14,7 +14,9 @@ use crosscheck::interrupt;
 use crosscheck::report::{self, staging};
 use crosscheck::run::refinement::Depth;
 use crosscheck::run::{self, LoadError, Plan, budget, sweep};
-use crosscheck::scene::{ContactStart, DampingTreatment, Dimension, IncrementRule, PenaltyRule};
+use crosscheck::scene::{
+    ContactStart, DampingTreatment, Dimension, IncrementRule, PenaltyRule, Scene,
+};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -60,13 +62,13 @@ enum Command {
         files: Vec<PathBuf>,
     },
     /// Sweep each engine's settings (time increment, penalty stiffness, rapier substeps; f32
-    /// and f64) and write what each accuracy costs: `OUT/sweep/<case>.csv` and
+    /// and f64) and write what each accuracy costs: `OUT/sweep.csv` and
     /// `OUT/figures/<case>.work-precision.svg`; orders, floors and time to accuracy on
     /// standard output.
     Sweep(SweepArgs),
     /// Stability map: every engine that steps in time on every case at increments of 0.25 … 4
     /// × the explicit engine's stable increment, each run classified accurate / inaccurate /
-    /// unstable / failed: `OUT/stability/<engine>.csv` and `OUT/figures/stability-<engine>.svg`.
+    /// unstable / failed: `OUT/stability.csv` (with each critical increment) and `OUT/figures/stability-<engine>.svg`.
     Stability(StabilityArgs),
 }
 
@@ -634,29 +636,27 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
         return interrupted();
     }
     let names: Vec<&str> = plan.engines.iter().map(|e| e.name()).collect();
-    // The sweep and accuracy on request cover the seed cases; the stress family is for the
-    // stability map.
+    // Accuracy on request covers the seed cases; the sweep those and the cases that ask for it
+    // (`sweep = true`); the whole stress family is the stability map's.
     let seeds = case::discover(dir).unwrap_or_default();
-    let seed_plan = Plan {
-        cases: plan
-            .cases
+    let is_seed = |s: &Scene| {
+        seeds
             .iter()
-            .filter(|s| {
-                seeds
-                    .iter()
-                    .any(|p| p.file_stem().is_some_and(|f| *f == *s.id))
-            })
-            .cloned()
-            .collect(),
+            .any(|p| p.file_stem().is_some_and(|f| *f == *s.id))
+    };
+    let subplan = |keep: &dyn Fn(&Scene) -> bool| Plan {
+        cases: plan.cases.iter().filter(|s| keep(s)).cloned().collect(),
         engines: Vec::new(),
         settings: plan.settings,
     };
+    let seed_plan = subplan(&is_seed);
+    let sweep_plan = subplan(&|s: &Scene| is_seed(s) || s.sweep);
     let sweeps = if args.sweep {
         let grid = sweep::Grid {
             repeat: args.repeat as usize,
             ..sweep::Grid::default()
         };
-        work_precision::measure(&seed_plan, &outcome, &names, &grid, !args.quiet)
+        work_precision::measure(&sweep_plan, &outcome, &names, &grid, !args.quiet)
     } else {
         Vec::new()
     };
@@ -667,7 +667,7 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
     let maps = if args.stability {
         comparison::stability::measure(&plan, &outcome, &names, !args.quiet)
     } else {
-        Vec::new()
+        Default::default()
     };
     let mapped = started.elapsed().as_secs_f64();
     if interrupt::requested() {
@@ -765,7 +765,7 @@ fn sweep_command(args: SweepArgs, dir: &Path) -> ExitCode {
         Ok(x) => x,
         Err(code) => return code,
     };
-    let (_lock, staging) = match lock_and_stage(&target, !args.no_wait, &["sweep", "figures"]) {
+    let (_lock, staging) = match lock_and_stage(&target, !args.no_wait, &["sweep.csv", "figures"]) {
         Ok(x) => x,
         Err(code) => return code,
     };
@@ -791,7 +791,7 @@ fn sweep_command(args: SweepArgs, dir: &Path) -> ExitCode {
     out.print(&written::text(&sweeps));
     out.print(&format!(
         "written: {} and {}\n",
-        args.out.join("sweep").display(),
+        args.out.join("sweep.csv").display(),
         args.out.join("figures").display()
     ));
     out.finish(ExitCode::SUCCESS)
@@ -808,20 +808,21 @@ fn stability_command(args: StabilityArgs, dir: &Path) -> ExitCode {
         Ok(x) => x,
         Err(code) => return code,
     };
-    let (_lock, staging) = match lock_and_stage(&target, !args.no_wait, &["stability", "figures"]) {
-        Ok(x) => x,
-        Err(code) => return code,
-    };
+    let (_lock, staging) =
+        match lock_and_stage(&target, !args.no_wait, &["stability.csv", "figures"]) {
+            Ok(x) => x,
+            Err(code) => return code,
+        };
     let (plan, outcome) = exact_solutions(cases);
     if interrupt::requested() {
         return interrupted();
     }
-    let points = comparison::stability::measure(&plan, &outcome, &engines, !args.quiet);
+    let map = comparison::stability::measure(&plan, &outcome, &engines, !args.quiet);
     if interrupt::requested() {
         return interrupted();
     }
     if let Err(code) = put_in_place(staging, "the stability map", |dir| {
-        written::write(dir, &points)
+        written::write(dir, &map)
     }) {
         return code;
     }

@@ -51,9 +51,10 @@ fn previous_report() -> (tempfile::TempDir, PathBuf, BTreeMap<String, Vec<u8>>) 
     let stepping = crosscheck::engines::all().len() - 2;
     assert_eq!(
         before.len(),
-        2 * (crosscheck::engines::all().len() + stepping) + 2 * 3 + 2 + 3,
+        2 * (crosscheck::engines::all().len() + stepping) + 2 * 3 + 2 + 2 + 3 + 5,
         "CSVs, budget CSVs, case figures (histories, errors, sketch), budget figures per family, \
-         summary, timings, REPORT.md"
+         case pages, summary, timings, REPORT.md, results.csv, README.md and the three question \
+         pages"
     );
     (root, out, before)
 }
@@ -183,7 +184,7 @@ fn one_writer_per_output() {
     let after = snapshot(&out);
     assert_eq!(
         after.len(),
-        before.len() + 2 * crosscheck::engines::all().len() - 2 + 3, // CSVs, budget CSVs, 3 figures
+        before.len() + 2 * crosscheck::engines::all().len() - 2 + 3 + 1, // CSVs, budget CSVs, 3 figures, its page
         "the new case's CSVs and figure"
     );
     for (name, bytes) in &before {
@@ -237,11 +238,17 @@ fn out_dot_keeps_the_users_files() {
     assert_eq!(
         names(dir.path()),
         [
+            "README.md",
             "REPORT.md",
+            "accuracy.md",
+            "cases",
+            "cost.md",
             "data",
             "data-of-mine",
             "figures",
             "notes.txt",
+            "results.csv",
+            "stability.md",
             "summary.json",
             "timings.json"
         ]
@@ -302,7 +309,7 @@ fn closed_or_full_stdout_is_an_error_not_a_panic() {
         let after = snapshot(&out);
         assert_eq!(
             after.len(),
-            before.len() + 2 * crosscheck::engines::all().len() - 2 + 3, // CSVs, budget CSVs, 3 figures
+            before.len() + 2 * crosscheck::engines::all().len() - 2 + 3 + 1, // CSVs, budget CSVs, 3 figures, its page
             "the report is in place"
         );
     }

@@ -7,8 +7,26 @@ use crosscheck::report::markdown::sci;
 use crosscheck::report::summary::Summary;
 use std::process::Command;
 
+/// Every page of the report under `out`: (its directory, its text): the question pages and
+/// each case's, then `REPORT.md` last.
+fn pages(out: &std::path::Path) -> Vec<(std::path::PathBuf, String)> {
+    let read = |p: std::path::PathBuf| std::fs::read_to_string(&p).unwrap();
+    let mut cases: Vec<std::path::PathBuf> = std::fs::read_dir(out.join("cases"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    cases.sort();
+    let mut all: Vec<(std::path::PathBuf, String)> = ["accuracy.md", "cost.md", "stability.md"]
+        .iter()
+        .map(|p| (out.to_path_buf(), read(out.join(p))))
+        .collect();
+    all.extend(cases.into_iter().map(|p| (out.join("cases"), read(p))));
+    all.push((out.to_path_buf(), read(out.join("REPORT.md"))));
+    all
+}
+
 /// Run every case, with the sweep, into a temporary directory (once per test binary): the
-/// directory, its summary and its REPORT.md.
+/// directory, its summary and its pages, one after the other (`REPORT.md` last).
 fn run_into_temporary_directory() -> &'static (tempfile::TempDir, Summary, String) {
     static RUN: std::sync::OnceLock<(tempfile::TempDir, Summary, String)> =
         std::sync::OnceLock::new();
@@ -34,7 +52,7 @@ fn run_into_temporary_directory() -> &'static (tempfile::TempDir, Summary, Strin
             &std::fs::read_to_string(out.path().join("summary.json")).unwrap(),
         )
         .unwrap();
-        let report = std::fs::read_to_string(out.path().join("REPORT.md")).unwrap();
+        let report: String = pages(out.path()).into_iter().map(|p| p.1).collect();
         (out, summary, report)
     })
 }
@@ -52,11 +70,11 @@ fn sweep_orders_and_floors_are_in_the_summary_and_the_report() {
         .iter()
         .filter(|c| !c.id.starts_with("stress_") && !c.id.starts_with("contact_"))
     {
+        let sweep = std::fs::read_to_string(out.path().join("sweep.csv")).unwrap();
         assert!(
-            out.path()
-                .join("sweep")
-                .join(format!("{}.csv", c.id))
-                .is_file()
+            sweep.lines().any(|l| l.starts_with(&format!("{},", c.id))),
+            "{}: no sweep rows",
+            c.id
         );
         assert!(
             out.path()
@@ -274,16 +292,18 @@ fn verdict_matrix_equals_the_summary_and_every_link_resolves() {
         "every case × engine but the two exact solutions"
     );
     let mut links = 0;
-    for piece in report.split("](").skip(1) {
-        let target = piece.split(')').next().unwrap();
-        assert!(out.path().join(target).is_file(), "link {target}");
-        links += 1;
-        if target.ends_with(".svg") {
-            let svg = std::fs::read_to_string(out.path().join(target)).unwrap();
-            assert!(
-                svg.contains("<svg") && svg.trim_end().ends_with("</svg>"),
-                "{target} is not an SVG document"
-            );
+    for (dir, page) in pages(out.path()) {
+        for piece in page.split("](").skip(1) {
+            let target = piece.split(')').next().unwrap();
+            assert!(dir.join(target).is_file(), "link {target} from {dir:?}");
+            links += 1;
+            if target.ends_with(".svg") {
+                let svg = std::fs::read_to_string(dir.join(target)).unwrap();
+                assert!(
+                    svg.contains("<svg") && svg.trim_end().ends_with("</svg>"),
+                    "{target} is not an SVG document"
+                );
+            }
         }
     }
     assert!(links >= 13, "one figure per case at least, found {links}");
@@ -344,14 +364,16 @@ fn equivalent_cases_are_found_and_agree() {
 fn the_stability_map_is_in_the_report_and_matches_its_csvs() {
     let (out, _, report) = run_into_temporary_directory();
     assert!(report.contains("## Where each engine stays stable"));
+    let csv = std::fs::read_to_string(out.path().join("stability.csv")).unwrap();
     for engine in crosscheck::run::stability::ENGINES {
-        let csv =
-            std::fs::read_to_string(out.path().join("stability").join(format!("{engine}.csv")))
-                .unwrap();
+        // case, engine, search, ratio, increment_s, outcome, …: the grid's rows, ratio and
+        // outcome in columns 1 and 3 as the table reads them.
         let rows: Vec<Vec<&str>> = csv
             .lines()
             .skip(1)
-            .map(|l| l.split(',').collect())
+            .map(|l| l.split(',').collect::<Vec<&str>>())
+            .filter(|r| r[1] == engine && r[2] == "grid")
+            .map(|r| vec![r[0], r[3], r[4], r[5]])
             .collect();
         assert_eq!(rows.len(), 32 * crosscheck::run::stability::RATIOS.len());
         let count = |ratio: &str, outcome: &str| {
@@ -473,4 +495,118 @@ fn the_contact_section_shows_the_summarys_rebounds() {
         .find(|l| l.starts_with("| contact_drop_e1 | explicit | "))
         .unwrap();
     assert!(line.ends_with(&format!("| {:.2e} |", explicit)), "{line}");
+}
+
+/// The first screen answers the user's three questions in its first 60 lines, with the
+/// summary's numbers: tolerances met per engine, CPU time to 1e-4 against `explicit` on the
+/// sliding seed case, and each engine's largest stable increment on the pinned seed case in
+/// seconds. The tidy CSVs give the same answers in a few lines.
+#[test]
+fn the_first_screen_answers_the_three_questions_as_the_csvs_do() {
+    let (out, summary, _) = run_into_temporary_directory();
+    let text = std::fs::read_to_string(out.path().join("REPORT.md")).unwrap();
+    let first: Vec<&str> = text.lines().take(60).collect();
+    let case = |id: &str| summary.cases.iter().find(|c| c.id == id).unwrap();
+    let run = |id: &str, e: &str| case(id).runs.iter().find(|r| r.engine == e).unwrap();
+    let cells =
+        |line: &str| -> Vec<String> { line.split('|').map(|c| c.trim().to_string()).collect() };
+    // How close: tolerances met, as the summary counts them.
+    let checks = summary.tolerance_checks();
+    for e in crosscheck::run::sweep::ENGINES {
+        let row = first
+            .iter()
+            .find(|l| l.starts_with(&format!("| `{e}` |")))
+            .unwrap_or_else(|| panic!("{e}: no engine row on the first screen"));
+        let mine: Vec<_> = checks.iter().filter(|c| c.engine == e).collect();
+        let met = mine.iter().filter(|c| c.met()).count();
+        assert_eq!(cells(row)[2], format!("{met} of {}", mine.len()), "{row}");
+    }
+    // What it costs: the cost table's rigid2d_slide_lumped row, `explicit` in s/s and
+    // `rapier_f64` as a multiple of it (to the printed precision).
+    let cost = |e: &str| {
+        run("rigid2d_slide_lumped", e)
+            .cost_to_accuracy
+            .iter()
+            .find(|c| c.target == 1e-4)
+            .and_then(|c| c.cpu_s_per_simulated_s)
+            .unwrap()
+    };
+    let row = first
+        .iter()
+        .find(|l| l.starts_with("| rigid2d_slide_lumped |") && l.contains("s/s"))
+        .expect("a cost row for the sliding seed case");
+    let c = cells(row);
+    assert_eq!(c[2], format!("{} s/s", sci(cost("explicit"))), "{row}");
+    let printed: f64 = c[4]
+        .trim_start_matches("≈ ")
+        .split('×')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let ratio = cost("rapier_f64") / cost("explicit");
+    assert!(
+        (printed / ratio - 1.0).abs() < 0.05,
+        "{printed} against {ratio}"
+    );
+    // Stable: the critical increments of rigid2d_pin_lumped, in seconds, as stability.csv has
+    // them.
+    let row = first
+        .iter()
+        .rev()
+        .find(|l| l.starts_with("| rigid2d_pin_lumped |"))
+        .expect("a critical increment row");
+    let c = cells(row);
+    let csv = std::fs::read_to_string(out.path().join("stability.csv")).unwrap();
+    for (k, e) in crosscheck::run::sweep::ENGINES.iter().enumerate() {
+        let k_crit = run("rigid2d_pin_lumped", e)
+            .critical_increment
+            .as_ref()
+            .unwrap();
+        let from_csv: f64 = csv
+            .lines()
+            .map(|l| l.split(',').collect::<Vec<&str>>())
+            .find(|f| f[0] == "rigid2d_pin_lumped" && f[1] == *e)
+            .unwrap()[8]
+            .parse()
+            .unwrap();
+        assert_eq!(from_csv, k_crit.seconds);
+        let prefix = if k_crit.bound == "at_least" {
+            "≥ "
+        } else {
+            ""
+        };
+        assert_eq!(
+            c[2 + k],
+            format!("{prefix}{:.3e}", k_crit.seconds),
+            "{e}: {row}"
+        );
+    }
+    // results.csv: the worst relative error per case and engine is the summary's verdict.
+    let mut reader = csv::Reader::from_path(out.path().join("results.csv")).unwrap();
+    let rows: Vec<Vec<String>> = reader
+        .records()
+        .map(|r| r.unwrap().iter().map(String::from).collect())
+        .collect();
+    for check in checks.iter().filter(|c| c.measured.is_some()) {
+        let worst = rows
+            .iter()
+            .filter(|r| r[0] == check.case && r[1] == check.engine && r[6] == "true")
+            .map(|r| r[5].parse::<f64>().unwrap())
+            .fold(0.0f64, f64::max);
+        assert_eq!(
+            Some(worst),
+            check.measured,
+            "{} / {}",
+            check.case,
+            check.engine
+        );
+    }
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.path().join("summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(
+        v["schema_version"],
+        crosscheck::report::summary::SCHEMA_VERSION
+    );
 }

@@ -79,7 +79,7 @@ fn a_failed_case_does_not_stop_the_others() {
             .filter(|r| r.engine.starts_with("explicit"))
             .all(|r| r.error.as_deref().is_some_and(|e| e.contains("unstable")))
     );
-    let md = std::fs::read_to_string(out.path().join("REPORT.md")).unwrap();
+    let md = std::fs::read_to_string(out.path().join("accuracy.md")).unwrap();
     assert!(md.contains("Failed runs") && md.contains("rigid2d_pin_lumped / explicit"));
 }
 
@@ -178,7 +178,7 @@ fn runs_are_deterministic_across_thread_counts() {
         snaps.push(s);
     }
     // A CSV per case and engine, a budget CSV per case and stepping engine (all but the closed
-    // form and the reference), and the summary.
+    // form and the reference), results.csv and the summary.
     let stepping = engines::all().len() - 2;
     // 35 cases: the 13 seed cases and the 22 of the stress family; 10 of those (contact that
     // opens and closes from t = 0) have no closed form, so neither its CSV nor budgets (a
@@ -190,7 +190,7 @@ fn runs_are_deterministic_across_thread_counts() {
         snaps[0].len(),
         35 * engines::all().len() - without_closed_form - small_refused
             + (35 - without_closed_form) * stepping
-            + 1
+            + 2
     );
     assert_eq!(snaps[0], snaps[1]);
 }

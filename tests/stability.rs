@@ -328,23 +328,49 @@ fn the_stability_command_writes_its_maps() {
         .status()
         .unwrap();
     assert!(status.success());
+    let csv = std::fs::read_to_string(out.path().join("stability.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next(),
+        Some(
+            "case,engine,search,ratio,increment_s,outcome,error_max,energy_growth,\
+             critical_increment_s,critical_ratio,critical_bound"
+        )
+    );
+    let all: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     for engine in ["explicit", "rapier_f64"] {
-        let csv =
-            std::fs::read_to_string(out.path().join("stability").join(format!("{engine}.csv")))
-                .unwrap();
-        let mut lines = csv.lines();
-        assert_eq!(
-            lines.next(),
-            Some("case,ratio,increment,outcome,error_max,energy_growth")
-        );
-        let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
-        assert_eq!(rows.len(), 2 * 10);
-        for r in &rows {
-            let ratio: f64 = r[1].parse().unwrap();
-            let outcome = r[3];
+        let mine: Vec<&Vec<&str>> = all.iter().filter(|r| r[1] == engine).collect();
+        let grid: Vec<&&Vec<&str>> = mine.iter().filter(|r| r[2] == "grid").collect();
+        assert_eq!(grid.len(), 2 * 10);
+        for r in &grid {
+            let ratio: f64 = r[3].parse().unwrap();
+            let outcome = r[5];
             if engine == "explicit" {
                 // The explicit engine's map has its edge exactly at the stable increment.
                 assert_eq!(outcome == "unstable", ratio > 1.0, "{r:?}");
+            }
+        }
+        for case in ["stress_pair_undamped", "springs_grounded_a"] {
+            let rows: Vec<&&Vec<&str>> = mine.iter().filter(|r| r[0] == case).collect();
+            let critical: f64 = rows[0][9].parse().unwrap();
+            if engine == "explicit" {
+                // Undamped linear springs: central differences are stable up to h = 2/ω, the
+                // computed stable increment; bisected to 1 %, the largest bounded run is
+                // within 1 % below it, or a little above it where the growth of a mode just
+                // past the limit stays under the energy criterion over the run (2 %).
+                assert!((0.985..=1.02).contains(&critical), "{case}: {critical}");
+                assert_eq!(rows[0][10], "bisected");
+                // The bisection's runs bracket it: one bounded at it, one unstable within 1 %.
+                let unstable = rows
+                    .iter()
+                    .filter(|r| r[5] == "unstable")
+                    .map(|r| r[3].parse::<f64>().unwrap())
+                    .fold(f64::INFINITY, f64::min);
+                assert!(unstable / critical <= 1.01 + 1e-12, "{case}: {unstable}");
+            } else {
+                // rapier's joint springs are implicit: bounded at every increment tried.
+                assert_eq!(rows[0][10], "at_least", "{case}");
+                assert!((critical - 64.0).abs() < 1e-9, "{case}: {critical}");
             }
         }
         let svg = std::fs::read_to_string(

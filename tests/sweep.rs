@@ -131,26 +131,43 @@ fn a_sweep_writes_its_csvs_and_figures() {
     let (a, b) = (dir.path().join("a"), dir.path().join("b"));
     sweep_into(&a);
     sweep_into(&b);
-    for case in cases {
-        let text = std::fs::read_to_string(a.join("sweep").join(format!("{case}.csv"))).unwrap();
-        let mut lines = text.lines();
+    // One file for every case: its rows, as a CSV reader sees them (a path label has a comma).
+    let records = |dir: &std::path::Path| -> Vec<Vec<String>> {
+        let mut reader = csv::Reader::from_path(dir.join("sweep.csv")).unwrap();
         assert_eq!(
-            lines.next().unwrap(),
-            "engine,precision,increment,penalty_stiffness,iterations,steps,error_max,error_rms,\
-             cpu_s_min,cpu_s_median,cpu_s_max,status"
+            reader
+                .headers()
+                .unwrap()
+                .iter()
+                .collect::<Vec<_>>()
+                .join(","),
+            "case,engine,precision,path,varied,increment_s,substeps,penalty_n_per_m,steps,\
+             error,error_rms,cpu_s_per_simulated_s,cpu_s_per_simulated_s_median,\
+             cpu_s_per_simulated_s_max,status"
         );
-        let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+        reader
+            .records()
+            .map(|r| r.unwrap().iter().map(String::from).collect())
+            .collect()
+    };
+    let (all_a, all_b) = (records(&a), records(&b));
+    for case in cases {
+        let rows: Vec<&Vec<String>> = all_a.iter().filter(|r| r[0] == case).collect();
         assert!(rows.len() > 20, "{case}: {} rows", rows.len());
         for r in &rows {
-            assert_eq!(r.len(), 12, "{r:?}");
-            assert!(["ok", "unstable", "failed"].contains(&r[11]), "{r:?}");
-            let cpu: Vec<f64> = r[8..11].iter().map(|x| x.parse().unwrap()).collect();
+            assert_eq!(r.len(), 15, "{r:?}");
+            assert!(
+                ["ok", "unstable", "failed"].contains(&r[14].as_str()),
+                "{r:?}"
+            );
+            assert!(["h", "substeps"].contains(&r[4].as_str()), "{r:?}");
+            let cpu: Vec<f64> = r[11..14].iter().map(|x| x.parse().unwrap()).collect();
             assert!(
                 cpu[0] > 0.0 && cpu[0] <= cpu[1] && cpu[1] <= cpu[2],
                 "{r:?}"
             );
-            if r[11] == "ok" {
-                let e: f64 = r[6].parse().unwrap();
+            if r[14] == "ok" {
+                let e: f64 = r[9].parse().unwrap();
                 assert!(e.is_finite() && e >= 0.0, "{r:?}");
             }
         }
@@ -158,28 +175,22 @@ fn a_sweep_writes_its_csvs_and_figures() {
         if case.starts_with("rigid") {
             assert!(
                 rows.iter()
-                    .any(|r| r[0] == "explicit" && r[11] == "unstable"),
+                    .any(|r| r[1] == "explicit" && r[14] == "unstable"),
                 "{case}: no unstable probe"
             );
         }
         for engine in sweep::ENGINES {
-            assert!(rows.iter().any(|r| r[0] == engine), "{case}: no {engine}");
+            assert!(rows.iter().any(|r| r[1] == engine), "{case}: no {engine}");
         }
         let svg =
             std::fs::read_to_string(a.join("figures").join(format!("{case}.work-precision.svg")))
                 .unwrap();
         let doc = roxmltree::Document::parse(&svg).unwrap_or_else(|e| panic!("{case}: {e}"));
         assert_eq!(doc.root_element().tag_name().name(), "svg");
-        // Same settings, same errors: everything but the CPU times is reproduced.
-        let other = std::fs::read_to_string(b.join("sweep").join(format!("{case}.csv"))).unwrap();
-        let strip = |t: &str| -> Vec<String> {
-            t.lines()
-                .map(|l| {
-                    let f: Vec<&str> = l.split(',').collect();
-                    [&f[..8], &f[11..]].concat().join(",")
-                })
-                .collect()
-        };
-        assert_eq!(strip(&text), strip(&other), "{case}");
     }
+    // Same settings, same errors: everything but the CPU times is reproduced.
+    let strip = |rows: &[Vec<String>]| -> Vec<Vec<String>> {
+        rows.iter().map(|f| [&f[..11], &f[14..]].concat()).collect()
+    };
+    assert_eq!(strip(&all_a), strip(&all_b));
 }

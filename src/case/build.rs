@@ -1246,6 +1246,7 @@ pub fn scene(case: &CaseFile, stem: Option<&str>) -> Result<Scene, SceneError> {
             contact_start,
         },
         tolerances,
+        sweep: case.sweep,
     })
 }
 

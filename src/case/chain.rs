@@ -216,6 +216,7 @@ impl Chain {
                 contact_start: ContactStart::Consistent,
             },
             tolerances: Default::default(),
+            sweep: false,
         }
     }
 }

@@ -56,6 +56,9 @@ pub struct CaseFile {
     /// Tolerances each engine must meet against the closed form (read by the comparison).
     #[serde(default)]
     pub tolerances: toml::Table,
+    /// Whether the main command sweeps this case (what accuracy costs) besides the seed cases.
+    #[serde(default)]
+    pub sweep: bool,
 }
 
 /// `[time]`: how the time increment is chosen.

@@ -3,13 +3,14 @@
 
 use crate::comparison::against_own_model;
 use crate::contract::History;
-use crate::run::stability::{self, Point};
+use crate::run::stability::{self, Map};
 use crate::run::{Outcome, Plan};
 use crate::scene::Scene;
 
 /// Map every case of `plan` for the `engines` asked for (those of [`stability::ENGINES`]),
-/// measuring errors against the exact solutions in `outcome`.
-pub fn measure(plan: &Plan, outcome: &Outcome, engines: &[&str], progress: bool) -> Vec<Point> {
+/// measuring errors against the exact solutions in `outcome`, and bisect each pair's critical
+/// increment ([`stability::critical`]).
+pub fn measure(plan: &Plan, outcome: &Outcome, engines: &[&str], progress: bool) -> Map {
     let error_of =
         |scene: &Scene, engine: &str, h: &History| against_own_model(outcome, scene, engine, h);
     let chosen: Vec<&str> = stability::ENGINES
@@ -26,6 +27,8 @@ pub fn measure(plan: &Plan, outcome: &Outcome, engines: &[&str], progress: bool)
     let points = stability::run(&scenes, &chosen, &stability::RATIOS, &error_of, &|| {
         bar.inc(1)
     });
+    bar.set_message("critical increments");
+    let critical = stability::critical(&scenes, &points, &error_of);
     bar.finish_and_clear();
-    points
+    Map { points, critical }
 }

@@ -90,8 +90,14 @@ pub struct CaseSweep {
 /// One point as the sweep CSV writes it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Row {
+    /// Case id.
+    pub case: String,
     /// Engine name.
     pub engine: String,
+    /// The path it is on ([`SweepPath::label`]).
+    pub path: String,
+    /// What the path varies: `h` (the increment) or `substeps`.
+    pub varied: String,
     /// `f64` or `f32`.
     pub precision: String,
     /// Time increment taken.
@@ -116,19 +122,23 @@ pub struct Row {
     pub status: String,
 }
 
-/// The CSV columns, in order.
-pub const COLUMNS: [&str; 12] = [
+/// The CSV columns, in order (units: `increment_s` seconds, `penalty_n_per_m` N/m, errors
+/// over the column's peak, CPU seconds per simulated second).
+pub const COLUMNS: [&str; 15] = [
+    "case",
     "engine",
     "precision",
-    "increment",
-    "penalty_stiffness",
-    "iterations",
+    "path",
+    "varied",
+    "increment_s",
+    "substeps",
+    "penalty_n_per_m",
     "steps",
-    "error_max",
+    "error",
     "error_rms",
-    "cpu_s_min",
-    "cpu_s_median",
-    "cpu_s_max",
+    "cpu_s_per_simulated_s",
+    "cpu_s_per_simulated_s_median",
+    "cpu_s_per_simulated_s_max",
     "status",
 ];
 
@@ -142,12 +152,12 @@ impl CaseSweep {
     pub fn path_rows(&self, path: &SweepPath) -> Vec<Row> {
         path.points
             .iter()
-            .map(|pt| row(path, pt, self.duration))
+            .map(|pt| row(&self.case, path, pt, self.duration))
             .collect()
     }
 }
 
-fn row(path: &SweepPath, p: &sweep::Point, duration: f64) -> Row {
+fn row(case: &str, path: &SweepPath, p: &sweep::Point, duration: f64) -> Row {
     let mut cpu: Vec<f64> = p.cpu_seconds.iter().map(|c| c / duration).collect();
     cpu.sort_by(f64::total_cmp);
     let (min, max) = (
@@ -155,7 +165,14 @@ fn row(path: &SweepPath, p: &sweep::Point, duration: f64) -> Row {
         cpu.last().copied().unwrap_or(0.0),
     );
     Row {
+        case: case.to_string(),
         engine: path.engine.clone(),
+        path: path.label(),
+        varied: match path.kind {
+            PathKind::Increment { .. } => "h",
+            PathKind::Substeps { .. } => "substeps",
+        }
+        .to_string(),
         precision: path.precision.to_string(),
         increment: p.increment,
         penalty_stiffness: p.penalty_stiffness,
@@ -469,4 +486,173 @@ pub fn pareto(rows: &[Row]) -> Vec<usize> {
         }
     }
     front
+}
+
+/// How a time to accuracy was found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Reached {
+    /// A swept point within the target: the cheapest such.
+    Measured,
+    /// Beyond the sweep, along the observed order from its most accurate point.
+    Extrapolated,
+    /// Refinement stopped paying above the target (the floor is named).
+    Floor,
+    /// Neither reached nor extrapolable (no asymptotic range).
+    NotReached,
+}
+
+/// What reaching an accuracy costs an engine on a case.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CostToAccuracy {
+    /// The accuracy asked for: largest error over the peak, worst column.
+    pub target: f64,
+    /// How it was found.
+    pub reached: Reached,
+    /// CPU seconds per simulated second (measured or extrapolated).
+    pub cpu_s_per_simulated_s: Option<f64>,
+    /// The order it was extrapolated along (error ∝ hᵖ, CPU time ∝ 1/h).
+    pub order: Option<f64>,
+    /// The error of the point it was measured at or extrapolated from; for a floor, the floor.
+    pub error: Option<f64>,
+    /// For a floor, what limits it.
+    pub cause: Option<String>,
+}
+
+/// What each of [`TARGETS`] costs `fit`'s engine on `sweep`'s case: the cheapest swept point
+/// within it; else, where a floor above the target stopped the sweep, that floor; else, along
+/// the observed order p from the engine's most accurate point on the path the order was fitted
+/// on (CPU time × (error / target)^(1/p): CPU time ∝ 1/h, error ∝ hᵖ); else not reached.
+pub fn costs(sweep: &CaseSweep, fit: &EngineFit) -> Vec<CostToAccuracy> {
+    let rows: Vec<Row> = sweep
+        .paths
+        .iter()
+        .filter(|p| p.engine == fit.engine)
+        .flat_map(|p| sweep.path_rows(p))
+        .collect();
+    // The points to extrapolate from: the fitted path's (every path of the engine for the
+    // penalty diagonal, which is not one path).
+    let along: Vec<Row> = match &fit.observed_order {
+        Some(o) => {
+            let path: Vec<Row> = sweep
+                .paths
+                .iter()
+                .filter(|p| p.engine == fit.engine && p.label() == o.path)
+                .flat_map(|p| sweep.path_rows(p))
+                .collect();
+            if path.is_empty() { rows.clone() } else { path }
+        }
+        None => Vec::new(),
+    };
+    let best = along
+        .iter()
+        .filter(|r| r.status == "ok")
+        .filter_map(|r| Some((r.error_max?, r.cpu_s_min)))
+        .min_by(|a, b| a.0.total_cmp(&b.0));
+    TARGETS
+        .iter()
+        .map(|&target| {
+            let mut cost = CostToAccuracy {
+                target,
+                reached: Reached::NotReached,
+                cpu_s_per_simulated_s: None,
+                order: None,
+                error: None,
+                cause: None,
+            };
+            match cheapest(&rows, &fit.engine, target) {
+                Reach::Reached(r) => {
+                    cost.reached = Reached::Measured;
+                    cost.cpu_s_per_simulated_s = Some(r.cpu_s_min);
+                    cost.error = r.error_max;
+                }
+                Reach::NotReached(smallest) => {
+                    let order = fit.observed_order.as_ref().map(|o| o.value);
+                    match (&fit.floor, order, best) {
+                        (Some(f), _, _) if f.value > target => {
+                            cost.reached = Reached::Floor;
+                            cost.error = Some(f.value);
+                            cost.cause = Some(f.cause.clone());
+                        }
+                        (_, Some(p), Some((e, cpu))) if p >= MIN_EXTRAPOLATED_ORDER => {
+                            cost.reached = Reached::Extrapolated;
+                            cost.cpu_s_per_simulated_s = Some(cpu * (e / target).powf(1.0 / p));
+                            cost.order = Some(p);
+                            cost.error = Some(e);
+                        }
+                        _ => cost.error = smallest,
+                    }
+                }
+            }
+            cost
+        })
+        .collect()
+}
+
+/// Below this observed order a time to accuracy is not extrapolated (a slope that shallow is
+/// not an asymptotic range).
+pub const MIN_EXTRAPOLATED_ORDER: f64 = 0.5;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A first-order engine whose CPU time per simulated second is 1/h: error h, so the time to
+    /// an error ε is 1/ε, measured or not.
+    fn first_order(finest: i32) -> CaseSweep {
+        let points = (0..=finest)
+            .map(|k| {
+                let h = 10f64.powi(-k);
+                sweep::Point {
+                    increment: h,
+                    penalty_stiffness: None,
+                    iterations: None,
+                    steps: (1.0 / h) as u64,
+                    stable_increment: None,
+                    error: Some((h, h)),
+                    cpu_seconds: vec![1.0 / h],
+                    status: Status::Ok,
+                    message: None,
+                }
+            })
+            .collect();
+        let path = SweepPath {
+            engine: "rapier_f64".into(),
+            precision: "f64",
+            kind: PathKind::Increment {
+                penalty_ratio: None,
+            },
+            points,
+            ended: "budget",
+        };
+        let fits = vec![fit("rapier_f64", std::slice::from_ref(&path), false)];
+        CaseSweep {
+            case: "synthetic".into(),
+            duration: 1.0,
+            paths: vec![path],
+            fits,
+        }
+    }
+
+    #[test]
+    fn a_cost_beyond_the_sweep_is_extrapolated_along_the_observed_order() {
+        let sweep = first_order(2); // errors 1, 0.1, 0.01
+        let found = costs(&sweep, &sweep.fits[0]);
+        let at = |t: f64| found.iter().find(|c| c.target == t).unwrap();
+        assert_eq!(at(1e-2).reached, Reached::Measured);
+        assert_eq!(at(1e-2).cpu_s_per_simulated_s, Some(100.0));
+        // 1e-4 and 1e-6: along order 1 from the finest point, 1/ε (to round-off).
+        for t in [1e-4, 1e-6] {
+            let c = at(t);
+            assert_eq!(c.reached, Reached::Extrapolated);
+            assert!((c.order.unwrap() - 1.0).abs() < 1e-12);
+            let cpu = c.cpu_s_per_simulated_s.unwrap();
+            assert!((cpu * t - 1.0).abs() < 1e-9, "{t}: {cpu}");
+        }
+        // Swept further, the same figure is measured.
+        let further = first_order(4);
+        let measured = costs(&further, &further.fits[0]);
+        assert_eq!(measured[1].reached, Reached::Measured);
+        assert!((measured[1].cpu_s_per_simulated_s.unwrap() * 1e-4 - 1.0).abs() < 1e-9);
+    }
 }

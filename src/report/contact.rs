@@ -56,7 +56,8 @@ pub fn section(w: &mut String, s: &Summary) {
         let _ = writeln!(
             w,
             "Rebound height of the first impact over the drop, against e² (penalty contact: a \
-             contact dashpot sized for e; rapier: its `restitution`, the block a fixed body):\n"
+             contact dashpot sized for e; rapier: its `restitution`, the block a fixed body):\n\n\
+             ![first rebound over the drop against e, every engine, over e²](figures/rebound.svg)\n"
         );
         let _ = writeln!(w, "| case | e | e² | {} |", names.join(" | "));
         let _ = writeln!(w, "|---|---:|---:|{}", "---:|".repeat(names.len()));

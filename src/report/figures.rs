@@ -3,20 +3,11 @@
 
 use crate::comparison;
 use crate::contract::{self, History};
+use crate::report::palette;
 use crate::scene::Scene;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::path::{Path, PathBuf};
-
-/// Engines drawn, with their colours, in drawing order (the closed form last, on top).
-const DRAWN: [(&str, RGBColor); 6] = [
-    ("rapier_f64_default", RGBColor(200, 160, 0)),
-    ("rapier_f64", RGBColor(214, 39, 40)),
-    ("explicit", RGBColor(31, 119, 180)),
-    ("explicit_small", RGBColor(44, 160, 44)),
-    ("reference", RGBColor(148, 103, 189)),
-    ("analytic", RGBColor(0, 0, 0)),
-];
 
 /// Width of the legend column on the right of every panel (outside the data).
 const LEGEND_WIDTH: u32 = 240;
@@ -69,9 +60,56 @@ pub fn figure_path(out: &Path, case: &str) -> PathBuf {
     out.join("figures").join(format!("{case}.svg"))
 }
 
+/// Drawn, in drawing order: the exact solutions first (thick, grey, underneath), then every
+/// engine.
+const DRAWN: [&str; 8] = [
+    "analytic",
+    "reference",
+    "rapier_f64_default",
+    "rapier_f32_default",
+    "rapier_f64",
+    "rapier_f32",
+    "explicit_small",
+    "explicit",
+];
+
+/// Height of the one legend, under the title.
+const LEGEND_HEIGHT: u32 = 50;
+
+/// Markers per line: each engine's at its own times, so that lines which agree and overlap
+/// still show every engine.
+const MARKERS: usize = 8;
+
+/// A line's width: the exact solutions thick, under the engines.
+fn stroke(engine: &str) -> u32 {
+    match engine {
+        "analytic" => 7,
+        "reference" => 4,
+        _ => 2,
+    }
+}
+
+/// The runs of consecutive points within [lo, hi] (a run that leaves the range is broken
+/// there, not drawn along the frame).
+fn within(points: &[(f64, f64)], lo: f64, hi: f64) -> Vec<Vec<(f64, f64)>> {
+    let mut runs: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
+    for &(t, y) in points {
+        if (lo..=hi).contains(&y) {
+            if let Some(r) = runs.last_mut() {
+                r.push((t, y));
+            }
+        } else if runs.last().is_some_and(|r| !r.is_empty()) {
+            runs.push(Vec::new());
+        }
+    }
+    runs.retain(|r| !r.is_empty());
+    runs
+}
+
 /// Render a case's figure: one panel per column in `columns` (name and unit) whose values are
-/// not all zero, every available engine's history as a line. `histories` pairs engine names
-/// with histories.
+/// not all zero, every available engine's history as a line (the exact solutions thick and
+/// grey underneath, each engine with markers at its own times), one legend under the title.
+/// `histories` pairs engine names with histories.
 pub fn render(
     case: &str,
     columns: &[(&str, &str)],
@@ -89,20 +127,25 @@ pub fn render(
     if live.is_empty() {
         return None;
     }
+    let drawn: Vec<&str> = DRAWN
+        .iter()
+        .copied()
+        .filter(|e| histories.iter().any(|(h, _)| h == e))
+        .collect();
+    let mut leaves: Vec<&str> = Vec::new();
     let mut svg = String::new();
     {
-        let height = 220 * live.len() as u32 + 40;
-        let root =
-            SVGBackend::with_string(&mut svg, (900 + LEGEND_WIDTH, height)).into_drawing_area();
+        let height = 220 * live.len() as u32 + 40 + LEGEND_HEIGHT;
+        let root = SVGBackend::with_string(&mut svg, (1000, height)).into_drawing_area();
         root.fill(&WHITE).ok()?;
-        let (title, body) = root.split_vertically(40);
+        let (title, rest) = root.split_vertically(40);
+        let (legend, body) = rest.split_vertically(LEGEND_HEIGHT);
         title.titled(case, ("sans-serif", 22)).ok()?;
         let panels = body.split_evenly((live.len(), 1));
-        for (whole, &(column, unit)) in panels.iter().zip(&live) {
-            let (panel, legend) = whole.split_horizontally(900);
-            let series: Vec<Series> = DRAWN
+        for (panel, &(column, unit)) in panels.iter().zip(&live) {
+            let series: Vec<Series> = drawn
                 .iter()
-                .filter_map(|(engine, colour)| {
+                .filter_map(|engine| {
                     let (_, h) = histories.iter().find(|(e, _)| e == engine)?;
                     let t = h.column("t")?;
                     let v = h.column(column)?;
@@ -111,67 +154,131 @@ pub fn render(
                         .zip(v)
                         .filter(|(t, y)| t.is_finite() && y.is_finite())
                         .collect();
-                    Some((*engine, *colour, finite))
+                    Some((*engine, palette::engine(engine), finite))
                 })
                 .collect();
-            let (t0, t1) = series
-                .iter()
-                .flat_map(|s| s.2.iter().map(|p| p.0))
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
-                    (a.min(t), b.max(t))
-                });
-            // Scale to the closed form (else the converged reference, else the first engine) so
-            // one wild run does not flatten the others; wild values are clipped at the panel
-            // edge. A constant scale (the reference's contact force where its impacts are
-            // impulses) would clip every engine: then all of them set the range.
-            let range = |points: &mut dyn Iterator<Item = f64>| {
-                points.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), y| {
-                    (a.min(y), b.max(y))
-                })
-            };
-            let scale = series
-                .iter()
-                .find(|s| s.0 == "analytic")
-                .or(series.iter().find(|s| s.0 == "reference"))
-                .or(series.first())?;
-            let (mut lo, mut hi) = range(&mut scale.2.iter().map(|p| p.1));
-            if hi <= lo {
-                (lo, hi) = range(&mut series.iter().flat_map(|s| s.2.iter().map(|p| p.1)));
+            for e in panel_lines(panel, column, unit, &series)? {
+                if !leaves.contains(&e) {
+                    leaves.push(e);
+                }
             }
-            let (lo, hi) = padded(lo, hi)?;
-            if !(t0.is_finite() && t1.is_finite() && t1 > t0) {
-                return None;
-            }
-            let mut chart = ChartBuilder::on(&panel)
-                .margin(8)
-                .x_label_area_size(36)
-                .y_label_area_size(80)
-                .build_cartesian_2d(t0..t1, lo..hi)
+        }
+        for (i, engine) in drawn.iter().enumerate() {
+            let x = 20 + 240 * (i % 4) as i32;
+            let y = 14 + 22 * (i / 4) as i32;
+            let colour = palette::engine(engine);
+            legend
+                .draw(&PathElement::new(
+                    [(x, y), (x + 28, y)],
+                    colour.stroke_width(stroke(engine)),
+                ))
                 .ok()?;
-            let (x_span, y_span) = (t1 - t0, hi - lo);
-            chart
-                .configure_mesh()
-                .x_desc("t [s]")
-                .y_desc(format!("{column} [{unit}]"))
-                .x_label_formatter(&|x| tick(*x, x_span))
-                .y_label_formatter(&|y| tick(*y, y_span))
-                .light_line_style(WHITE)
-                .draw()
-                .ok()?;
-            for (row, (engine, colour, points)) in series.iter().enumerate() {
-                let clipped = points.iter().map(|(t, y)| (*t, y.clamp(lo, hi)));
-                chart
-                    .draw_series(LineSeries::new(clipped, colour.stroke_width(1)))
+            if !palette::is_exact(engine) {
+                legend
+                    .draw(&Circle::new((x + 14, y), 4, colour.filled()))
                     .ok()?;
-                // The legend, in its own column right of the data. A run that leaves the
-                // closed form's range is clipped at the panel edge, and says so.
-                let outside = points.iter().any(|(_, y)| *y < lo || *y > hi);
-                legend_entry(&legend, row, *colour, engine, outside)?;
             }
+            let label = if leaves.contains(engine) {
+                format!("{engine} (leaves the range)")
+            } else {
+                engine.to_string()
+            };
+            legend
+                .draw(&Text::new(
+                    label,
+                    (x + 36, y - 7),
+                    ("sans-serif", 13).into_font(),
+                ))
+                .ok()?;
         }
         root.present().ok()?;
     }
     Some(svg)
+}
+
+/// One panel: its axes scaled to the exact solution, each series drawn where it is within
+/// them. Returns the engines that leave the range.
+fn panel_lines<'a, DB: DrawingBackend>(
+    panel: &DrawingArea<DB, plotters::coord::Shift>,
+    column: &str,
+    unit: &str,
+    series: &[Series<'a>],
+) -> Option<Vec<&'a str>> {
+    let (t0, t1) = series
+        .iter()
+        .flat_map(|s| s.2.iter().map(|p| p.0))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
+            (a.min(t), b.max(t))
+        });
+    // Scale to the closed form (else the converged reference, else the first engine) so one
+    // wild run does not flatten the others. A constant scale (the reference's contact force
+    // where its impacts are impulses) would leave out every engine: then all of them set it.
+    let range = |points: &mut dyn Iterator<Item = f64>| {
+        points.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), y| {
+            (a.min(y), b.max(y))
+        })
+    };
+    let scale = series
+        .iter()
+        .find(|s| s.0 == "analytic")
+        .or(series.iter().find(|s| s.0 == "reference"))
+        .or(series.first())?;
+    let (mut lo, mut hi) = range(&mut scale.2.iter().map(|p| p.1));
+    if hi <= lo {
+        (lo, hi) = range(&mut series.iter().flat_map(|s| s.2.iter().map(|p| p.1)));
+    }
+    let (lo, hi) = padded(lo, hi)?;
+    if !(t0.is_finite() && t1.is_finite() && t1 > t0) {
+        return None;
+    }
+    let mut chart = ChartBuilder::on(panel)
+        .margin(8)
+        .x_label_area_size(36)
+        .y_label_area_size(80)
+        .build_cartesian_2d(t0..t1, lo..hi)
+        .ok()?;
+    let (x_span, y_span) = (t1 - t0, hi - lo);
+    chart
+        .configure_mesh()
+        .x_desc("t [s]")
+        .y_desc(format!("{column} [{unit}]"))
+        .x_label_formatter(&|x| tick(*x, x_span))
+        .y_label_formatter(&|y| tick(*y, y_span))
+        .light_line_style(WHITE)
+        .draw()
+        .ok()?;
+    let mut leaves = Vec::new();
+    let engines = series
+        .iter()
+        .filter(|s| !palette::is_exact(s.0))
+        .count()
+        .max(1);
+    let mut k = 0;
+    for (engine, colour, points) in series {
+        for run in within(points, lo, hi) {
+            chart
+                .draw_series(LineSeries::new(run, colour.stroke_width(stroke(engine))))
+                .ok()?;
+        }
+        if points.iter().any(|(_, y)| *y < lo || *y > hi) {
+            leaves.push(*engine);
+        }
+        if palette::is_exact(engine) || points.is_empty() {
+            continue;
+        }
+        // Markers at this engine's own fraction of each of MARKERS intervals.
+        let n = points.len();
+        let marks = (0..MARKERS).filter_map(|m| {
+            let i = (m * engines + k) * n / (MARKERS * engines);
+            let (t, y) = *points.get(i)?;
+            (lo..=hi).contains(&y).then_some((t, y))
+        });
+        chart
+            .draw_series(marks.map(|p| Circle::new(p, 4, colour.filled())))
+            .ok()?;
+        k += 1;
+    }
+    Some(leaves)
 }
 
 /// One line of a panel's legend (in its own column right of the data): a run that leaves the
@@ -286,7 +393,8 @@ pub fn render_errors(scene: &Scene, histories: &[(&str, History)]) -> Option<Str
     for column in contract::columns(scene.family) {
         let series: Vec<_> = DRAWN
             .iter()
-            .filter_map(|(engine, colour)| {
+            .filter_map(|engine| {
+                let colour = palette::engine(engine);
                 let against = comparison::baseline(engine)?;
                 let (run, exact) = (find(engine)?, find(against)?);
                 let (t, y, x) = (run.column("t")?, run.column(column)?, exact.column(column)?);
@@ -300,7 +408,7 @@ pub fn render_errors(scene: &Scene, histories: &[(&str, History)]) -> Option<Str
                     .map(|i| (t[i], ((y[i] - x[i]).abs() / peak).max(LOG_FLOOR)))
                     .filter(|p| p.1.is_finite())
                     .collect();
-                Some((format!("{engine} vs {against}"), *colour, points))
+                Some((format!("{engine} vs {against}"), colour, points))
             })
             .collect();
         if !series.is_empty() {
@@ -309,7 +417,8 @@ pub fn render_errors(scene: &Scene, histories: &[(&str, History)]) -> Option<Str
     }
     let balance: Vec<_> = DRAWN
         .iter()
-        .filter_map(|(engine, colour)| {
+        .filter_map(|engine| {
+            let colour = palette::engine(engine);
             let h = find(engine)?;
             let (t, b) = (h.column("t")?, h.column(contract::E_BALANCE)?);
             let (k, e) = (
@@ -324,7 +433,7 @@ pub fn render_errors(scene: &Scene, histories: &[(&str, History)]) -> Option<Str
                     .map(|(t, b)| (t, (b.abs() / scale).max(LOG_FLOOR)))
                     .filter(|p| p.1.is_finite())
                     .collect();
-                (engine.to_string(), *colour, points)
+                (engine.to_string(), colour, points)
             })
         })
         .collect();
@@ -364,15 +473,15 @@ pub fn budget_figure_path(out: &Path, family: &str) -> PathBuf {
     out.join("figures").join(format!("budget-{family}.svg"))
 }
 
-/// The budget's parts, with their colours, in stacking order.
+/// The budget's parts, with their colours.
 const PARTS: [(&str, RGBColor); 4] = [
-    ("model_form", RGBColor(150, 150, 150)),
-    ("time_step", RGBColor(31, 119, 180)),
-    ("penalty", RGBColor(255, 127, 14)),
-    ("solver", RGBColor(214, 39, 40)),
+    ("model_form", RGBColor(120, 120, 120)),
+    ("time_step", palette::BLUE),
+    ("penalty", palette::ORANGE),
+    ("solver", palette::PURPLE),
 ];
 
-/// One bar of the budget figure: its label, the four parts' norms (model form, time step,
+/// One row of the budget figure: its label, the four parts' norms (model form, time step,
 /// penalty, solver) of the run's worst column, and that column's total.
 pub struct BudgetBar {
     /// `case / engine (column)`.
@@ -383,83 +492,116 @@ pub struct BudgetBar {
     pub total: f64,
 }
 
-/// Render a family's budget: one horizontal bar per case and engine, each part's share of the
-/// sum of the parts' norms (the norms are maxima over time, so they need not add up to the
-/// total's; the shares show which source dominates), the total's norm printed at its end.
+/// Render a family's budget as a dot plot on a log scale: one row per case and engine, a dot
+/// per part (its norm over the column's peak) and a black bar for the total, so that a part of
+/// 1e-16 sits sixteen decades left of one of 1.
 pub fn render_budget(family: &str, bars: &[BudgetBar]) -> Option<String> {
     if bars.is_empty() {
         return None;
     }
     const ROW: i32 = 18;
     const TOP: i32 = 70;
-    let (label_w, bar_x, bar_w) = (380, 390, 440);
-    let height = (TOP + ROW * bars.len() as i32 + 50) as u32;
+    let (label_w, axis_x, axis_w) = (380, 400, 560);
+    let values = bars
+        .iter()
+        .flat_map(|b| b.parts.iter().chain([&b.total]))
+        .filter(|v| **v > 0.0 && v.is_finite());
+    let (lo, hi) = values.fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(*v), b.max(*v)));
+    if !(lo.is_finite() && hi > 0.0) {
+        return None;
+    }
+    let (d0, d1) = (
+        lo.max(LOG_FLOOR).log10().floor() as i32,
+        hi.log10()
+            .ceil()
+            .max(lo.max(LOG_FLOOR).log10().floor() + 1.0) as i32,
+    );
+    let x_of = |v: f64| -> i32 {
+        let l = v.max(10f64.powi(d0)).log10();
+        axis_x + ((l - d0 as f64) / (d1 - d0) as f64 * axis_w as f64).round() as i32
+    };
+    let height = (TOP + ROW * bars.len() as i32 + 60) as u32;
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (1000, height)).into_drawing_area();
         root.fill(&WHITE).ok()?;
         let font = |size| ("sans-serif", size).into_font();
         root.draw(&Text::new(
-            format!("Discrepancy budget, {family}: share of each source (worst column per run)"),
+            format!(
+                "Discrepancy budget, {family}: each source's largest value over the column's \
+                 peak (worst column per run)"
+            ),
             (10, 8),
-            font(18),
+            font(16),
         ))
         .ok()?;
         for (k, (name, colour)) in PARTS.iter().enumerate() {
-            let x = bar_x + 110 * k as i32;
-            root.draw(&Rectangle::new([(x, 40), (x + 14, 54)], colour.filled()))
+            let x = axis_x + 110 * k as i32;
+            root.draw(&Circle::new((x + 7, 47), 5, colour.filled()))
                 .ok()?;
-            root.draw(&Text::new(name.to_string(), (x + 18, 41), font(12)))
+            root.draw(&Text::new(name.replace('_', " "), (x + 16, 41), font(12)))
                 .ok()?;
         }
-        root.draw(&Text::new(
-            "total error / peak".to_string(),
-            (bar_x + bar_w + 12, 41),
-            font(12),
+        let x = axis_x + 440;
+        root.draw(&PathElement::new(
+            [(x + 7, 40), (x + 7, 54)],
+            BLACK.stroke_width(3),
         ))
         .ok()?;
-        for (i, bar) in bars.iter().enumerate() {
-            let y = TOP + ROW * i as i32;
-            let right = TextStyle::from(font(11)).pos(Pos::new(HPos::Right, VPos::Top));
-            root.draw(&Text::new(bar.label.clone(), (label_w, y + 3), right))
+        root.draw(&Text::new("total", (x + 16, 41), font(12)))
+            .ok()?;
+        let bottom = TOP + ROW * bars.len() as i32;
+        for d in d0..=d1 {
+            let x = x_of(10f64.powi(d));
+            let grid = if d % 4 == 0 {
+                RGBColor(200, 200, 200)
+            } else {
+                RGBColor(235, 235, 235)
+            };
+            root.draw(&PathElement::new([(x, TOP), (x, bottom)], grid))
                 .ok()?;
-            let sum: f64 = bar.parts.iter().sum();
-            let mut x = bar_x as f64;
-            if sum > 0.0 && sum.is_finite() {
-                for (part, (_, colour)) in bar.parts.iter().zip(PARTS) {
-                    let w = bar_w as f64 * part / sum;
-                    root.draw(&Rectangle::new(
-                        [
-                            (x.round() as i32, y + 2),
-                            ((x + w).round() as i32, y + ROW - 2),
-                        ],
-                        colour.filled(),
-                    ))
-                    .ok()?;
-                    x += w;
+        }
+        for (i, bar) in bars.iter().enumerate() {
+            let y = TOP + ROW * i as i32 + ROW / 2;
+            let right = TextStyle::from(font(11)).pos(Pos::new(HPos::Right, VPos::Center));
+            root.draw(&Text::new(bar.label.clone(), (label_w, y), right))
+                .ok()?;
+            for (part, (_, colour)) in bar.parts.iter().zip(PARTS) {
+                if *part > 0.0 && part.is_finite() {
+                    root.draw(&Circle::new((x_of(*part), y), 4, colour.filled()))
+                        .ok()?;
                 }
             }
+            if bar.total > 0.0 && bar.total.is_finite() {
+                let x = x_of(bar.total);
+                root.draw(&PathElement::new(
+                    [(x, y - 6), (x, y + 6)],
+                    BLACK.stroke_width(2),
+                ))
+                .ok()?;
+            }
+        }
+        // Axis: decades.
+        root.draw(&PathElement::new(
+            [(axis_x, bottom + 4), (axis_x + axis_w, bottom + 4)],
+            BLACK,
+        ))
+        .ok()?;
+        let step = if d1 - d0 > 8 { 2 } else { 1 };
+        for d in (d0..=d1).filter(|d| (d - d0) % step == 0) {
+            let x = x_of(10f64.powi(d));
+            root.draw(&PathElement::new([(x, bottom + 4), (x, bottom + 9)], BLACK))
+                .ok()?;
             root.draw(&Text::new(
-                crate::report::markdown::sci(bar.total),
-                (bar_x + bar_w + 12, y + 3),
+                format!("1e{d}"),
+                (x - 12, bottom + 12),
                 font(11),
             ))
             .ok()?;
         }
-        // Axis: share in per cent.
-        let y = TOP + ROW * bars.len() as i32 + 4;
-        root.draw(&PathElement::new([(bar_x, y), (bar_x + bar_w, y)], BLACK))
-            .ok()?;
-        for k in 0..=4 {
-            let x = bar_x + bar_w * k / 4;
-            root.draw(&PathElement::new([(x, y), (x, y + 5)], BLACK))
-                .ok()?;
-            root.draw(&Text::new(format!("{}", 25 * k), (x - 8, y + 8), font(11)))
-                .ok()?;
-        }
         root.draw(&Text::new(
-            "share of the parts' norms [%]".to_string(),
-            (bar_x + bar_w / 2 - 80, y + 24),
+            "value over the column's peak (log scale; a part below 1e-16 drawn at 1e-16)",
+            (axis_x + 40, bottom + 30),
             font(12),
         ))
         .ok()?;

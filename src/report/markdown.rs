@@ -33,26 +33,118 @@ fn total(r: &EngineSummary) -> Option<f64> {
     r.against_analytic.as_ref().and_then(|c| c.worst_max)
 }
 
-/// Render the report.
-///
-/// `sweeps`: each case's sweep rows (the cost of accuracy); `parts`: how long each part of the
-/// run took, seconds, in order (empty: not said).
-pub fn render(
-    s: &Summary,
-    timings: &Timings,
-    provenance: &Provenance,
-    sweeps: &SweepRows,
-    maps: &std::collections::BTreeMap<String, Vec<crate::run::stability::Point>>,
-    requests: &[crate::run::on_request::Request],
-    parts: &[(&str, f64)],
-) -> String {
+/// The report's pages: `REPORT.md` (the first screen and an index), one page per question,
+/// one per case.
+#[derive(Debug, Clone, Default)]
+pub struct Pages {
+    /// `REPORT.md`.
+    pub report: String,
+    /// `accuracy.md`: how close each engine gets, and why where it does not.
+    pub accuracy: String,
+    /// `cost.md`: what accuracy costs.
+    pub cost: String,
+    /// `stability.md`: where each engine stays stable.
+    pub stability: String,
+    /// `cases/<case>.md`, by case id.
+    pub cases: Vec<(String, String)>,
+}
+
+/// What the report is rendered from besides the summary.
+#[derive(Debug, Clone, Copy)]
+pub struct Inputs<'a> {
+    /// Wall-clock seconds per case and engine.
+    pub timings: &'a Timings,
+    /// What was run.
+    pub provenance: &'a Provenance,
+    /// Each case's sweep rows (the cost of accuracy).
+    pub sweeps: &'a SweepRows,
+    /// The stability map.
+    pub maps: &'a crate::run::stability::Map,
+    /// Accuracy on request's runs.
+    pub requests: &'a [crate::run::on_request::Request],
+    /// How long each part of the run took, seconds, in order (empty: not said).
+    pub parts: &'a [(&'a str, f64)],
+    /// The report this run replaces, if there was one.
+    pub previous: Option<&'a Summary>,
+}
+
+/// A page's title and the link back to the first screen.
+fn page_head(w: &mut String, title: &str, back: &str) {
+    let _ = writeln!(w, "# {title}\n\n[← the report]({back}REPORT.md)\n");
+}
+
+/// Render the report's pages.
+pub fn render(s: &Summary, inputs: &Inputs) -> Pages {
+    let mut pages = Pages::default();
+    let mut report = String::new();
+    super::first_screen::render(
+        &mut report,
+        s,
+        inputs.provenance,
+        inputs.parts,
+        inputs.previous,
+    );
+    index(&mut report, s);
+    pages.report = report;
+    let mut cost = String::new();
+    page_head(&mut cost, "What accuracy costs", "");
+    work_precision::overview(&mut cost, s, inputs.sweeps);
+    crate::report::on_request::overview(&mut cost, inputs.requests);
+    pages.cost = cost;
+    let mut stability = String::new();
+    page_head(&mut stability, "Where each engine stays stable", "");
+    crate::report::stability::overview(&mut stability, inputs.maps);
+    pages.stability = stability;
+    pages.accuracy = accuracy(s, inputs);
+    for c in &s.cases {
+        let mut page = String::new();
+        page_head(&mut page, &c.id, "../");
+        case_section(&mut page, c);
+        if let Some(rows) = inputs.sweeps.get(&c.id) {
+            work_precision::case_part(&mut page, c, rows);
+        }
+        pages.cases.push((c.id.clone(), page));
+    }
+    pages
+}
+
+/// The rest of `REPORT.md`: where each answer is in full, the data files, and every case.
+fn index(w: &mut String, s: &Summary) {
+    let _ = writeln!(
+        w,
+        "## In full\n\n\
+         - [How close each engine gets](accuracy.md): every cell's verdict, the causes of the \
+         misses with their controls, equivalences, where each discrepancy comes from, contact that \
+         opens and closes.\n\
+         - [What accuracy costs](cost.md): observed orders and floors, time to each accuracy, \
+         accuracy on request.\n\
+         - [Where each engine stays stable](stability.md): the stability maps and every critical \
+         increment.\n\
+         - Data (columns and units in [README.md](README.md)): `results.csv`, `sweep.csv`, \
+         `stability.csv`, `on_request.csv`, `summary.json`, `data/<case>/<engine>.csv`.\n"
+    );
+    let checks = s.tolerance_checks();
+    let _ = writeln!(w, "| case | what it is | tolerances met |\n|---|---|---:|");
+    for c in &s.cases {
+        let mine: Vec<_> = checks.iter().filter(|k| k.case == c.id).collect();
+        let met = mine.iter().filter(|k| k.met()).count();
+        let _ = writeln!(
+            w,
+            "| [{0}](cases/{0}.md) | {1} | {met} of {2} |",
+            c.id,
+            c.title,
+            mine.len()
+        );
+    }
+}
+
+/// `accuracy.md`: what was run, the verdicts and their causes, and every engine's errors.
+fn accuracy(s: &Summary, inputs: &Inputs) -> String {
     let mut o = String::new();
     let w = &mut o;
-    let _ = writeln!(w, "# crosscheck report\n");
-    at_a_glance(w, s, provenance, parts);
-    work_precision::overview(w, s, sweeps);
-    crate::report::on_request::overview(w, requests);
-    crate::report::stability::overview(w, maps);
+    page_head(w, "How close each engine gets", "");
+    at_a_glance(w, s, inputs.provenance, inputs.parts);
+    let timings = inputs.timings;
     let _ = writeln!(
         w,
         "crosscheck runs classic explicit-dynamics verification problems whose exact answer is known \
@@ -172,15 +264,6 @@ pub fn render(
 
     cross_check_section(w, s);
     crate::report::contact::section(w, s);
-
-    // Per case.
-    let _ = writeln!(w, "\n## Cases");
-    for c in &s.cases {
-        case_section(w, c);
-        if let Some(rows) = sweeps.get(&c.id) {
-            work_precision::case_part(w, c, rows);
-        }
-    }
     o
 }
 
@@ -340,17 +423,13 @@ fn engine_notes(c: &CaseSummary, r: &EngineSummary) -> String {
 }
 
 fn case_section(w: &mut String, c: &CaseSummary) {
+    let _ = writeln!(w, "{} ({}D, {} s).\n", c.title, c.dimension, c.duration);
     let _ = writeln!(
         w,
-        "\n### {}\n\n{} ({}D, {} s).\n",
-        c.id, c.title, c.dimension, c.duration
-    );
-    let _ = writeln!(
-        w,
-        "![{0}: the scene, drawn from the case file](figures/{0}.sketch.svg)\n\n\
-         ![{0}: every engine's histories](figures/{0}.svg)\n\n\
+        "![{0}: the scene, drawn from the case file](../figures/{0}.sketch.svg)\n\n\
+         ![{0}: every engine's histories](../figures/{0}.svg)\n\n\
          ![{0}: each engine's error against its own model, and its energy balance, over time \
-         (log scale)](figures/{0}.errors.svg)\n",
+         (log scale)](../figures/{0}.errors.svg)\n",
         c.id
     );
     if let Some(m) = &c.contact {

@@ -7,9 +7,9 @@
 //! - `timings.json`: wall-clock seconds per case and engine (the one thing that varies);
 //! - [`figures`]: `figures/<case>.svg`, each case's histories drawn, and its errors over time;
 //! - [`sketch`]: `figures/<case>.sketch.svg`, each scene drawn from the `Scene` itself;
-//! - [`work_precision`]: `sweep/<case>.csv` and `figures/<case>.work-precision.svg`, what
+//! - [`work_precision`]: `sweep.csv` and `figures/<case>.work-precision.svg`, what
 //!   each accuracy costs;
-//! - [`stability`]: `stability/<engine>.csv` and `figures/stability-<engine>.svg`, where each
+//! - [`stability`]: `stability.csv` and `figures/stability-<engine>.svg`, where each
 //!   engine stays stable and accurate;
 //! - [`contact`]: the report's section on contact that opens and closes;
 //! - [`markdown`]: `REPORT.md`, rendered from the summary and the timings;
@@ -19,9 +19,13 @@
 pub mod contact;
 pub mod data;
 pub mod figures;
+pub mod first_screen;
 pub mod markdown;
 pub mod on_request;
+pub mod palette;
 pub mod provenance;
+pub mod rebound;
+pub mod results;
 pub mod scaling;
 pub mod sketch;
 pub mod stability;
@@ -41,11 +45,17 @@ use std::path::{Path, PathBuf};
 use summary::Summary;
 
 /// The report's own entries in its directory; nothing else there is the report's.
-pub const ENTRIES: [&str; 8] = [
+pub const ENTRIES: [&str; 14] = [
+    "README.md",
+    "cases",
+    "accuracy.md",
+    "cost.md",
+    "stability.md",
+    "results.csv",
     "data",
     "figures",
-    "sweep",
-    "stability",
+    "sweep.csv",
+    "stability.csv",
     "on_request.csv",
     "summary.json",
     "timings.json",
@@ -53,7 +63,7 @@ pub const ENTRIES: [&str; 8] = [
 ];
 
 /// What a run measured beyond its jobs, for the report.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct Study<'a> {
     /// Each job's discrepancy budget.
     pub budgets: &'a [JobBudget],
@@ -61,12 +71,31 @@ pub struct Study<'a> {
     pub attributions: &'a [crate::comparison::attribution::Attribution],
     /// Each case's sweep (what accuracy costs).
     pub sweeps: &'a [CaseSweep],
-    /// The stability map's runs (empty when it did not run).
-    pub stability: &'a [crate::run::stability::Point],
+    /// The stability map (empty when it did not run).
+    pub stability: &'a crate::run::stability::Map,
     /// Accuracy on request's runs (empty when it did not run).
     pub requests: &'a [crate::run::on_request::Request],
     /// How long each part of the run took (name, wall seconds), in order.
     pub parts: Vec<(&'static str, f64)>,
+}
+
+/// A map that did not run.
+static NO_MAP: crate::run::stability::Map = crate::run::stability::Map {
+    points: Vec::new(),
+    critical: Vec::new(),
+};
+
+impl Default for Study<'_> {
+    fn default() -> Self {
+        Study {
+            budgets: &[],
+            attributions: &[],
+            sweeps: &[],
+            stability: &NO_MAP,
+            requests: &[],
+            parts: Vec::new(),
+        }
+    }
 }
 
 /// Wall-clock seconds per case and engine.
@@ -95,9 +124,11 @@ pub fn write(
     summary.attach_budgets(study.budgets);
     summary.attach_attributions(study.attributions);
     summary.attach_sweeps(study.sweeps);
+    summary.attach_critical(&study.stability.critical);
     let mut timings: Timings = read_json(&timings_path(previous)).unwrap_or_default();
-    if let Some(old) = read_json::<Summary>(&summary_path(previous)) {
-        summary.merge_previous(old);
+    let old = read_json::<Summary>(&summary_path(previous));
+    if let Some(old) = &old {
+        summary.merge_previous(old.clone());
     }
     for job in &outcome.jobs {
         if let Ok(s) = &job.result {
@@ -167,24 +198,53 @@ pub fn write(
             )?;
         }
     }
+    if let Some(svg) = rebound::render(&rebound::points(&summary)) {
+        checkpoint("figures")?;
+        data::write_atomic(&rebound::figure_path(out), svg.as_bytes())?;
+    }
     data::write_atomic(&summary_path(out), summary.to_json().as_bytes())?;
+    data::write_atomic(&results::csv_path(out), results::csv(&summary).as_bytes())?;
     let json = serde_json::to_string_pretty(&timings).expect("timings serialise") + "\n";
     data::write_atomic(&timings_path(out), json.as_bytes())?;
     checkpoint("report")?;
-    data::write_atomic(
-        &report_path(out),
-        markdown::render(
-            &summary,
-            &timings,
-            &provenance::Provenance::gather(&plan.settings),
-            &work_precision::read_all(out, summary.cases.iter().map(|c| c.id.as_str())),
-            &stability::read_all(out),
-            &on_request::read(out),
-            &study.parts,
-        )
-        .as_bytes(),
-    )?;
+    let pages = markdown::render(
+        &summary,
+        &markdown::Inputs {
+            timings: &timings,
+            provenance: &provenance::Provenance::gather(&plan.settings),
+            sweeps: &work_precision::read_all(out),
+            maps: &stability::read_all(out),
+            requests: &on_request::read(out),
+            parts: &study.parts,
+            previous: old.as_ref(),
+        },
+    );
+    write_pages(out, &pages)?;
     Ok(summary)
+}
+
+/// Write the report's pages: each case's, then the question pages, `REPORT.md` last.
+fn write_pages(out: &Path, pages: &markdown::Pages) -> Result<(), data::DataError> {
+    for (case, page) in &pages.cases {
+        data::write_atomic(&case_page_path(out, case), page.as_bytes())?;
+    }
+    for (name, page) in [
+        ("accuracy.md", &pages.accuracy),
+        ("cost.md", &pages.cost),
+        ("stability.md", &pages.stability),
+    ] {
+        data::write_atomic(&out.join(name), page.as_bytes())?;
+    }
+    data::write_atomic(&out.join("README.md"), DATA_DICTIONARY.as_bytes())?;
+    data::write_atomic(&report_path(out), pages.report.as_bytes())
+}
+
+/// The report directory's `README.md`: its pages, data files, columns and units.
+pub const DATA_DICTIONARY: &str = include_str!("README.md");
+
+/// `out/cases/<case>.md`.
+pub fn case_page_path(out: &Path, case: &str) -> PathBuf {
+    out.join("cases").join(format!("{case}.md"))
 }
 
 /// Write each job's discrepancy budget to `out/data/<case>/<engine>.budget.csv`.

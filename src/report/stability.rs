@@ -1,27 +1,35 @@
-//! The stability map's files: `stability/<engine>.csv` ([`COLUMNS`], one row per case and
-//! ratio), `figures/stability-<engine>.svg` (cases × ratio, outcome as colour), and the report
-//! section that says in words where each engine stays stable and accurate.
+//! The stability map's files: `stability.csv` ([`COLUMNS`], one row per run: case, engine
+//! and ratio, with each pair's critical increment), `figures/stability-<engine>.svg` (cases ×
+//! ratio, outcome as colour, the critical increment marked), and the report section that says
+//! in words where each engine stays stable and accurate.
 
 use crate::report::data::format_finite as number;
-use crate::run::stability::{ENERGY_GROWTH_LIMIT, ENGINES, Outcome, Point, RATIOS};
+use crate::run::stability::{
+    BISECTION_WIDTH, Bound, Critical, ENERGY_GROWTH_LIMIT, ENGINES, Map, Outcome, Point, RATIOS,
+};
 use plotters::prelude::*;
-use std::collections::BTreeMap;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
-/// The CSV header.
-pub const COLUMNS: [&str; 6] = [
+/// The CSV header. Units: `increment_s` and `critical_increment_s` in seconds; `ratio` of the
+/// map's stable increment; `critical_ratio` of the explicit engine's computed one.
+pub const COLUMNS: [&str; 11] = [
     "case",
+    "engine",
+    "search",
     "ratio",
-    "increment",
+    "increment_s",
     "outcome",
     "error_max",
     "energy_growth",
+    "critical_increment_s",
+    "critical_ratio",
+    "critical_bound",
 ];
 
-/// `out/stability/<engine>.csv`.
-pub fn csv_path(out: &Path, engine: &str) -> PathBuf {
-    out.join("stability").join(format!("{engine}.csv"))
+/// `out/stability.csv`.
+pub fn csv_path(out: &Path) -> PathBuf {
+    out.join("stability.csv")
 }
 
 /// `out/figures/stability-<engine>.svg`.
@@ -33,25 +41,45 @@ fn optional(x: Option<f64>) -> String {
     x.filter(|v| v.is_finite()).map_or_else(String::new, number)
 }
 
-/// One engine's points as CSV text (an absent or non-finite value is an empty field).
-pub fn csv(points: &[&Point]) -> String {
+/// A map as CSV text: every grid run (`search` = `grid`), then each pair's runs beyond the
+/// grid (`bisection`); every row carries its pair's critical increment (empty where it has
+/// none). An absent or non-finite value is an empty field.
+pub fn csv(map: &Map) -> String {
     let mut s = COLUMNS.join(",") + "\n";
-    for p in points {
+    let critical_of = |case: &str, engine: &str| {
+        map.critical
+            .iter()
+            .find(|c| c.case == case && c.engine == engine)
+    };
+    let probes = map.critical.iter().flat_map(|c| c.probes.iter());
+    let rows = map
+        .points
+        .iter()
+        .map(|p| ("grid", p))
+        .chain(probes.map(|p| ("bisection", p)));
+    for (search, p) in rows {
+        let c = critical_of(&p.case, &p.engine);
         let fields = [
             p.case.clone(),
+            p.engine.clone(),
+            search.to_string(),
             number(p.ratio),
             optional(p.increment),
             p.outcome.name().to_string(),
             optional(p.error_max),
             optional(p.energy_growth),
+            optional(c.map(|c| c.increment)),
+            optional(c.map(Critical::explicit_ratio)),
+            c.map_or(String::new(), |c| c.bound.name().to_string()),
         ];
         s += &(fields.join(",") + "\n");
     }
     s
 }
 
-/// Read an engine's CSV back as points (None if missing or not one).
-pub fn read(path: &Path, engine: &str) -> Option<Vec<Point>> {
+/// Read `stability.csv` back (None if missing or not one): the grid runs, and each pair's
+/// critical increment (without its probes).
+pub fn read(path: &Path) -> Option<Map> {
     let text = std::fs::read_to_string(path).ok()?;
     let mut lines = text.lines();
     if lines.next()? != COLUMNS.join(",") {
@@ -64,46 +92,89 @@ pub fn read(path: &Path, engine: &str) -> Option<Vec<Point>> {
             s.parse::<f64>().ok().map(Some)
         }
     };
-    lines
-        .map(|l| {
-            let f: Vec<&str> = l.split(',').collect();
-            if f.len() != COLUMNS.len() {
-                return None;
-            }
-            Some(Point {
-                case: f[0].to_string(),
-                engine: engine.to_string(),
-                ratio: f[1].parse().ok()?,
-                increment: num(f[2])?,
-                outcome: Outcome::parse(f[3])?,
-                error_max: num(f[4])?,
-                energy_growth: num(f[5])?,
+    let mut map = Map::default();
+    for l in lines {
+        let f: Vec<&str> = l.split(',').collect();
+        if f.len() != COLUMNS.len() {
+            return None;
+        }
+        let (case, engine) = (f[0].to_string(), f[1].to_string());
+        if let (Some(increment), Some(ratio), Some(bound)) =
+            (num(f[8])?, num(f[9])?, Bound::parse(f[10]))
+            && !map
+                .critical
+                .iter()
+                .any(|c| c.case == case && c.engine == engine)
+        {
+            map.critical.push(Critical {
+                case: case.clone(),
+                engine: engine.clone(),
+                increment,
+                explicit_stable: increment / ratio,
+                bound,
+                probes: Vec::new(),
+            });
+        }
+        if f[2] == "grid" {
+            map.points.push(Point {
+                case,
+                engine,
+                ratio: f[3].parse().ok()?,
+                increment: num(f[4])?,
+                outcome: Outcome::parse(f[5])?,
+                error_max: num(f[6])?,
+                energy_growth: num(f[7])?,
                 message: None,
-            })
-        })
-        .collect()
+            });
+        }
+    }
+    Some(map)
 }
 
-/// Every engine's map found under `out`.
-pub fn read_all(out: &Path) -> BTreeMap<String, Vec<Point>> {
-    ENGINES
-        .iter()
-        .filter_map(|e| Some((e.to_string(), read(&csv_path(out, e), e)?)))
-        .collect()
+/// The map found under `out` (empty when there is none).
+pub fn read_all(out: &Path) -> Map {
+    read(&csv_path(out)).unwrap_or_default()
+}
+
+/// The critical increment as the report prints it: seconds, with `≥` or `<` where the search
+/// did not bracket it.
+pub fn critical_cell(c: &Critical) -> String {
+    let prefix = match c.bound {
+        Bound::Bisected => "",
+        Bound::AtLeast => "≥ ",
+        Bound::Below => "< ",
+    };
+    format!("{prefix}{:.3e}", c.increment)
 }
 
 fn colour(o: Outcome) -> RGBColor {
     match o {
-        Outcome::Accurate => RGBColor(102, 187, 106),
-        Outcome::Inaccurate => RGBColor(255, 202, 40),
-        Outcome::Unstable => RGBColor(229, 57, 53),
-        Outcome::Failed => RGBColor(158, 158, 158),
+        // Okabe–Ito blue, yellow and vermillion: apart in lightness as well as hue.
+        Outcome::Accurate => RGBColor(0, 114, 178),
+        Outcome::Inaccurate => RGBColor(240, 228, 66),
+        Outcome::Unstable => RGBColor(213, 94, 0),
+        Outcome::Failed => RGBColor(120, 120, 120),
         Outcome::NotApplicable => RGBColor(236, 239, 241),
     }
 }
 
-/// One engine's map: a row per case, a column per ratio, the outcome as colour.
-pub fn render(engine: &str, points: &[&Point]) -> Option<String> {
+/// Where a ratio falls on the map's columns: log-linear between the centres of the two grid
+/// ratios around it, clamped to the first and last centres.
+fn column_x(ratios: &[f64], r: f64, left: u32, width: u32) -> i32 {
+    let centre = |j: usize| (left + width * j as u32 + width / 2) as f64;
+    let j = ratios.iter().rposition(|x| *x <= r).unwrap_or(0);
+    let x = match ratios.get(j + 1) {
+        Some(next) if r >= ratios[j] => {
+            centre(j) + (r / ratios[j]).ln() / (next / ratios[j]).ln() * width as f64
+        }
+        _ => centre(j),
+    };
+    x.round() as i32
+}
+
+/// One engine's map: a row per case, a column per ratio, the outcome as colour; each row's
+/// critical increment (bisected) marked and printed in seconds at its right.
+pub fn render(engine: &str, points: &[&Point], critical: &[&Critical]) -> Option<String> {
     let mut cases: Vec<&str> = points.iter().map(|p| p.case.as_str()).collect();
     cases.dedup();
     let mut ratios: Vec<f64> = points.iter().map(|p| p.ratio).collect();
@@ -116,7 +187,8 @@ pub fn render(engine: &str, points: &[&Point]) -> Option<String> {
     let left = 200u32;
     let top = 60u32;
     let legend_height = 70u32;
-    let width = left + cell.0 * ratios.len() as u32 + 20;
+    let right = 150u32;
+    let width = left + cell.0 * ratios.len() as u32 + right;
     let height = top + cell.1 * cases.len() as u32 + legend_height;
     let mut svg = String::new();
     {
@@ -156,7 +228,29 @@ pub fn render(engine: &str, points: &[&Point]) -> Option<String> {
                 ))
                 .ok()?;
             }
+            if let Some(c) = critical.iter().find(|c| c.case == *case) {
+                let x = column_x(&ratios, c.explicit_ratio(), left, cell.0);
+                let (y0, y1) = (y + 2, y + cell.1 as i32 - 4);
+                root.draw(&Polygon::new(
+                    vec![(x - 5, y0), (x + 5, y0), (x, y1)],
+                    BLACK.filled(),
+                ))
+                .ok()?;
+                let text = format!("{} s", critical_cell(c));
+                let at = (left + cell.0 * ratios.len() as u32 + 8) as i32;
+                root.draw(&Text::new(text, (at, y + 4), font.clone()))
+                    .ok()?;
+            }
         }
+        root.draw(&Text::new(
+            "critical increment",
+            (
+                (left + cell.0 * ratios.len() as u32 + 8) as i32,
+                top as i32 - 20,
+            ),
+            font.clone(),
+        ))
+        .ok()?;
         // The stable increment: a line between the last ratio ≤ 1 and the first above.
         if let Some(j) = ratios.iter().position(|r| *r > 1.0) {
             let x = (left + cell.0 * j as u32) as i32 - 1;
@@ -195,7 +289,11 @@ pub fn render(engine: &str, points: &[&Point]) -> Option<String> {
             x += 30 + 7 * label.chars().count() as i32;
         }
         root.draw(&Text::new(
-            "black line: the stable increment (ratio 1)",
+            format!(
+                "black line: the explicit stable increment (ratio 1); ▼: the largest bounded \
+                 increment, bisected to {:.0} %",
+                (BISECTION_WIDTH - 1.0) * 100.0
+            ),
             (10, y + 26),
             font,
         ))
@@ -205,25 +303,104 @@ pub fn render(engine: &str, points: &[&Point]) -> Option<String> {
     Some(svg)
 }
 
-/// Write every engine's CSV and figure.
-pub fn write(out: &Path, points: &[Point]) -> Result<(), crate::report::data::DataError> {
+/// Write `stability.csv` (keeping the previous file's rows of engines this map did not run)
+/// and each engine's figure.
+pub fn write(out: &Path, map: &Map) -> Result<(), crate::report::data::DataError> {
     use crate::report::data::{DataError, write_atomic};
+    if map.points.is_empty() {
+        return Ok(());
+    }
+    crate::interrupt::checkpoint("stability").map_err(|_| DataError::Interrupted)?;
+    let ran = |engine: &str| map.points.iter().any(|p| p.engine == engine);
+    let mut all = read_all(out);
+    all.points.retain(|p| !ran(&p.engine));
+    all.critical.retain(|c| !ran(&c.engine));
+    all.points.extend(map.points.iter().cloned());
+    all.critical.extend(map.critical.iter().cloned());
+    let order = |e: &str| ENGINES.iter().position(|x| *x == e);
+    all.points.sort_by_key(|p| order(&p.engine));
+    all.critical.sort_by_key(|c| order(&c.engine));
+    write_atomic(&csv_path(out), csv(&all).as_bytes())?;
     for engine in ENGINES {
-        let mine: Vec<&Point> = points.iter().filter(|p| p.engine == engine).collect();
+        let mine: Vec<&Point> = map.points.iter().filter(|p| p.engine == engine).collect();
         if mine.is_empty() {
             continue;
         }
-        crate::interrupt::checkpoint("stability").map_err(|_| DataError::Interrupted)?;
-        write_atomic(&csv_path(out, engine), csv(&mine).as_bytes())?;
-        if let Some(svg) = render(engine, &mine) {
+        let critical: Vec<&Critical> = map.critical.iter().filter(|c| c.engine == engine).collect();
+        if let Some(svg) = render(engine, &mine, &critical) {
             write_atomic(&figure_path(out, engine), svg.as_bytes())?;
         }
     }
     Ok(())
 }
 
-/// The report section: per engine, the map and a sentence on where it stays stable.
-pub fn overview(w: &mut String, maps: &BTreeMap<String, Vec<Point>>) {
+/// The map's runs per engine, in [`ENGINES`] order.
+fn by_engine(map: &Map) -> Vec<(&'static str, Vec<Point>)> {
+    ENGINES
+        .iter()
+        .map(|e| {
+            let mine: Vec<Point> = map
+                .points
+                .iter()
+                .filter(|p| p.engine == *e)
+                .cloned()
+                .collect();
+            (*e, mine)
+        })
+        .filter(|(_, p)| !p.is_empty())
+        .collect()
+}
+
+/// The critical increments, a row per case and a column per engine: seconds, and the ratio to
+/// the explicit engine's computed stable increment.
+pub fn critical_table(w: &mut String, map: &Map) {
+    if map.critical.is_empty() {
+        return;
+    }
+    let engines: Vec<&str> = ENGINES
+        .iter()
+        .copied()
+        .filter(|e| map.critical.iter().any(|c| c.engine == *e))
+        .collect();
+    let mut cases: Vec<&str> = map.critical.iter().map(|c| c.case.as_str()).collect();
+    cases.sort_unstable();
+    cases.dedup();
+    let _ = writeln!(
+        w,
+        "\n### The critical increment\n\nPer case and engine, the largest increment at which the run \
+         stays bounded, in seconds, and in brackets its ratio to the explicit engine's computed stable \
+         increment: between the map's last bounded and first unstable ratio, bisected until the two are \
+         within {:.0} % (`search` = `bisection` in `stability.csv`). Where the engine stayed bounded up \
+         to {}× it is at least that (≥); where it was unstable down to {}×, less than that (<). A \
+         critical increment below 1 for an explicit engine means a run went unstable below the \
+         computed stable increment (a penalty impact, see above).\n",
+        (BISECTION_WIDTH - 1.0) * 100.0,
+        crate::run::stability::BEYOND.last().copied().unwrap_or(4.0),
+        crate::run::stability::BELOW.last().copied().unwrap_or(0.25),
+    );
+    let names: Vec<String> = engines.iter().map(|e| format!("`{e}`")).collect();
+    let _ = writeln!(w, "| case | {} |", names.join(" | "));
+    let _ = writeln!(w, "|---|{}", "---:|".repeat(engines.len()));
+    for case in cases {
+        let cells: Vec<String> = engines
+            .iter()
+            .map(|e| {
+                map.critical
+                    .iter()
+                    .find(|c| c.case == case && c.engine == *e)
+                    .map_or("–".into(), |c| {
+                        format!("{} s ({:.2})", critical_cell(c), c.explicit_ratio())
+                    })
+            })
+            .collect();
+        let _ = writeln!(w, "| {case} | {} |", cells.join(" | "));
+    }
+}
+
+/// The report section: per engine, the map and a sentence on where it stays stable; then the
+/// critical increments.
+pub fn overview(w: &mut String, map: &Map) {
+    let maps = by_engine(map);
     if maps.is_empty() {
         return;
     }
@@ -239,7 +416,7 @@ pub fn overview(w: &mut String, maps: &BTreeMap<String, Vec<Point>>) {
          without one takes the case's `rapier_f64` tolerance, any other the tightest the case \
          declares), *inaccurate* when bounded but outside it. Cases without a stable increment \
          (the free spins) are not mapped; a case an engine does not model is *not applicable* \
-         (not counted as failed). Data: `stability/<engine>.csv`.\n",
+         (not counted as failed). Data: `stability.csv`.\n",
         RATIOS
             .iter()
             .map(|r| r.to_string())
@@ -250,7 +427,7 @@ pub fn overview(w: &mut String, maps: &BTreeMap<String, Vec<Point>>) {
         w,
         "| engine | cases | accurate at 0.25× | accurate at 0.98× | first unstable ratio (cases) | unstable at 1.02× | unstable at 4× | failed |\n|---|---:|---:|---:|---|---:|---:|---:|"
     );
-    for (engine, points) in maps {
+    for (engine, points) in &maps {
         let cases = {
             let mut c: Vec<&str> = points.iter().map(|p| p.case.as_str()).collect();
             c.sort();
@@ -273,7 +450,7 @@ pub fn overview(w: &mut String, maps: &BTreeMap<String, Vec<Point>>) {
             "| `{engine}` | {cases} | {} | {} | {} | {} | {} | {} |",
             count(0.25, Outcome::Accurate),
             count(0.98, Outcome::Accurate),
-            first_unstable.map_or("never".to_string(), |r| format!(
+            first_unstable.map_or("not up to 4×".to_string(), |r| format!(
                 "{r}× ({})",
                 count(r, Outcome::Unstable)
             )),
@@ -285,8 +462,9 @@ pub fn overview(w: &mut String, maps: &BTreeMap<String, Vec<Point>>) {
                 .count(),
         );
     }
+    critical_table(w, map);
     let _ = writeln!(w);
-    for (engine, points) in maps {
+    for (engine, points) in &maps {
         let _ = writeln!(w, "**`{engine}`.** {}\n", words(engine, points));
         let _ = writeln!(
             w,

@@ -5,7 +5,7 @@ use crate::comparison::attribution::Attribution;
 use crate::comparison::contact::{self, Impacts};
 use crate::comparison::discrepancy::{ColumnBudget, JobBudget, PARTS};
 use crate::comparison::equivalence::{self, Equivalence};
-use crate::comparison::work_precision::{CaseSweep, Floor, ObservedOrder};
+use crate::comparison::work_precision::{CaseSweep, CostToAccuracy, Floor, ObservedOrder};
 use crate::comparison::{self, CLOSED_FORM, Comparison, ContactValidity};
 use crate::contract::History;
 use crate::report::data::{csv_path, read_history};
@@ -18,6 +18,9 @@ use std::path::Path;
 /// The whole run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Summary {
+    /// The version of this file's layout ([`SCHEMA_VERSION`]; 0: written before it had one).
+    #[serde(default)]
+    pub schema_version: u32,
     /// `crosscheck <version>`.
     pub generator: String,
     /// Engines run, in report order.
@@ -29,6 +32,10 @@ pub struct Summary {
     #[serde(default)]
     pub equivalences: Vec<Equivalence>,
 }
+
+/// The layout of `summary.json` this build writes. 1: `schema_version`, `cost_to_accuracy`
+/// and `critical_increment` on each run.
+pub const SCHEMA_VERSION: u32 = 1;
 
 /// Pairs of engines compared with each other, (candidate, reference):
 /// - `explicit` against `explicit_small`: finite against small rotation, same integrator: the
@@ -135,6 +142,25 @@ pub struct EngineSummary {
     /// cause they show ([`crate::comparison::attribution`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub attribution: Option<Attribution>,
+    /// What reaching 1e-2, 1e-4 and 1e-6 of the peak costs, from the sweep (measured,
+    /// extrapolated along the observed order, or the floor that stops it).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub cost_to_accuracy: Vec<CostToAccuracy>,
+    /// The largest increment that stays bounded, from the stability map, bisected.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub critical_increment: Option<CriticalIncrement>,
+}
+
+/// The largest increment at which a run stays bounded ([`crate::run::stability::Critical`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CriticalIncrement {
+    /// Seconds.
+    pub seconds: f64,
+    /// Over the explicit engine's computed stable increment.
+    pub explicit_ratio: f64,
+    /// `bisected` (to 1 %), `at_least` (bounded up to the largest ratio tried) or `below`
+    /// (unstable down to the smallest).
+    pub bound: String,
 }
 
 impl EngineSummary {
@@ -227,6 +253,7 @@ impl Summary {
             .collect();
         let engines: Vec<String> = plan.engines.iter().map(|e| e.name().to_string()).collect();
         Summary {
+            schema_version: SCHEMA_VERSION,
             generator: format!("crosscheck {}", env!("CARGO_PKG_VERSION")),
             equivalences: equivalence::measure(&plan.cases, &engines, history),
             engines,
@@ -330,7 +357,21 @@ impl Summary {
                     run.observed_order = fit.observed_order.as_ref().map(|o| o.value);
                     run.order_fit = fit.observed_order.clone();
                     run.floor = fit.floor.clone();
+                    run.cost_to_accuracy = crate::comparison::work_precision::costs(sweep, fit);
                 }
+            }
+        }
+    }
+
+    /// Put each pair's critical increment on its run.
+    pub fn attach_critical(&mut self, critical: &[crate::run::stability::Critical]) {
+        for c in critical {
+            if let Some(run) = self.run_mut(&c.case, &c.engine) {
+                run.critical_increment = Some(CriticalIncrement {
+                    seconds: c.increment,
+                    explicit_ratio: c.explicit_ratio(),
+                    bound: c.bound.name().to_string(),
+                });
             }
         }
     }
@@ -445,6 +486,8 @@ fn engine_summary(
             floor: None,
             impacts: None,
             attribution: None,
+            cost_to_accuracy: Vec::new(),
+            critical_increment: None,
         },
         Ok(s) => {
             let against = (job.engine != CLOSED_FORM)
@@ -476,6 +519,8 @@ fn engine_summary(
                 floor: None,
                 impacts: contact::measure(scene, &s.history, &s.info.measures, s.info.increment),
                 attribution: None,
+                cost_to_accuracy: Vec::new(),
+                critical_increment: None,
             }
         }
     }

@@ -1,4 +1,4 @@
-//! The sweep's files: `sweep/<case>.csv` (one row per point: [`COLUMNS`]) and
+//! The sweep's files: `sweep.csv` (one row per point of every case: [`COLUMNS`]) and
 //! `figures/<case>.work-precision.svg` (error against CPU time, log–log, one path per engine
 //! and setting family, the Pareto front, unstable points at the edge, timing whiskers, the
 //! case's tolerances).
@@ -7,14 +7,15 @@ use crate::comparison::work_precision::{self, COLUMNS, CaseSweep, Row};
 use crate::report::data::format_finite as number;
 use crate::report::figures::tick;
 use crate::report::markdown::sci;
-use crate::run::sweep::PathKind;
+use crate::report::palette;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-/// `out/sweep/<case>.csv`.
-pub fn csv_path(out: &Path, case: &str) -> PathBuf {
-    out.join("sweep").join(format!("{case}.csv"))
+/// `out/sweep.csv`.
+pub fn csv_path(out: &Path) -> PathBuf {
+    out.join("sweep.csv")
 }
 
 /// `out/figures/<case>.work-precision.svg`.
@@ -27,17 +28,21 @@ fn optional(x: Option<f64>) -> String {
     x.map_or_else(String::new, number)
 }
 
-/// A case's sweep as CSV text (numbers in Rust's shortest round-trip form; an absent or
-/// non-finite value is an empty field).
+/// Sweep rows as CSV text (numbers in Rust's shortest round-trip form; an absent or
+/// non-finite value is an empty field; a field with a comma quoted).
 pub fn csv(rows: &[Row]) -> String {
-    let mut s = COLUMNS.join(",") + "\n";
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let _ = w.write_record(COLUMNS);
     for r in rows {
-        let fields = [
+        let _ = w.write_record([
+            r.case.clone(),
             r.engine.clone(),
             r.precision.clone(),
+            r.path.clone(),
+            r.varied.clone(),
             number(r.increment),
-            optional(r.penalty_stiffness),
             r.iterations.map_or_else(String::new, |i| i.to_string()),
+            optional(r.penalty_stiffness),
             r.steps.to_string(),
             optional(r.error_max),
             optional(r.error_rms),
@@ -45,17 +50,15 @@ pub fn csv(rows: &[Row]) -> String {
             number(r.cpu_s_median),
             number(r.cpu_s_max),
             r.status.clone(),
-        ];
-        s += &(fields.join(",") + "\n");
+        ]);
     }
-    s
+    String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default()
 }
 
 /// Read a sweep CSV back (None if it is missing or not one).
 pub fn read(path: &Path) -> Option<Vec<Row>> {
-    let text = std::fs::read_to_string(path).ok()?;
-    let mut lines = text.lines();
-    if lines.next()? != COLUMNS.join(",") {
+    let mut reader = csv::Reader::from_path(path).ok()?;
+    if reader.headers().ok()?.iter().ne(COLUMNS) {
         return None;
     }
     let num = |s: &str| -> Option<Option<f64>> {
@@ -65,55 +68,33 @@ pub fn read(path: &Path) -> Option<Vec<Row>> {
             s.parse::<f64>().ok().map(Some)
         }
     };
-    lines
-        .map(|l| {
-            let f: Vec<&str> = l.split(',').collect();
-            if f.len() != COLUMNS.len() {
-                return None;
-            }
+    reader
+        .records()
+        .map(|record| {
+            let f = record.ok()?;
             Some(Row {
-                engine: f[0].to_string(),
-                precision: f[1].to_string(),
-                increment: num(f[2])??,
-                penalty_stiffness: num(f[3])?,
-                iterations: if f[4].is_empty() {
+                case: f[0].to_string(),
+                engine: f[1].to_string(),
+                precision: f[2].to_string(),
+                path: f[3].to_string(),
+                varied: f[4].to_string(),
+                increment: num(&f[5])??,
+                iterations: if f[6].is_empty() {
                     None
                 } else {
-                    Some(f[4].parse().ok()?)
+                    Some(f[6].parse().ok()?)
                 },
-                steps: f[5].parse().ok()?,
-                error_max: num(f[6])?,
-                error_rms: num(f[7])?,
-                cpu_s_min: num(f[8])??,
-                cpu_s_median: num(f[9])??,
-                cpu_s_max: num(f[10])??,
-                status: f[11].to_string(),
+                penalty_stiffness: num(&f[7])?,
+                steps: f[8].parse().ok()?,
+                error_max: num(&f[9])?,
+                error_rms: num(&f[10])?,
+                cpu_s_min: num(&f[11])??,
+                cpu_s_median: num(&f[12])??,
+                cpu_s_max: num(&f[13])??,
+                status: f[14].to_string(),
             })
         })
         .collect()
-}
-
-/// Engine colours of the work–precision diagram.
-const COLOURS: [(&str, RGBColor); 6] = [
-    ("explicit", RGBColor(31, 119, 180)),
-    ("explicit_small", RGBColor(44, 160, 44)),
-    ("rapier_f64", RGBColor(214, 39, 40)),
-    ("rapier_f32", RGBColor(255, 127, 14)),
-    ("rapier_f64_default", RGBColor(148, 103, 189)),
-    ("rapier_f32_default", RGBColor(140, 86, 75)),
-];
-
-fn colour(engine: &str) -> RGBColor {
-    COLOURS
-        .iter()
-        .find(|(e, _)| *e == engine)
-        .map_or(RGBColor(0, 0, 0), |c| c.1)
-}
-
-/// `c` mixed with white by `t` ∈ [0, 1).
-fn lighter(c: RGBColor, t: f64) -> RGBColor {
-    let mix = |x: u8| (x as f64 + (255.0 - x as f64) * t).round() as u8;
-    RGBColor(mix(c.0), mix(c.1), mix(c.2))
 }
 
 /// Errors below this are drawn at it (round-off).
@@ -176,31 +157,10 @@ pub fn render(sweep: &CaseSweep, tolerances: &BTreeMap<String, f64>) -> Option<S
             .light_line_style(WHITE)
             .draw()
             .ok()?;
-        // The Pareto front, under the data.
-        let front: Vec<(f64, f64)> = work_precision::pareto(&rows)
-            .into_iter()
-            .map(|i| {
-                (
-                    rows[i].error_max.unwrap_or(1.0).max(ERROR_FLOOR),
-                    rows[i].cpu_s_min,
-                )
-            })
-            .collect();
-        let mut steps = Vec::new();
-        for (k, p) in front.iter().enumerate() {
-            if k > 0 {
-                steps.push((front[k - 1].0, p.1));
-            }
-            steps.push(*p);
-        }
-        let grey = RGBColor(190, 190, 190);
-        chart
-            .draw_series(LineSeries::new(steps, grey.stroke_width(6)))
-            .ok()?;
         // Tolerances.
         let mut by_value: BTreeMap<String, Vec<&str>> = BTreeMap::new();
         for (engine, t) in tolerances {
-            if colour(engine) != RGBColor(0, 0, 0) {
+            if palette::engine(engine) != RGBColor(0, 0, 0) {
                 by_value.entry(number(*t)).or_default().push(engine);
             }
         }
@@ -209,60 +169,107 @@ pub fn render(sweep: &CaseSweep, tolerances: &BTreeMap<String, f64>) -> Option<S
             if !(x0..x1).contains(&t) {
                 continue;
             }
-            let c = colour(engines[0]);
+            let c = palette::engine(engines[0]);
             chart
                 .draw_series(LineSeries::new([(t, y0), (t, y1)], c.stroke_width(1)))
                 .ok()?;
             chart
                 .draw_series([Text::new(
                     format!("tolerance {}", engines.join(", ")),
-                    (t * 1.1, y1 / 1.3 / 1.8f64.powi(k as i32)),
-                    ("sans-serif", 11).into_font().color(&c),
+                    (t / 1.1, y1 / 1.3 / 1.8f64.powi(k as i32)),
+                    ("sans-serif", 11)
+                        .into_font()
+                        .color(&c)
+                        .pos(Pos::new(HPos::Right, VPos::Top)),
                 )])
                 .ok()?;
         }
-        // Paths.
-        let mut entries: Vec<(String, RGBColor)> = Vec::new();
-        let mut shade: BTreeMap<&str, usize> = BTreeMap::new();
-        for path in &sweep.paths {
-            let k = shade.entry(path.engine.as_str()).or_default();
-            let c = lighter(colour(&path.engine), 0.13 * *k as f64);
-            *k += 1;
-            let path_rows = sweep.path_rows(path);
-            // (error, fastest, slowest) of each ok point.
-            let pts: Vec<(f64, f64, f64)> = path_rows
-                .iter()
-                .filter(|r| r.status == "ok")
-                .filter_map(|r| Some((r.error_max?.max(ERROR_FLOOR), r.cpu_s_min, r.cpu_s_max)))
-                .collect();
-            let width = if matches!(path.kind, PathKind::Substeps { .. }) {
-                1
-            } else {
-                2
-            };
+        // The 1e-4 line and the order-1 and order-2 guides (CPU time ∝ error^(-1/p)).
+        let guide = RGBColor(90, 90, 90);
+        if (x0..x1).contains(&1e-4) {
             chart
-                .draw_series(LineSeries::new(
-                    pts.iter().map(|p| (p.0, p.1)),
-                    c.stroke_width(width),
+                .draw_series(DashedLineSeries::new(
+                    [(1e-4, y0), (1e-4, y1)],
+                    4,
+                    4,
+                    guide.stroke_width(1),
                 ))
                 .ok()?;
             chart
-                .draw_series(pts.iter().map(|p| Circle::new((p.0, p.1), 3, c.filled())))
+                .draw_series([Text::new(
+                    "1e-4",
+                    (1e-4 * 1.1, y0 * 1.3),
+                    ("sans-serif", 12).into_font(),
+                )])
                 .ok()?;
-            for p in &pts {
-                if p.2 > p.1 * 1.001 {
-                    chart
-                        .draw_series(LineSeries::new([(p.0, p.1), (p.0, p.2)], c.stroke_width(1)))
-                        .ok()?;
-                }
+        }
+        let anchor = (x1 / 30.0, y0 * 1.5);
+        for p in [1.0, 2.0] {
+            let at = |x: f64| anchor.1 * (x / anchor.0).powf(-1.0 / p);
+            let start = x0.max(anchor.0 * (y1 / anchor.1).powf(-p));
+            let xs = (0..=20).map(|i| start * (anchor.0 / start).powf(i as f64 / 20.0));
+            chart
+                .draw_series(DashedLineSeries::new(
+                    xs.map(|x| (x, at(x))),
+                    2,
+                    5,
+                    guide.stroke_width(1),
+                ))
+                .ok()?;
+            chart
+                .draw_series([Text::new(
+                    format!("order {p}"),
+                    (start * 1.2, at(start) / 1.15),
+                    ("sans-serif", 12).into_font().color(&guide),
+                )])
+                .ok()?;
+        }
+        // Each engine: every setting a faint dot, its own Pareto front a line.
+        let mut entries: Vec<(String, RGBColor)> = Vec::new();
+        for engine in crate::run::sweep::ENGINES {
+            let mine: Vec<Row> = rows
+                .iter()
+                .filter(|r| r.engine == engine)
+                .cloned()
+                .collect();
+            if mine.is_empty() {
+                continue;
             }
-            for r in path_rows.iter().filter(|r| r.status != "ok") {
+            let c = palette::engine(engine);
+            let point = |r: &Row| (r.error_max.unwrap_or(1.0).max(ERROR_FLOOR), r.cpu_s_min);
+            let ok: Vec<&Row> = mine
+                .iter()
+                .filter(|r| r.status == "ok" && r.error_max.is_some())
+                .collect();
+            chart
+                .draw_series(
+                    ok.iter()
+                        .map(|r| Circle::new(point(r), 3, c.mix(0.35).filled())),
+                )
+                .ok()?;
+            for r in ok.iter().filter(|r| r.cpu_s_max > r.cpu_s_min * 1.001) {
+                let (x, y) = point(r);
+                chart
+                    .draw_series(LineSeries::new([(x, y), (x, r.cpu_s_max)], c.mix(0.5)))
+                    .ok()?;
+            }
+            let front: Vec<(f64, f64)> = work_precision::pareto(&mine)
+                .into_iter()
+                .map(|i| point(&mine[i]))
+                .collect();
+            chart
+                .draw_series(LineSeries::new(front.iter().copied(), c.stroke_width(2)))
+                .ok()?;
+            chart
+                .draw_series(front.iter().map(|p| Circle::new(*p, 4, c.filled())))
+                .ok()?;
+            for r in mine.iter().filter(|r| r.status != "ok") {
                 let y = r.cpu_s_min.clamp(y0, y1);
                 chart
                     .draw_series([Cross::new((x1 / 1.25, y), 5, c.stroke_width(2))])
                     .ok()?;
             }
-            entries.push((path.label(), c));
+            entries.push((engine.to_string(), c));
         }
         // Legend, in its own column.
         let font = ("sans-serif", 12).into_font();
@@ -271,11 +278,14 @@ pub fn render(sweep: &CaseSweep, tolerances: &BTreeMap<String, f64>) -> Option<S
             let y = 20 + 18 * row;
             row += 1;
             match mark {
-                0 => legend
-                    .draw(&PathElement::new([(4, y), (24, y)], c.stroke_width(2)))
-                    .ok()?,
+                0 => {
+                    legend
+                        .draw(&PathElement::new([(4, y), (24, y)], c.stroke_width(2)))
+                        .ok()?;
+                    legend.draw(&Circle::new((14, y), 4, c.filled())).ok()?
+                }
                 1 => legend
-                    .draw(&PathElement::new([(4, y), (24, y)], c.stroke_width(6)))
+                    .draw(&Circle::new((14, y), 3, c.mix(0.35).filled()))
                     .ok()?,
                 _ => legend
                     .draw(&Cross::new((14, y), 5, c.stroke_width(2)))
@@ -287,20 +297,26 @@ pub fn render(sweep: &CaseSweep, tolerances: &BTreeMap<String, f64>) -> Option<S
             Some(())
         };
         for (label, c) in entries {
-            line(label, c, 0)?;
+            line(format!("{label}: cheapest for its error"), c, 0)?;
         }
-        line("Pareto front (all engines)".into(), grey, 1)?;
+        line(
+            "other settings (increment, k_p, substeps)".into(),
+            RGBColor(0, 0, 0),
+            1,
+        )?;
         line(
             "unstable or failed (right edge)".into(),
             RGBColor(0, 0, 0),
             2,
         )?;
+        line("dashed: order 1 and 2 slopes, 1e-4".into(), WHITE, 1)?;
         root.present().ok()?;
     }
     Some(svg)
 }
 
-/// Write each case's sweep CSV and work–precision figure into `out` (each file atomically;
+/// Write `sweep.csv` (the previous file's rows of cases this sweep did not run kept, every
+/// row in case order) and each case's work–precision figure into `out` (each file atomically;
 /// an interruption checkpoint before each).
 pub fn write(
     out: &Path,
@@ -308,9 +324,17 @@ pub fn write(
     scenes: &[crate::scene::Scene],
 ) -> Result<(), crate::report::data::DataError> {
     use crate::report::data::{DataError, write_atomic};
+    if sweeps.is_empty() {
+        return Ok(());
+    }
+    crate::interrupt::checkpoint("sweep").map_err(|_| DataError::Interrupted)?;
+    let mut rows: Vec<Row> = read(&csv_path(out)).unwrap_or_default();
+    rows.retain(|r| !sweeps.iter().any(|s| s.case == r.case));
+    rows.extend(sweeps.iter().flat_map(CaseSweep::rows));
+    rows.sort_by(|a, b| a.case.cmp(&b.case));
+    write_atomic(&csv_path(out), csv(&rows).as_bytes())?;
     for s in sweeps {
         crate::interrupt::checkpoint("sweep").map_err(|_| DataError::Interrupted)?;
-        write_atomic(&csv_path(out, &s.case), csv(&s.rows()).as_bytes())?;
         let tolerances = scenes
             .iter()
             .find(|c| c.id == s.case)
@@ -367,11 +391,13 @@ pub fn text(sweeps: &[CaseSweep]) -> String {
 /// Each case's sweep rows, by case id.
 pub type SweepRows = BTreeMap<String, Vec<Row>>;
 
-/// The sweep rows written in `out` for each of `cases` (cases without a sweep are left out).
-pub fn read_all<'a>(out: &Path, cases: impl Iterator<Item = &'a str>) -> SweepRows {
-    cases
-        .filter_map(|c| Some((c.to_string(), read(&csv_path(out, c))?)))
-        .collect()
+/// The sweep rows written in `out` (`sweep.csv`), by case.
+pub fn read_all(out: &Path) -> SweepRows {
+    let mut by_case = SweepRows::new();
+    for r in read(&csv_path(out)).unwrap_or_default() {
+        by_case.entry(r.case.clone()).or_default().push(r);
+    }
+    by_case
 }
 
 /// The short name of a floor's cause (before any detail in parentheses or after a colon).
@@ -414,7 +440,7 @@ pub fn overview(w: &mut String, s: &crate::report::summary::Summary, sweeps: &Sw
     let _ = writeln!(
         w,
         "\n## What accuracy costs\n\nEach engine was rerun over a grid of settings (the sweep: \
-         `sweep/<case>.csv`, one work–precision diagram per case in its section). The time \
+         `sweep.csv`, one work–precision diagram per case on its page). The time \
          increment goes from 0.9 of the stable one (or the output interval; rapier's default \
          configuration from its 1/60 s) down by √10 per point; the explicit engines do so at each \
          penalty stiffness of 1e2 … 1e6 × the largest spring stiffness, rapier's matched \
@@ -484,9 +510,9 @@ pub fn case_part(w: &mut String, c: &crate::report::summary::CaseSummary, rows: 
     use std::fmt::Write;
     let _ = writeln!(
         w,
-        "\n**What accuracy costs.** Data: `sweep/{0}.csv`.\n\n\
+        "\n**What accuracy costs.** Data: `sweep.csv`, the rows of case `{0}`.\n\n\
          ![{0}: work–precision diagram (error against CPU time per simulated second, log–log)]\
-         (figures/{0}.work-precision.svg)\n",
+         (../figures/{0}.work-precision.svg)\n",
         c.id
     );
     let _ = writeln!(

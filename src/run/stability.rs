@@ -235,3 +235,190 @@ fn map_point(
     }
     point
 }
+
+/// A map: its grid runs and each (case, engine)'s critical increment.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Map {
+    /// The grid's runs, in case, engine, ratio order.
+    pub points: Vec<Point>,
+    /// Per (case, engine), the largest increment that stays bounded.
+    pub critical: Vec<Critical>,
+}
+
+/// Bisection stops when the bracket's two ratios are within this factor of each other (1 %).
+pub const BISECTION_WIDTH: f64 = 1.01;
+
+/// Ratios tried beyond the grid when an engine stayed bounded at all of its ratios: the
+/// critical increment is then reported as at least the largest bounded one.
+pub const BEYOND: [f64; 2] = [16.0, 64.0];
+
+/// Ratios tried below the grid when an engine was unstable at its smallest ratio.
+pub const BELOW: [f64; 2] = [0.125, 0.0625];
+
+/// How the critical increment was bounded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Bound {
+    /// Between a bounded and an unstable run within [`BISECTION_WIDTH`].
+    Bisected,
+    /// Bounded at every ratio tried, up to the largest ([`BEYOND`]): at least this.
+    AtLeast,
+    /// Unstable at every ratio tried, down to the smallest ([`BELOW`]): less than this.
+    Below,
+}
+
+impl Bound {
+    /// Name in the CSV.
+    pub fn name(self) -> &'static str {
+        match self {
+            Bound::Bisected => "bisected",
+            Bound::AtLeast => "at_least",
+            Bound::Below => "below",
+        }
+    }
+    /// From the CSV name.
+    pub fn parse(s: &str) -> Option<Bound> {
+        [Bound::Bisected, Bound::AtLeast, Bound::Below]
+            .into_iter()
+            .find(|b| b.name() == s)
+    }
+}
+
+/// The largest increment at which an engine stays bounded on a case, found from the map's
+/// grid and refined by bisection.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Critical {
+    /// Case id.
+    pub case: String,
+    /// Engine name.
+    pub engine: String,
+    /// The largest bounded run's increment, seconds (for [`Bound::Below`], the smallest
+    /// increment tried).
+    pub increment: f64,
+    /// The explicit engine's computed stable increment on the case, seconds.
+    pub explicit_stable: f64,
+    /// How it was bounded.
+    pub bound: Bound,
+    /// The runs beyond the grid (bisection, extension above or below), in the order run.
+    pub probes: Vec<Point>,
+}
+
+impl Critical {
+    /// The critical increment over the explicit engine's computed stable increment.
+    pub fn explicit_ratio(&self) -> f64 {
+        self.increment / self.explicit_stable
+    }
+}
+
+fn bounded(o: Outcome) -> bool {
+    matches!(o, Outcome::Accurate | Outcome::Inaccurate)
+}
+
+/// Each (case, engine)'s critical increment from its grid `points` (as [`run`] returns them),
+/// running the extra ratios it needs; in parallel. A pair whose grid has a failed or not
+/// applicable run, or whose case has no explicit stable increment, has none.
+pub fn critical(
+    scenes: &[&Scene],
+    points: &[Point],
+    error_of: &(dyn Fn(&Scene, &str, &History) -> Option<f64> + Sync),
+) -> Vec<Critical> {
+    let mut pairs: Vec<(&Scene, &str)> = Vec::new();
+    for p in points {
+        if let Some(s) = scenes.iter().find(|s| s.id == p.case)
+            && !pairs.iter().any(|(c, e)| c.id == p.case && *e == p.engine)
+        {
+            pairs.push((s, p.engine.as_str()));
+        }
+    }
+    pairs
+        .par_iter()
+        .filter_map(|(scene, engine)| {
+            let mut grid: Vec<&Point> = points
+                .iter()
+                .filter(|p| p.case == scene.id && p.engine == *engine)
+                .collect();
+            grid.sort_by(|a, b| a.ratio.total_cmp(&b.ratio));
+            bisect(scene, engine, &grid, error_of)
+        })
+        .collect()
+}
+
+/// One pair's critical increment (see [`critical`]).
+fn bisect(
+    scene: &Scene,
+    engine: &str,
+    grid: &[&Point],
+    error_of: &(dyn Fn(&Scene, &str, &History) -> Option<f64> + Sync),
+) -> Option<Critical> {
+    if grid
+        .iter()
+        .any(|p| !bounded(p.outcome) && p.outcome != Outcome::Unstable)
+    {
+        return None;
+    }
+    let explicit_stable = ExplicitEngine::finite()
+        .stable_increment(scene, &RunSettings::default())?
+        .increment;
+    let mut probes: Vec<Point> = Vec::new();
+    let run = |ratio: f64, probes: &mut Vec<Point>| -> Point {
+        let p = map_point(scene, engine, ratio, error_of);
+        probes.push(p.clone());
+        p
+    };
+    let first_unstable = grid.iter().position(|p| p.outcome == Outcome::Unstable);
+    // The bracket: (largest bounded run, smallest unstable run above it).
+    let (mut low, mut high): (Option<Point>, Option<Point>) = match first_unstable {
+        Some(0) => (None, Some(grid[0].clone())),
+        Some(i) => (Some(grid[i - 1].clone()), Some(grid[i].clone())),
+        None => (grid.last().map(|p| (*p).clone()), None),
+    };
+    if high.is_none() {
+        for r in BEYOND {
+            let p = run(r, &mut probes);
+            match p.outcome {
+                o if bounded(o) => low = Some(p),
+                Outcome::Unstable => {
+                    high = Some(p);
+                    break;
+                }
+                _ => break,
+            }
+        }
+    }
+    if low.is_none() {
+        for r in BELOW {
+            let p = run(r, &mut probes);
+            match p.outcome {
+                o if bounded(o) => {
+                    low = Some(p);
+                    break;
+                }
+                Outcome::Unstable => high = Some(p),
+                _ => break,
+            }
+        }
+    }
+    let bound = match (&low, &high) {
+        (Some(_), Some(_)) => Bound::Bisected,
+        (Some(_), None) => Bound::AtLeast,
+        (None, _) => Bound::Below,
+    };
+    if let (Some(l), Some(h)) = (&mut low, &mut high) {
+        while h.ratio / l.ratio > BISECTION_WIDTH {
+            let p = run((l.ratio * h.ratio).sqrt(), &mut probes);
+            match p.outcome {
+                o if bounded(o) => *l = p,
+                Outcome::Unstable => *h = p,
+                _ => break,
+            }
+        }
+    }
+    let at = low.or(high)?;
+    Some(Critical {
+        case: scene.id.clone(),
+        engine: engine.to_string(),
+        increment: at.increment?,
+        explicit_stable,
+        bound,
+        probes,
+    })
+}

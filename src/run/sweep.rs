@@ -6,7 +6,8 @@
 //! - `explicit`, `explicit_small`: the time increment, from 0.9 of the stable one (or the
 //!   output interval, whichever is shorter) down by [`Grid::refinement`] per point; on a scene
 //!   with penalty contact one such path per penalty stiffness of [`Grid::penalty_ratios`] (× the
-//!   largest spring stiffness). Each path also runs once just above its stable increment (the
+//!   largest spring stiffness `k`; on a scene without springs `k` is the case's own penalty
+//!   stiffness over the grid's geometric middle ratio, so the middle path runs the case's own). Each path also runs once just above its stable increment (the
 //!   shortest increment above it that divides the output interval, where there is one): that
 //!   point must come back unstable.
 //! - `rapier_f64`, `rapier_f32` (matched configuration): the increment from the output interval
@@ -444,7 +445,7 @@ fn run_path(
     let penalty = match kind {
         PathKind::Increment {
             penalty_ratio: Some(r),
-        } => Some(PenaltyRule::Ratio(r)),
+        } => Some(penalty_rule(scene, r, grid)),
         _ => None,
     };
     let rapier = engine_name.starts_with("rapier");
@@ -545,6 +546,20 @@ fn run_path(
         kind,
         points,
         ended,
+    }
+}
+
+/// A penalty path's stiffness: `ratio` × the scene's largest spring stiffness `k`. A scene
+/// without springs has no `k`: there the grid's geometric middle ratio stands for the case's
+/// own penalty stiffness (`k` = the case's k_p over that middle ratio).
+fn penalty_rule(scene: &Scene, ratio: f64, grid: &Grid) -> PenaltyRule {
+    let ratios = &grid.penalty_ratios;
+    match (ratios.first(), ratios.last()) {
+        (Some(first), Some(last)) if scene.largest_stiffness() <= 0.0 => {
+            let own = scene.penalty_stiffness(scene.settings.penalty);
+            PenaltyRule::Stiffness(ratio / (first * last).sqrt() * own)
+        }
+        _ => PenaltyRule::Ratio(ratio),
     }
 }
 

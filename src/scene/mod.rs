@@ -622,6 +622,9 @@ pub struct Scene {
     /// Tolerance per engine name: the largest error against `analytic` allowed, as a fraction
     /// of each column's peak (`[tolerances]` in the case file).
     pub tolerances: std::collections::BTreeMap<String, f64>,
+    /// The main command sweeps this case (`sweep = true` in the case file; the seed cases are
+    /// swept whatever it says).
+    pub sweep: bool,
 }
 
 impl Scene {

@@ -13,7 +13,8 @@
 //!   stable increment (the increment and the compliance shrink together, h² ∝ 1/k_p), since at
 //!   a fixed stiffness the compliance floor is reached at the first refinement. For rapier it
 //!   is the increment path of its configuration.
-//! - **Floor**: where a path stalled (the refinement no longer paid, see the sweep), its
+//! - **Floor**: where a path stalled (twice in a row: the refinement no longer paid, see the
+//!   sweep), its
 //!   smallest error, with its cause named from the discrepancy budget's parts: penalty
 //!   compliance (≈ k/k_p) for penalty paths, f32 round-off where the f64 twin goes lower on the
 //!   same path, f64 round-off below 1e-10, and otherwise the engine's solver (rapier's contact
@@ -403,7 +404,8 @@ fn fit(engine: &str, paths: &[SweepPath], contact: bool) -> EngineFit {
             .and_then(|p| {
                 let mut points = ok_points(p);
                 if p.ended == "stalled" {
-                    points.pop(); // the point that stalled is not in the asymptotic range
+                    // The two points that stalled are not in the asymptotic range.
+                    points.truncate(points.len().saturating_sub(2));
                 }
                 order(&points, floor_value(p), &p.label())
             })
@@ -428,7 +430,8 @@ fn fit(engine: &str, paths: &[SweepPath], contact: bool) -> EngineFit {
             own.iter()
                 .flat_map(|p| ok_points(p))
                 .all(|(_, e)| e >= f.value * (1.0 - 1e-12))
-        });
+        })
+        .or_else(|| round_off(paths, engine));
     EngineFit {
         engine: engine.to_string(),
         observed_order,
@@ -587,6 +590,45 @@ pub fn costs(sweep: &CaseSweep, fit: &EngineFit) -> Vec<CostToAccuracy> {
             cost
         })
         .collect()
+}
+
+/// An f32 engine's floor where its f64 twin is at least twice as accurate at the most refined
+/// setting of one of its paths (the f32 run is held by round-off there, however the sweep
+/// ended): the smallest error it reached.
+fn round_off(paths: &[SweepPath], engine: &str) -> Option<Floor> {
+    if !engine.contains("f32") {
+        return None;
+    }
+    let twin = engine.replace("f32", "f64");
+    let finest = |name: &str| -> Vec<(String, f64, Option<usize>, f64)> {
+        paths
+            .iter()
+            .filter(|p| p.engine == name)
+            .flat_map(|p| {
+                ok_points(p).last().map(|&(h, e)| {
+                    let n = p.points.iter().rev().find_map(|q| q.iterations);
+                    (p.label().replace(&twin, engine), h, n, e)
+                })
+            })
+            .collect()
+    };
+    let theirs = finest(&twin);
+    let held = finest(engine).into_iter().find(|(label, h, n, e)| {
+        theirs.iter().any(|(l, th, tn, te)| {
+            l == label && (th / h - 1.0).abs() < 1e-9 && tn == n && *te < e / 2.0
+        })
+    })?;
+    // The floor is the smallest error the engine reached on any path.
+    let value = paths
+        .iter()
+        .filter(|p| p.engine == engine)
+        .flat_map(ok_points)
+        .fold(f64::INFINITY, |m, (_, e)| m.min(e));
+    Some(Floor {
+        value,
+        cause: "f32 round-off".into(),
+        path: held.0,
+    })
 }
 
 /// Below this observed order a time to accuracy is not extrapolated (a slope that shallow is

@@ -170,10 +170,14 @@ fn conclusions(w: &mut String, s: &Summary, engines: &[&str]) {
             let r = cost_ratios(s, rapier, target);
             let values: Vec<f64> = r.iter().map(|x| x.0).collect();
             let (m, lo, hi) = (median(&values)?, r.first()?, r.last()?);
-            let orders: Vec<f64> = s
-                .cases
+            // The orders of the cells extrapolated, where any were.
+            let orders: Vec<f64> = r
                 .iter()
-                .filter_map(|c| cost(run(c, rapier)?, target)?.order)
+                .filter_map(|(_, _, id)| {
+                    let c = s.cases.iter().find(|c| c.id == *id)?;
+                    let k = cost(run(c, rapier)?, target)?;
+                    (k.reached == Reached::Extrapolated).then_some(k.order?)
+                })
                 .collect();
             let extrapolated = match (
                 orders.iter().copied().reduce(f64::min),
@@ -181,7 +185,7 @@ fn conclusions(w: &mut String, s: &Summary, engines: &[&str]) {
             ) {
                 (Some(a), Some(b)) => format!(
                     ", {} of them extrapolated along its observed order {a:.2}–{b:.2}",
-                    r.iter().filter(|x| x.1).count()
+                    orders.len()
                 ),
                 _ => String::new(),
             };

@@ -465,12 +465,63 @@ pub fn overview(w: &mut String, map: &Map) {
     critical_table(w, map);
     let _ = writeln!(w);
     for (engine, points) in &maps {
-        let _ = writeln!(w, "**`{engine}`.** {}\n", words(engine, points));
+        let _ = writeln!(
+            w,
+            "**`{engine}`.** {}{}\n",
+            words(engine, points),
+            beyond_the_grid(map, engine)
+        );
         let _ = writeln!(
             w,
             "![stability map of {engine}](figures/stability-{engine}.svg)\n"
         );
     }
+}
+
+/// Where an engine bounded on the whole grid went unstable beyond it, with the matched
+/// configuration at the same increments as the control (a default configuration differs from
+/// it in its solver settings only).
+fn beyond_the_grid(map: &Map, engine: &str) -> String {
+    let last = RATIOS.last().copied().unwrap_or(4.0);
+    let above: Vec<&Critical> = map
+        .critical
+        .iter()
+        .filter(|c| c.engine == engine && c.bound == Bound::Bisected)
+        .filter(|c| c.explicit_ratio() > last)
+        .collect();
+    if above.is_empty() {
+        return String::new();
+    }
+    let cases: Vec<String> = above
+        .iter()
+        .map(|c| format!("{} ({:.1}×)", c.case, c.explicit_ratio()))
+        .collect();
+    let matched = engine.replace("_default", "");
+    let control = if matched != engine
+        && above.iter().all(|c| {
+            map.critical
+                .iter()
+                .any(|m| m.engine == matched && m.case == c.case && m.bound == Bound::AtLeast)
+        }) {
+        format!(
+            " At the same increments `{matched}` (the matched configuration: the same engine \
+             with converged solver settings) stays bounded up to {}× on every one of them, so \
+             what goes unstable is rapier's default solver configuration at that increment, \
+             not the scene.",
+            crate::run::stability::BEYOND
+                .last()
+                .copied()
+                .unwrap_or(last)
+        )
+    } else {
+        String::new()
+    };
+    format!(
+        " Beyond the grid it goes unstable on {} of its cases, at these critical increments \
+         (over the explicit stable increment): {}.{control}",
+        above.len(),
+        cases.join(", ")
+    )
 }
 
 /// The map in plain words.
@@ -545,7 +596,7 @@ fn words(engine: &str, points: &[Point]) -> String {
             share(4.0, Outcome::Failed),
         );
         if points.iter().all(|p| p.outcome != Outcome::Unstable) {
-            s += " It never went unstable: its springs are implicit, so past the explicit limit it \
+            s += " It never went unstable on the grid: its springs are implicit, so past the explicit limit it \
                   loses accuracy (energy, amplitude) instead of blowing up.";
         }
     }

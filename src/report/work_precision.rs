@@ -445,7 +445,7 @@ pub fn overview(w: &mut String, s: &crate::report::summary::Summary, sweeps: &Sw
          configuration from its 1/60 s) down by √10 per point; the explicit engines do so at each \
          penalty stiffness of 1e2 … 1e6 × the largest spring stiffness, rapier's matched \
          configuration also over 1 … 64 substeps, f32 and f64. A path stops where its error stalls \
-         (a point more than {} of the previous one) or where the next point would take more than \
+         (two points in a row each more than {} of the one before) or where the next point would take more than \
          {:.0e} increments (rapier: {:.0e} substeps). Errors are against the exact solution of \
          the engine's own model, as in the verdicts; CPU time is the running thread's, setup \
          included, per simulated second, the minimum of {} runs (one for points over a tenth of \

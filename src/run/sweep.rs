@@ -14,8 +14,11 @@
 //!   down, and the substeps (`solver_iterations`: 1, 2, 4, …) at the output interval;
 //! - `rapier_f64_default`, `rapier_f32_default`: the increment from rapier's 1/60 s down.
 //!
-//! A path stops when its error stalls (a point's error is more than [`Grid::stall`] of the
-//! previous one: the refinement no longer pays) or when the next point would take more than
+//! A path stops when its error stalls twice in a row (two successive points each more than
+//! [`Grid::stall`] of the point before: the refinement no longer pays; a single stall can be
+//! a plateau, such as a small fast mode whose phase error has saturated before the step
+//! resolves it; a stall that the budget leaves unconfirmed counts) or when the next point
+//! would take more than
 //! the grid's budget of increments ([`Grid::max_increments`], substeps counted for rapier).
 //! Both rules depend only on the errors and the settings, never on timings, so the same inputs
 //! run the same points. Each point runs [`Grid::repeat`] times; the CPU seconds of each run are
@@ -42,7 +45,8 @@ pub struct Grid {
     pub penalty_ratios: Vec<f64>,
     /// Rapier substep counts of the substeps path.
     pub substeps: Vec<usize>,
-    /// A path stops after a point whose error exceeds this fraction of the previous point's.
+    /// A path stops after two successive points whose errors each exceed this fraction of the
+    /// point before.
     pub stall: f64,
     /// Most increments one run of a point may take (explicit engines: increments; rapier:
     /// increments × substeps, [`RAPIER_SHARE`] of it). About 0.1–0.3 s of CPU for the explicit
@@ -500,6 +504,7 @@ fn run_path(
         PathKind::Increment { .. } => grid.max_points,
     };
     let mut probe: Option<Point> = None;
+    let mut stalls = 0;
     for k in 0..count {
         let (settings, substeps) = setting(k, points.first());
         let iterations = substeps_of(engine_name, kind, substeps);
@@ -507,7 +512,8 @@ fn run_path(
         let increments =
             engine.increments(scene, &settings).unwrap_or(0.0) * iterations.unwrap_or(1) as f64;
         if increments > budget * (1.0 + 1e-9) {
-            ended = "budget";
+            // A stall the budget left unconfirmed still ends the path as stalled.
+            ended = if stalls > 0 { "stalled" } else { "budget" };
             break;
         }
         let repeat = if increments > budget / 10.0 {
@@ -529,10 +535,10 @@ fn run_path(
         }
         // An error of the order of the answer itself is pre-asymptotic (it saturates, it
         // does not stall): only smaller errors can stall.
-        if let (Some(e), Some(p)) = (this, previous)
-            && e > grid.stall * p
-            && p < PRE_ASYMPTOTIC
-        {
+        let stalled = matches!((this, previous), (Some(e), Some(p))
+            if e > grid.stall * p && p < PRE_ASYMPTOTIC);
+        stalls = if stalled { stalls + 1 } else { 0 };
+        if stalls == 2 {
             ended = "stalled";
             break;
         }

@@ -4,8 +4,9 @@
 //! (Lagrange multipliers), factorised by nalgebra's LU. The two share nothing but the
 //! equations they solve.
 
+use crosscheck::engines::explicit::body_solve::{BodyOperator, BodySolve};
 use crosscheck::engines::explicit::space::{
-    BodyInertia, BodyOperator, BodySolve, Heading, Orientation, Planar, Space, Spatial,
+    BodyInertia, Heading, Orientation, Planar, Space, Spatial,
 };
 use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, UnitQuaternion, Vector2, Vector3};
 use proptest::prelude::*;
@@ -211,9 +212,7 @@ proptest! {
     /// mass centre there (0–2 translations held), with an anisotropic inertia in tilted axes:
     /// its solve with the operator formed at the orientation R₀ where a step starts gives,
     /// after any turn φ about g (R = Rot(g, φ)·R₀), the turned body's accelerations, as the
-    /// dense system at R solves them. The explicit engine forms such a body's operator once
-    /// per dynamic step (`Model::fix_single_axis_operators`) on this ground: the operator is
-    /// g·R I Rᵀg, and Rᵀg = R₀ᵀg. Checked below so that the test can fail: a turn about a
+    /// dense system at R solves them: the operator is g·R I Rᵀg, and Rᵀg = R₀ᵀg. Checked below so that the test can fail: a turn about a
     /// held axis instead changes it, and so does the same turn about g of a body whose mass
     /// centre is off the node with a translation free (its drag direction Q(g × c) turns).
     #[test]

@@ -100,9 +100,9 @@ fn centred_damping_follows_the_schemes_own_recurrence() {
 /// reference positions with initial velocities. With a dashpot on every link they share
 /// nodes and have unequal rates per mass, so the direct solve's k×k system (k = 3) is full
 /// and unsymmetric. `on_axis`: the masses are held across the line (their `uy`), so that an
-/// axial dashpot's line cannot turn and acts along it (`Model::with_lines_held`); otherwise
-/// they are free across it and only nothing pushing them off it keeps them there, so an
-/// axial dashpot's line is taken as turning.
+/// axial dashpot's line stays on it; otherwise they are free across it and only nothing
+/// pushing them off it keeps them there. Either way an axial dashpot's line is taken as
+/// turning.
 fn dashpot_chain(kinds: [Option<&str>; 3], on_axis: bool) -> crosscheck::scene::Scene {
     let mut text = String::from(
         "id = \"dashpot_chain\"\ntitle = \"a chain of three masses with dashpots\"\nfamily = \"springs\"\ndimension = 2\n\n[time]\nincrement = 1.0e-3\n\n[output]\nrows = 201\n\n",
@@ -195,20 +195,18 @@ fn chain_recurrence(h: f64, dashpots: [f64; 3]) -> Vec<nalgebra::Vector3<f64>> {
 }
 
 /// The largest departure of `engine`'s run of the chain with dashpots `kinds` (`on_axis`,
-/// see [`dashpot_chain`]) from the recurrence `x`, over the peak of the contract columns; and
-/// how many axial dashpots acted along fixed lines.
+/// see [`dashpot_chain`]) from the recurrence `x`, over the peak of the contract columns.
 fn departure_from_chain(
     engine: ExplicitEngine,
     kinds: [Option<&str>; 3],
     on_axis: bool,
     x: &[nalgebra::Vector3<f64>],
     h: f64,
-) -> (f64, u64) {
+) -> f64 {
     let out = engine
         .run(&dashpot_chain(kinds, on_axis), &RunSettings::default())
         .unwrap();
     assert_eq!(out.info.steps, 2000);
-    let held_lines = out.info.counters.get("held_lines").copied().unwrap_or(0);
     let (mut worst, mut scale): (f64, f64) = (0.0, 0.0);
     for (name, node) in [("u_end", 2), ("u_mid", 1), ("v_end", 2), ("v_mid", 1)] {
         for (row, got) in col(&out.history, name).iter().enumerate().skip(1) {
@@ -222,17 +220,16 @@ fn departure_from_chain(
             scale = scale.max(expected.abs());
         }
     }
-    (worst / scale, held_lines)
+    worst / scale
 }
 
 #[test]
 fn several_dashpots_follow_the_schemes_own_recurrence() {
     // `explicit_small` solves the dashpots' rates with the step's inverse of I + (h/2)·K
     // (formed once: no line turns); `explicit`, with the outer two dashpots axial and the
-    // middle one along a fixed direction: with the masses free across the line, the axial
-    // lines are taken as turning (along their spans, re-formed at every increment) and the
-    // system is solved by elimination; with the masses held on the line, those lines cannot
-    // turn and the step's inverse serves (`Model::with_lines_held`). All must follow the
+    // middle one along a fixed direction, the axial lines taken as turning (along their
+    // spans, re-formed at every increment) and the system solved by elimination, with the
+    // masses free across the line or held on it. All must follow the
     // recurrence (`chain_recurrence`) to round-off: 2000 increments of ε-sized roundings,
     // carried forward by modes with ω·h ≤ 0.03 (measured 1.0e-14 of the peak, every run);
     // 1e-13 bounds it. A wrong entry of the 3×3 solve (its inverse transposed, say) changes
@@ -244,23 +241,17 @@ fn several_dashpots_follow_the_schemes_own_recurrence() {
     let h = 1.0e-3;
     let x = chain_recurrence(h, CHAIN_DASHPOTS);
     let axial = [Some("axial"), Some("fixed_direction"), Some("axial")];
-    for (engine, kinds, on_axis, held) in [
-        (
-            ExplicitEngine::small(),
-            [Some("fixed_direction"); 3],
-            true,
-            0,
-        ),
-        (ExplicitEngine::finite(), axial, false, 0),
-        (ExplicitEngine::finite(), axial, true, 2),
+    for (engine, kinds, on_axis) in [
+        (ExplicitEngine::small(), [Some("fixed_direction"); 3], true),
+        (ExplicitEngine::finite(), axial, false),
+        (ExplicitEngine::finite(), axial, true),
     ] {
         let kind = kinds[0].unwrap();
-        let (departure, held_lines) = departure_from_chain(engine, kinds, on_axis, &x, h);
+        let departure = departure_from_chain(engine, kinds, on_axis, &x, h);
         println!(
             "{kind}, on the axis {on_axis}: largest departure from the recurrence {departure:.3e} of the peak"
         );
         assert!(departure < 1e-13, "{kind}, {on_axis}: {departure:e}");
-        assert_eq!(held_lines, held, "{kind}, {on_axis}");
     }
 }
 
@@ -268,10 +259,9 @@ fn several_dashpots_follow_the_schemes_own_recurrence() {
 fn one_dashpot_follows_the_schemes_own_recurrence() {
     // One dashpot takes its own 1×1 solve, kept in registers, at every increment but the
     // first (`ParticleDashpots::solve`; the first restarts the half-step sequence through
-    // `Model::damping`): axial under `explicit` with the masses free across the line (its
-    // line is taken as turning: the system is formed at every increment), along a fixed line
-    // under `explicit_small`, and axial under `explicit` with the masses held on the line
-    // (the line cannot turn: the step's inverse, as for `explicit_small`). The chain with a
+    // `Model::damping`): axial under `explicit` (its line taken as turning: the system is
+    // formed at every increment) with the masses free across the line or held on it, and
+    // along a fixed line under `explicit_small` (the step's inverse). The chain with a
     // dashpot on one link only: on the first link (one end on the ground) and on the last
     // (both ends particles, of unequal mass). Same recurrence and the same round-off bound as
     // above (measured: 4.2e-14 and 1.1e-14 of the peak, turning; 4.2e-14 and 1.1e-14,
@@ -287,14 +277,14 @@ fn one_dashpot_follows_the_schemes_own_recurrence() {
         let mut rates = [0.0; 3];
         rates[link] = CHAIN_DASHPOTS[link];
         let x = chain_recurrence(h, rates);
-        for (engine, kind, on_axis, held) in [
-            (ExplicitEngine::finite(), "axial", false, 0),
-            (ExplicitEngine::finite(), "axial", true, 1),
-            (ExplicitEngine::small(), "fixed_direction", true, 0),
+        for (engine, kind, on_axis) in [
+            (ExplicitEngine::finite(), "axial", false),
+            (ExplicitEngine::finite(), "axial", true),
+            (ExplicitEngine::small(), "fixed_direction", true),
         ] {
             let mut kinds = [None; 3];
             kinds[link] = Some(kind);
-            let (departure, held_lines) = departure_from_chain(engine, kinds, on_axis, &x, h);
+            let departure = departure_from_chain(engine, kinds, on_axis, &x, h);
             println!(
                 "{kind} dashpot on link {link}, on the axis {on_axis}: departure {departure:.3e} of the peak"
             );
@@ -302,17 +292,16 @@ fn one_dashpot_follows_the_schemes_own_recurrence() {
                 departure < 1e-13,
                 "{kind}, link {link}, {on_axis}: {departure:e}"
             );
-            assert_eq!(held_lines, held, "{kind}, link {link}, {on_axis}");
         }
     }
 }
 
 #[test]
-fn turning_body_takes_the_closed_form_centred_velocity() {
+fn turning_body_iterates_its_centred_velocity_to_the_same_fixed_point_with_an_inert_dashpot() {
     // The sliding bodies with off-centre mass: the centripetal term is the only
-    // velocity-dependent force and each body turns about one axis, so the centred velocity is
-    // solved in closed form: two body solves per increment (the forces, the unit-rate terms),
-    // where the velocity iteration took two or three (2.45 on average, measured).
+    // velocity-dependent force, so the centred velocity is iterated: two or three body solves
+    // per increment (the iteration stops within 1e-14 of the velocity scale; the predictor
+    // v(n−½) + (h/2)·a(n−1) is that close after one or two passes at ω·h ≈ 1e-5).
     for (id, direction) in [
         ("rigid2d_slide_surface", "[1.0, 0.0]"),
         ("rigid3d_slide_surface", "[1.0, 0.0, 0.0]"),
@@ -320,14 +309,15 @@ fn turning_body_takes_the_closed_form_centred_velocity() {
         let c = counters(id, ExplicitEngine::finite());
         let per_step = c["body_solves"] as f64 / 10_000.0;
         println!("{id}: body solves per increment: {per_step:.5}");
-        // 2 per increment, plus about 20 for the setup (static steps, start, linearisation).
-        assert!((2.0..=2.003).contains(&per_step), "{id}: {c:?}");
+        // At least the check pass after the first; at most the 100 passes the iteration
+        // allows would show as far more than 4 (plus about 20 for the setup).
+        assert!((2.0..=4.0).contains(&per_step), "{id}: {c:?}");
         // The same scene with a dashpot far too weak to act (1e-100 N·s/m, the smallest a
-        // case accepts, on the body's spring node) takes the velocity iteration instead: the
-        // closed form must be its fixed point. The iteration stops within 1e-14 of the
-        // velocity scale per increment; over 10^4 increments the positions then differ by
-        // about 1e-12 of their peak and the contact force, through the penalty's 1e10 N/m, by
-        // about 1e-10 of its peak (measured 8.3e-11); 1e-9 bounds it.
+        // case accepts, on the body's spring node) iterates with the dashpot's forces too:
+        // the same fixed point. Each iteration stops within 1e-14 of the velocity scale per
+        // increment; over 10^4 increments the positions then differ by about 1e-12 of their
+        // peak and the contact force, through the penalty's 1e10 N/m, by about 1e-10 of its
+        // peak; 1e-9 bounds it.
         let iterated = variant(
             id,
             &[(
@@ -346,7 +336,7 @@ fn turning_body_takes_the_closed_form_centred_velocity() {
         for column in live_columns(&scene(id)) {
             let (a, b) = (col(&closed, &column), col(&iterated, &column));
             let change = max_diff(&a, &b) / peak(&a);
-            println!("{id} {column}: closed form against iteration {change:.2e} of the peak");
+            println!("{id} {column}: without and with the inert dashpot {change:.2e} of the peak");
             assert!(change <= 1e-9, "{id} {column}: {change:e}");
         }
     }

@@ -50,10 +50,8 @@ fn floor_gives_the_engines_answer_and_the_closed_form() {
     );
     // The same operations in the same order: equal bit for bit between the two forms.
     assert_eq!(registers, slices);
-    // The engine reaches the same recurrence through its affine step (`AffineStep`: the
-    // force as the start's force plus the stiffness times the motion since, and the motion
-    // summed from zero between two rows). Measured: 5.6e-17 apart (bit for bit before the
-    // affine step, through the general path). Any order of operations would do:
+    // The engine reaches the same recurrence through its one increment (measured: bit for
+    // bit). Any order of operations would do:
     // 2·10^4 increments of a quantity of order 1, each off by a few ulps, stay under 1e-12,
     // while a different recurrence (the lagged dashpot, first order) is off by ~1e-4.
     assert!(

@@ -1,7 +1,6 @@
 //! The scaling study's chain family: the explicit engine's error against the exact solution
-//! is the one central differences must give, at N = 10, 1000 and 100 000 along x (on the
-//! engine's one-dimensional store), and at 1000 and 300 000 turned off the axes (on its 2D
-//! store, by passes and by blocks).
+//! is the one central differences must give, at N = 10, 1000 and 100 000 along x, and at 1000
+//! and 300 000 turned off the axes (the same increment whatever the scene's size or direction).
 //!
 //! Central differences started from rest reproduce a discrete mode's shape exactly and shift
 //! only its frequency, from ω to (2/h) asin(ωh/2) (`Chain::predicted_error`), so the measured
@@ -9,7 +8,6 @@
 //! start, a lost DOF, a wrong mode shape) would show at once.
 use crosscheck::case::chain::Chain;
 use crosscheck::engines::explicit::ExplicitEngine;
-use crosscheck::engines::explicit::blocks::BLOCKS_FROM;
 use crosscheck::engines::{Engine, RunSettings};
 use crosscheck::run::scaling::{self, STEPS};
 use crosscheck::scene::{Connection, Probe, Scene};
@@ -39,9 +37,8 @@ fn turned(mut scene: Scene, angle: f64) -> Scene {
 }
 
 /// The largest error over the probes and rows of the chain of `n` masses turned by `angle`,
-/// its prediction, the increments the engine stepped by blocks of springs, and of those, the
-/// ones on the one-dimensional store.
-fn measured_error(n: usize, angle: f64) -> (f64, f64, u64, u64) {
+/// and its prediction.
+fn measured_error(n: usize, angle: f64) -> (f64, f64) {
     let chain = Chain::new(n, STEPS);
     let scene = turned(chain.scene(), angle);
     let out = ExplicitEngine::finite()
@@ -56,13 +53,7 @@ fn measured_error(n: usize, angle: f64) -> (f64, f64, u64, u64) {
             worst = worst.max((u - chain.displacement(node, *t)).abs() / chain.amplitude);
         }
     }
-    let count = |name: &str| out.info.counters.get(name).copied().unwrap_or(0);
-    (
-        worst,
-        chain.predicted_error(chain.increment),
-        count("block_increments"),
-        count("axial_increments"),
-    )
+    (worst, chain.predicted_error(chain.increment))
 }
 
 /// The error model holds to round-off: positions of size A are summed over 400 increments with
@@ -70,8 +61,8 @@ fn measured_error(n: usize, angle: f64) -> (f64, f64, u64, u64) {
 /// ~1e-2 of A) is far above that and far below any modelling mistake (a wrong ω alone would
 /// change the error at first order). Turned off the axes, the springs' directions and the
 /// probes add a few ulps more.
-fn assert_matches_prediction(n: usize, angle: f64) -> (u64, u64) {
-    let (error, predicted, blocks, axial) = measured_error(n, angle);
+fn assert_matches_prediction(n: usize, angle: f64) {
+    let (error, predicted) = measured_error(n, angle);
     assert!(
         predicted > 1e-3,
         "the run must be long enough for the phase error to show: {predicted:e}"
@@ -80,59 +71,27 @@ fn assert_matches_prediction(n: usize, angle: f64) -> (u64, u64) {
         (error - predicted).abs() <= 1e-9 * predicted,
         "N = {n}: error {error:e} against predicted {predicted:e}"
     );
-    (blocks, axial)
 }
 
-/// The increments of a chain's run that take the one pass: every one but the first (which
-/// starts the half-step velocity), those that write a row and the last two (whose
-/// accelerations the end of the step keeps): of increments 1 … 398, all but the 99 multiples
-/// of the row stride 4.
-fn one_pass(n: usize) -> u64 {
-    let chain = Chain::new(n, STEPS);
-    let stride = chain.steps / (chain.rows as u64 - 1);
-    let one_pass = (1..chain.steps - 1).filter(|n| n % stride != 0).count() as u64;
-    assert_eq!((stride, one_pass), (4, 299));
-    one_pass
-}
-
-/// The chain moves along x only: at every size, every one-pass increment is stepped by blocks
-/// on the one-dimensional store (`Model::step_axial`; `tests/blocks.rs` finds it equal to the
-/// blocks on the 2D store to the bit), and the run holds the error model.
 #[test]
 fn chain_of_10_matches_the_error_model() {
-    assert_eq!(
-        assert_matches_prediction(10, 0.0),
-        (one_pass(10), one_pass(10))
-    );
+    assert_matches_prediction(10, 0.0);
 }
 
 #[test]
 fn chain_of_1000_matches_the_error_model() {
-    assert_eq!(
-        assert_matches_prediction(1000, 0.0),
-        (one_pass(1000), one_pass(1000))
-    );
+    assert_matches_prediction(1000, 0.0);
 }
 
 #[test]
 fn chain_of_100_000_matches_the_error_model() {
-    assert_eq!(
-        assert_matches_prediction(100_000, 0.0),
-        (one_pass(100_000), one_pass(100_000))
-    );
+    assert_matches_prediction(100_000, 0.0);
 }
 
-/// Turned off the axes, the chain keeps its 2D store: below `BLOCKS_FROM` the force pass and
-/// the update, from it the blocks (`Model::step_by_blocks`; `tests/blocks.rs` finds them equal
-/// to the two passes bit for bit). Both runs hold the error model.
 #[test]
-fn chains_turned_off_the_axes_match_the_error_model_on_the_2d_store() {
-    assert_eq!(assert_matches_prediction(1000, 0.5), (0, 0));
-    const { assert!(300_000 >= BLOCKS_FROM) };
-    assert_eq!(
-        assert_matches_prediction(300_000, 0.5),
-        (one_pass(300_000), 0)
-    );
+fn chains_turned_off_the_axes_match_the_error_model() {
+    assert_matches_prediction(1000, 0.5);
+    assert_matches_prediction(300_000, 0.5);
 }
 
 #[test]

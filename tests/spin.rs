@@ -155,9 +155,7 @@ fn near_the_intermediate_axis_the_body_flips_when_the_reference_says() {
 /// about one tilted axis g (`frames.tilted`'s y axis, (1, −1, 0)/√2) with the other two
 /// rotations held (`second_hold`): pinned at its reference node O, or sliding along the frame's
 /// x axis, with its mass centre off O (three point masses, an anisotropic inertia); `extra`
-/// adds elements. In the second step `explicit` forms the pinned body's solve operator once,
-/// at the orientation the first step left (`Model::fix_single_axis_operators`), and solves the
-/// sliding one's centred angular rate in closed form on g (`Model::centred_single_axis`);
+/// adds elements. In the second step `explicit` iterates the centred angular rate of each;
 /// rapier fits its joints to the pose the step starts from (`JointSpec::fitted`).
 /// `reference` integrates the same scene with its own equations and error control. A spring
 /// from a body point to the ground gives the moment. (The test found `reference` ending a

@@ -121,56 +121,35 @@ fn the_diagnosis_names_the_stiff_mode_of_the_pair() {
     );
 }
 
-/// Below the stable increment no mode grows, but a penalty impact resolved in about one
-/// increment can send the node back faster than it struck: the node of `contact_drop_e1`
-/// (m = 1, k_p = 1e7, ω_p = 3162.3 rad/s) at 0.9× of 2/ω_p has ω_p·h = 1.8, and one increment
-/// inside at depth d ≤ h·v returns it at ω_p²h·d − v, up to ((ω_p·h)² − 1)·v = 2.24 v. The run
-/// is stopped by the energy criterion, and the message says it was the impact (at the drop's
-/// t = √(2/9.81) = 0.4515 s, to within two increments), not a growing mode.
+/// Below the stable increment no mode grows, and an impact no longer sends the energy up: the
+/// node of `contact_drop_e1` (m = 1, k_p = 1e7, ω_p = 3162.3 rad/s) at 0.9× of 2/ω_p has
+/// ω_p·h = 1.8, where one increment inside at depth d ≤ h·v would return it at up to
+/// ((ω_p·h)² − 1)·v = 2.24 v without the impact's work balanced (`engines::explicit::impacts`;
+/// the run was stopped there before). Every contact case that opens and closes runs at the
+/// map's ratios below 1 on both explicit engines (66 runs; 23 stopped at an impact before the
+/// balance), refused only where an engine does not support the scene.
 #[test]
-fn an_impact_below_the_limit_is_named_as_the_cause() {
-    let scene = stress("contact_drop_e1");
-    let err = ExplicitEngine::finite()
-        .run(&scene, &at_ratio(0.9))
-        .expect_err("the impact returns more than twice the energy")
-        .to_string();
-    println!("{err}");
-    assert!(err.contains("no mode is past its limit"), "{err}");
-    assert!(err.contains("ω·h = 1.800"), "{err}");
-    assert!(err.contains("(ω·h)² − 1 = 2.24"), "{err}");
-    let at = common::number_after(&err, "penalty impact at t = ", ',');
-    let h = 0.9 * 2.0 / (1.0e7f64).sqrt();
-    let strike = (2.0f64 / 9.81).sqrt();
-    assert!(
-        (at - strike).abs() <= 2.0 * h,
-        "impact at {at} against {strike}"
-    );
-    // Every contact case that opens and closes, at the map's ratios below 1: a run that stops
-    // stops at an impact (what the report's stability section says of them).
+fn no_impact_stops_a_run_below_the_limit() {
     let contact: Vec<Scene> = case::discover(&case::stress_dir(&case::cases_dir()))
         .unwrap()
         .iter()
         .map(|f| case::load(f).unwrap_or_else(|e| panic!("{e}")))
         .filter(|s| s.id.starts_with("contact_"))
         .collect();
-    let mut stopped = 0;
+    let mut ran = 0;
     for scene in &contact {
         for engine in engines() {
             for r in [0.75, 0.9, 0.98] {
                 match engine.run(scene, &at_ratio(r)) {
-                    Ok(_) | Err(EngineError::Unsupported(_)) => continue,
-                    Err(e) => {
-                        let e = e.to_string();
-                        assert!(e.contains("penalty impact"), "{} at {r}: {e}", scene.id);
-                        stopped += 1;
-                    }
+                    Ok(_) => ran += 1,
+                    Err(EngineError::Unsupported(_)) => continue,
+                    Err(e) => panic!("{} at {r}: {e}", scene.id),
                 }
             }
         }
     }
-    // Measured: 23 of the 66 runs stop, every one at an impact.
-    println!("{stopped} runs stopped below the limit, each at an impact");
-    assert_eq!(stopped, 23, "runs stopped at an impact below the limit");
+    println!("{ran} runs below the limit, none stopped");
+    assert!(ran >= 60, "{ran} runs");
 }
 
 #[test]

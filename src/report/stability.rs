@@ -372,8 +372,8 @@ pub fn critical_table(w: &mut String, map: &Map) {
          increment: between the map's last bounded and first unstable ratio, bisected until the two are \
          within {:.0} % (`search` = `bisection` in `stability.csv`). Where the engine stayed bounded up \
          to {}× it is at least that (≥); where it was unstable down to {}×, less than that (<). A \
-         critical increment below 1 for an explicit engine means a run went unstable below the \
-         computed stable increment (a penalty impact, see above).\n",
+         critical increment below 1 for an explicit engine would mean a run went unstable below \
+         its computed stable increment.\n",
         (BISECTION_WIDTH - 1.0) * 100.0,
         crate::run::stability::BEYOND.last().copied().unwrap_or(4.0),
         crate::run::stability::BELOW.last().copied().unwrap_or(0.25),

@@ -8,7 +8,9 @@
 //!
 //! - **unstable**: the engine stopped the run as unstable (its state turned non-finite, or
 //!   `explicit`'s energy guard tripped), or the run's kinetic plus elastic energy rose above
-//!   [`ENERGY_GROWTH_LIMIT`] × what it may hold (its initial energy plus the work of the loads);
+//!   [`ENERGY_GROWTH_LIMIT`] × what it may hold (its initial energy plus the work of the loads),
+//!   times what a stable central-difference mode at the ratio reads above its energy
+//!   ([`measured_energy_allowance`]: 1/(1 − r²) below 1, 1 from 1 on);
 //! - **failed**: the engine refused or failed for another reason;
 //! - **accurate**: the largest error against the exact solution of the engine's own model is
 //!   within the case's tolerance for the engine ([`tolerance`]);
@@ -16,6 +18,7 @@
 
 use crate::contract::History;
 use crate::engines::explicit::ExplicitEngine;
+use crate::engines::explicit::integrate::measured_energy_allowance;
 use crate::engines::{self, RunSettings};
 use crate::run::matching;
 use crate::scene::{IncrementRule, Scene};
@@ -207,15 +210,15 @@ fn map_point(
             point.energy_growth = energy_growth(&out.history);
             point.error_max = error_of(scene, name, &out.history);
             let finite = out.history.rows.iter().flatten().all(|x| x.is_finite());
-            point.outcome =
-                if !finite || point.energy_growth.is_some_and(|g| g > ENERGY_GROWTH_LIMIT) {
-                    Outcome::Unstable
-                } else {
-                    match (point.error_max, tolerance(scene, name)) {
-                        (Some(e), Some(t)) if e <= t => Outcome::Accurate,
-                        _ => Outcome::Inaccurate,
-                    }
-                };
+            let limit = ENERGY_GROWTH_LIMIT * measured_energy_allowance(ratio);
+            point.outcome = if !finite || point.energy_growth.is_some_and(|g| g > limit) {
+                Outcome::Unstable
+            } else {
+                match (point.error_max, tolerance(scene, name)) {
+                    (Some(e), Some(t)) if e <= t => Outcome::Accurate,
+                    _ => Outcome::Inaccurate,
+                }
+            };
         }
         Ok(Err(e)) => {
             let message = e.to_string();

@@ -12,8 +12,7 @@
 //! k×k elimination replace the iteration's two or more passes; the answer is its fixed point,
 //! to round-off.
 //!
-//! A line that turns (an axial dashpot under finite rotation, unless its step holds it on its
-//! line: `Model::with_lines_held`) is not normalised: it is taken as
+//! A line that turns (an axial dashpot under finite rotation) is not normalised: it is taken as
 //! l, its span from end a to end b over its length at t = 0 (never zero: the case reader
 //! refuses coincident ends), and `e_j` is built from l_j. Multiplying row i of the system
 //! above by |l_i| gives the rows in the unknown `σ_j = r_j/|l_j|`:

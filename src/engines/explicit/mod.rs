@@ -1,15 +1,20 @@
 //! `explicit`: our central-difference explicit integrator with penalty contact.
 
-pub mod affine;
-pub mod blocks;
+pub mod body_solve;
 pub mod centred;
+pub mod constraints;
 pub mod diagnosis;
+pub mod forces;
+pub mod impacts;
 pub mod integrate;
 pub mod linear;
 pub mod model;
+pub mod motion;
 pub mod on_request;
+pub mod rows;
 pub mod space;
-pub mod turning;
+pub mod start;
+pub mod velocity;
 
 use super::{Engine, EngineError, RunInfo, RunOutput, RunSettings};
 use crate::scene::{Dimension, IncrementRule, Scene, SceneSettings};
@@ -31,10 +36,6 @@ pub enum Kinematics {
 #[derive(Debug, Clone, Copy)]
 pub struct ExplicitEngine {
     kinematics: Kinematics,
-    /// Whether a small step runs its increments between rows with its state in registers or
-    /// locals: with affine forces as [`affine::AffineStep`] (registers), with one body turning
-    /// about one axis under finite rotation as [`turning::TurningStep`] (locals).
-    batched: bool,
 }
 
 impl ExplicitEngine {
@@ -42,22 +43,12 @@ impl ExplicitEngine {
     pub fn finite() -> Self {
         Self {
             kinematics: Kinematics::Finite,
-            batched: true,
         }
     }
     /// Small rotation: engine `explicit_small`.
     pub fn small() -> Self {
         Self {
             kinematics: Kinematics::Small,
-            batched: true,
-        }
-    }
-    /// The same engine with every increment through the general path, never as an
-    /// [`affine::AffineStep`] or a [`turning::TurningStep`]: what those are checked against.
-    pub fn general(self) -> Self {
-        Self {
-            batched: false,
-            ..self
         }
     }
 }
@@ -144,23 +135,8 @@ impl Engine for ExplicitEngine {
             ("rotation_updates".to_string(), c.rotation_updates),
             ("body_solves".to_string(), c.body_solves),
         ]);
-        if c.block_increments > 0 {
-            counters.insert("block_increments".to_string(), c.block_increments);
-        }
-        if c.axial_increments > 0 {
-            counters.insert("axial_increments".to_string(), c.axial_increments);
-        }
-        if c.affine_increments > 0 {
-            counters.insert("affine_increments".to_string(), c.affine_increments);
-        }
-        if c.turning_increments > 0 {
-            counters.insert("turning_increments".to_string(), c.turning_increments);
-        }
-        if c.about_axis_increments > 0 {
-            counters.insert("about_axis_increments".to_string(), c.about_axis_increments);
-        }
-        if c.held_lines > 0 {
-            counters.insert("held_lines".to_string(), c.held_lines);
+        if c.impact_balances > 0 {
+            counters.insert("impact_balances".to_string(), c.impact_balances);
         }
         if let Some(n) = pilot_increments {
             counters.insert("pilot_increments".to_string(), n);
@@ -212,18 +188,10 @@ impl ExplicitEngine {
     ) -> Result<Integration, EngineError> {
         let s = merged(scene, settings);
         match (scene.dimension, self.kinematics) {
-            (Dimension::Two, Kinematics::Finite) => {
-                integrate::<Planar, true>(scene, &s, self.batched)
-            }
-            (Dimension::Two, Kinematics::Small) => {
-                integrate::<Planar, false>(scene, &s, self.batched)
-            }
-            (Dimension::Three, Kinematics::Finite) => {
-                integrate::<Spatial, true>(scene, &s, self.batched)
-            }
-            (Dimension::Three, Kinematics::Small) => {
-                integrate::<Spatial, false>(scene, &s, self.batched)
-            }
+            (Dimension::Two, Kinematics::Finite) => integrate::<Planar, true>(scene, &s),
+            (Dimension::Two, Kinematics::Small) => integrate::<Planar, false>(scene, &s),
+            (Dimension::Three, Kinematics::Finite) => integrate::<Spatial, true>(scene, &s),
+            (Dimension::Three, Kinematics::Small) => integrate::<Spatial, false>(scene, &s),
         }
     }
 

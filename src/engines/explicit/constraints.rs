@@ -1,0 +1,291 @@
+//! A step's boundary conditions compiled, and the generalised DOFs they leave free: moving
+//! along them, projecting on them, their mass, and a bound on their highest frequency.
+
+use super::body_solve::BodyOperator;
+use super::model::*;
+use super::space::{Lin, Space};
+use crate::scene::{BoundaryCondition, Dof, Scene, Step};
+
+impl<S: Space, const FINITE: bool> Model<S, FINITE> {
+    /// Compile a step's boundary conditions.
+    pub fn constraints(&self, scene: &Scene, step: &Step) -> Constraints<S> {
+        let np = self.particles.len();
+        let nb = self.bodies.len();
+        let mut c = Constraints {
+            particle_held: vec![Vec::new(); np],
+            motions: Vec::new(),
+            particle_motion: Vec::new(),
+            body_held_t: vec![Vec::new(); nb],
+            body_held_r: vec![Vec::new(); nb],
+            body_free_r: vec![Vec::new(); nb],
+            prescribed: Vec::new(),
+            rotating: vec![false; nb],
+            velocity_terms: vec![false; nb],
+            body_operators: vec![None; nb],
+        };
+        for bc in &step.conditions {
+            let BoundaryCondition { node, dof, value } = *bc;
+            let target = match (self.points[node], dof) {
+                (Point::Ground(_), _) => continue,
+                (Point::Particle(i), Dof::Translation(k)) => {
+                    Target::Particle(i, self.particles[i].axes[k.min(S::DIM - 1)])
+                }
+                (Point::Body { body, .. }, Dof::Translation(k)) => {
+                    Target::Translation(body, self.bodies[body].axes[k.min(S::DIM - 1)])
+                }
+                (Point::Body { body, .. }, Dof::Rotation(k)) => {
+                    Target::Rotation(body, self.bodies[body].rot_axes[k + S::ROT - 3])
+                }
+                (Point::Particle(_), Dof::Rotation(_)) => unreachable!("validated"),
+            };
+            match target {
+                Target::Particle(i, d) => c.particle_held[i].push(d),
+                Target::Translation(b, d) => c.body_held_t[b].push(d),
+                Target::Rotation(b, g) => c.body_held_r[b].push(g),
+            }
+            if let Some(v) = value {
+                c.prescribed.push((target, v));
+            }
+        }
+        let _ = scene;
+        // The distinct held sets, each with its projection (the last one found is tried first:
+        // neighbours usually share theirs; a set not among the first 64 is added again rather
+        // than searched for, so a scene of many frames compiles in linear time).
+        let mut distinct: Vec<&Vec<S::V>> = Vec::new();
+        let mut last = 0;
+        c.particle_motion = c
+            .particle_held
+            .iter()
+            .map(|h| {
+                if distinct.get(last).is_none_or(|d| *d != h) {
+                    last = distinct
+                        .iter()
+                        .take(64)
+                        .position(|d| *d == h)
+                        .unwrap_or_else(|| {
+                            distinct.push(h);
+                            distinct.len() - 1
+                        });
+                }
+                u32::try_from(last).expect("fewer than 2^32 distinct projections")
+            })
+            .collect();
+        c.motions = distinct.iter().map(|h| Motion::of(h, S::DIM)).collect();
+        for b in 0..nb {
+            c.body_free_r[b] = S::free_rotations(&c.body_held_r[b]);
+            let free_r = S::ROT - c.body_held_r[b].len();
+            let free_t = S::DIM - c.body_held_t[b].len();
+            c.rotating[b] = free_r > 0;
+            let centre = self.bodies[b].inertia.centre;
+            let offset = centre.dot(&centre) > 0.0;
+            c.velocity_terms[b] = FINITE && free_r > 0 && ((offset && free_t > 0) || free_r > 1);
+            // Under small rotations the configuration's mass properties are the reference ones
+            // throughout (`Model::initial_config`); under finite rotation in the plane the
+            // operator reads only the inertia about the axis (g·I g with g unturned, see
+            // `BodyInertia::axial`) and, unless pinned, the centre, which stays zero where it
+            // starts there (`Model::oriented`): the same operator, bit for bit.
+            if !FINITE || (S::ROT == 1 && self.turns_in_place(&c, b)) {
+                c.body_operators[b] = Some(BodyOperator::of(
+                    &self.bodies[b].inertia,
+                    &c.body_held_t[b],
+                    &c.body_free_r[b],
+                ));
+            }
+        }
+        c
+    }
+
+    /// Whether body `b` turns in place under `held`: pinned at its reference node, or with its
+    /// mass centre there (which turning leaves there, `Model::oriented`), so that its solve
+    /// has no drag terms and, about one free axis, an operator that turning leaves as it is.
+    pub(super) fn turns_in_place(&self, held: &Constraints<S>, b: usize) -> bool {
+        held.body_held_t[b].len() == S::DIM || self.bodies[b].inertia.centre == S::V::zero()
+    }
+
+    /// Move a configuration along a generalised DOF by `delta`.
+    pub fn perturb(&self, cfg: &mut Config<S>, target: &Target<S>, delta: f64) {
+        match target {
+            Target::Particle(i, d) => cfg.u[*i] += *d * delta,
+            Target::Translation(b, d) => cfg.bu[*b] += *d * delta,
+            Target::Rotation(b, g) => {
+                if FINITE {
+                    cfg.br[*b] = S::advance(&cfg.br[*b], &(*g * delta));
+                    // The carried rounding belonged to the rotation before the jump.
+                    cfg.br_carry[*b] = Default::default();
+                    cfg.inertia[*b] = self.oriented(*b, &cfg.br[*b]);
+                } else {
+                    cfg.bth[*b] += *g * delta;
+                }
+            }
+        }
+    }
+
+    /// The generalised force along a DOF.
+    pub fn project(&self, forces: &Forces<S>, target: &Target<S>) -> f64 {
+        match target {
+            Target::Particle(i, d) => d.dot(&forces.p[*i]),
+            Target::Translation(b, d) => d.dot(&forces.b[*b]),
+            Target::Rotation(b, g) => g.dot(&forces.m[*b]),
+        }
+    }
+
+    /// The rate of a generalised DOF.
+    pub fn rate_along(&self, rates: &Rates<S>, target: &Target<S>) -> f64 {
+        match target {
+            Target::Particle(i, d) => d.dot(&rates.p[*i]),
+            Target::Translation(b, d) => d.dot(&rates.b[*b]),
+            Target::Rotation(b, g) => g.dot(&rates.w[*b]),
+        }
+    }
+
+    /// Unit rates along a DOF.
+    pub fn unit_rate(&self, target: &Target<S>) -> Rates<S> {
+        let mut r = self.zero_rates();
+        match target {
+            Target::Particle(i, d) => r.p[*i] = *d,
+            Target::Translation(b, d) => r.b[*b] = *d,
+            Target::Rotation(b, g) => r.w[*b] = *g,
+        }
+        r
+    }
+
+    /// Generalised mass matrix entry between two DOFs.
+    pub fn mass_entry(&self, cfg: &Config<S>, k: &Target<S>, l: &Target<S>) -> f64 {
+        let ul = self.unit_rate(l);
+        match k {
+            Target::Particle(i, d) => self.particles[*i].mass * d.dot(&ul.p[*i]),
+            Target::Translation(b, d) => {
+                let (f, _) = self.body_momentum(cfg, *b, &ul.b[*b], &ul.w[*b]);
+                d.dot(&f)
+            }
+            Target::Rotation(b, g) => {
+                let (_, m) = self.body_momentum(cfg, *b, &ul.b[*b], &ul.w[*b]);
+                g.dot(&m)
+            }
+        }
+    }
+
+    /// Upper bounds `(λ, γ)` on the eigenvalues of M⁻¹K and on the row sums of M⁻¹C in the
+    /// free DOFs at `cfg`, from the elements alone (Gershgorin: every eigenvalue of M⁻¹K lies
+    /// within the largest absolute row sum), without assembling a matrix; O(elements). `None`
+    /// for scenes with bodies or contact (they take the assembled linearisation).
+    ///
+    /// An axial spring's tangent stiffness is `c ddᵀ + (T/L)(I − ddᵀ)`, T its tension; each
+    /// entry between unit axes e, f is bounded by `c|e·d||d·f| + (|T|/L)(|e·f| + |e·d||d·f|)`.
+    pub fn frequency_bound(&self, cfg: &Config<S>, held: &Constraints<S>) -> Option<(f64, f64)> {
+        if !self.bodies.is_empty() || !self.contacts.is_empty() {
+            return None;
+        }
+        let free: Vec<Vec<S::V>> = self
+            .particles
+            .iter()
+            .zip(&held.particle_held)
+            .map(|(p, h)| {
+                p.axes
+                    .iter()
+                    .copied()
+                    .filter(|a| h.iter().all(|d| d.dot(a).abs() < 0.5))
+                    .collect()
+            })
+            .collect();
+        let mut stiffness = vec![0.0; self.particles.len() * S::DIM];
+        let mut damping = vec![0.0; self.particles.len() * S::DIM];
+        let entry = |e: &S::V, f: &S::V, d: &S::V, c: f64, t: f64| {
+            let along = e.dot(d).abs() * d.dot(f).abs();
+            c * along + t * (e.dot(f).abs() + along)
+        };
+        // Add one element's row sums to the rows of its particle ends.
+        let add = |rows: &mut Vec<f64>, ends: [&Point<S>; 2], d: &S::V, c: f64, t: f64| {
+            for end in ends {
+                let Point::Particle(i) = end else { continue };
+                for (a, e) in free[*i].iter().enumerate() {
+                    let mut sum = 0.0;
+                    for other in ends {
+                        if let Point::Particle(j) = other {
+                            sum += free[*j].iter().map(|f| entry(e, f, d, c, t)).sum::<f64>();
+                        }
+                    }
+                    rows[*i * S::DIM + a] += sum;
+                }
+            }
+        };
+        for s in &self.grounded_springs {
+            if let Some(d) = s.direction {
+                add(
+                    &mut stiffness,
+                    [&s.point, &Point::Ground(S::V::zero())],
+                    &d,
+                    s.c,
+                    0.0,
+                );
+            }
+        }
+        for s in &self.grounded_dashpots {
+            if let Some(d) = s.direction {
+                add(
+                    &mut damping,
+                    [&s.point, &Point::Ground(S::V::zero())],
+                    &d,
+                    s.c,
+                    0.0,
+                );
+            }
+        }
+        let direction = |s: &TwoPoint<S>| {
+            if s.axial && FINITE {
+                let l = s.span0 + (self.displacement(cfg, &s.b) - self.displacement(cfg, &s.a));
+                let len = l.dot(&l).sqrt();
+                (l * (1.0 / len), len)
+            } else {
+                (s.direction, s.length0)
+            }
+        };
+        for s in &self.springs {
+            let (d, len) = direction(s);
+            let tension = if s.axial && FINITE {
+                (s.c * (len - s.length0) / len).abs()
+            } else {
+                0.0
+            };
+            add(&mut stiffness, [&s.a, &s.b], &d, s.c, tension);
+        }
+        for s in &self.dashpots {
+            let (d, _) = direction(s);
+            add(&mut damping, [&s.a, &s.b], &d, s.c, 0.0);
+        }
+        let largest = |rows: &[f64]| {
+            rows.iter()
+                .enumerate()
+                .map(|(r, x)| x / self.particles[r / S::DIM].mass)
+                .fold(0.0, f64::max)
+        };
+        Some((largest(&stiffness), largest(&damping)))
+    }
+
+    /// Free generalised DOFs under a step's constraints.
+    pub fn free_dofs(&self, held: &Constraints<S>) -> Vec<Target<S>> {
+        let mut out = Vec::new();
+        let free = |axes: &[S::V], held: &[S::V]| -> Vec<S::V> {
+            axes.iter()
+                .copied()
+                .filter(|a| held.iter().all(|h| h.dot(a).abs() < 0.5))
+                .collect()
+        };
+        for (i, p) in self.particles.iter().enumerate() {
+            for d in free(&p.axes, &held.particle_held[i]) {
+                out.push(Target::Particle(i, d));
+            }
+        }
+        for (b, body) in self.bodies.iter().enumerate() {
+            for d in free(&body.axes, &held.body_held_t[b]) {
+                out.push(Target::Translation(b, d));
+            }
+            for g in &body.rot_axes {
+                if held.body_held_r[b].iter().all(|h| h.dot(g).abs() < 0.5) {
+                    out.push(Target::Rotation(b, *g));
+                }
+            }
+        }
+        out
+    }
+}

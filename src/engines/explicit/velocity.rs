@@ -1,0 +1,303 @@
+//! The accelerations of an increment whose forces read the velocity at time n (dashpots; the
+//! centripetal and gyroscopic terms of bodies under finite rotation).
+//!
+//! The centred treatment uses `v(n) = v(n−½) + (h/2)·a(n)`, which keeps the scheme second
+//! order: solved directly where every dashpot joins particles and no body has velocity terms
+//! ([`ParticleDashpots`]), otherwise by fixed-point iteration from the predictor
+//! `v(n−½) + (h/2)·a(n−1)`, and, where that iteration cannot contract and the map is affine
+//! (dashpots along directions frozen for the increment, no centripetal term), by a direct
+//! solve in the free DOFs. The lagged treatment uses `v(n−½)` (first order, the classic
+//! explicit form).
+
+use super::centred::ParticleDashpots;
+use super::model::{Config, Constraints, Counters, Forces, Model, Rates, Target};
+use super::space::Space;
+use crate::engines::EngineError;
+use crate::scene::DampingTreatment;
+use nalgebra::{DMatrix, DVector};
+
+const MAX_DAMPING_ITERATIONS: usize = 100;
+
+/// The centred velocity iteration stops when v(n) is within this fraction of the largest
+/// velocity component of its fixed point (a few units of round-off).
+const VELOCITY_TOLERANCE: f64 = 1e-14;
+
+/// How one dynamic step finds v(n) and the accelerations at it.
+pub(super) enum VelocityRule<S: Space> {
+    /// No force reads the velocity: the accelerations follow from the forces.
+    Absent,
+    /// The lagged treatment: v(n) = v(n−½).
+    Lagged,
+    /// Centred, every dashpot between particles or a particle and the ground, no body with
+    /// velocity terms: solved directly.
+    Direct(ParticleDashpots<S>),
+    /// Centred, by fixed-point iteration; `affine` where the map is affine in v (then, once
+    /// the iteration fails to contract, `solved` switches the step to the direct solve in the
+    /// free `dofs`).
+    Iterated {
+        affine: bool,
+        solved: bool,
+        dofs: Vec<Target<S>>,
+    },
+}
+
+/// The work space of the velocity solve, kept across increments.
+pub(super) struct Velocities<S: Space> {
+    /// v(n), as the forces read it.
+    pub v_n: Rates<S>,
+    guess: Rates<S>,
+    /// Forces with the dashpots' added.
+    total: Forces<S>,
+    directions: Vec<S::V>,
+}
+
+impl<S: Space> Velocities<S> {
+    pub(super) fn new<const FINITE: bool>(model: &Model<S, FINITE>) -> Self {
+        Velocities {
+            v_n: model.zero_rates(),
+            guess: model.zero_rates(),
+            total: model.zero_forces(),
+            directions: Vec::new(),
+        }
+    }
+}
+
+impl<S: Space> VelocityRule<S> {
+    /// Whether any force reads the velocity (otherwise v(n) is formed only for a row).
+    pub(super) fn reads_velocity(&self) -> bool {
+        !matches!(self, VelocityRule::Absent)
+    }
+
+    /// The rule of a step under `held` from configuration `cfg` at increment `h`.
+    pub(super) fn of<const FINITE: bool>(
+        model: &Model<S, FINITE>,
+        cfg: &Config<S>,
+        held: &Constraints<S>,
+        h: f64,
+        treatment: DampingTreatment,
+        dense_limit: usize,
+    ) -> Self {
+        let velocity_terms = held.any_velocity_terms();
+        if !model.has_dashpots() && !velocity_terms {
+            return VelocityRule::Absent;
+        }
+        if treatment == DampingTreatment::Lagged {
+            return VelocityRule::Lagged;
+        }
+        if model.has_dashpots()
+            && !velocity_terms
+            && let Some(mut dashpots) = ParticleDashpots::of(model)
+        {
+            dashpots.prepare(model, cfg, held, h);
+            return VelocityRule::Direct(dashpots);
+        }
+        let dofs = model.free_dofs(held);
+        VelocityRule::Iterated {
+            affine: model.has_dashpots() && !velocity_terms && dofs.len() <= dense_limit,
+            solved: false,
+            dofs,
+        }
+    }
+
+    /// The accelerations at increment time t = n·h into `acc`, from the position forces
+    /// `forces`, the half-step velocity `v_half` and the last increment's accelerations
+    /// `acc_prev`; v(n) into `work.v_n`. Returns the dashpots' dissipation power.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn accelerations<const FINITE: bool>(
+        &mut self,
+        model: &Model<S, FINITE>,
+        cfg: &Config<S>,
+        forces: &Forces<S>,
+        (v_half, acc_prev): (&Rates<S>, &Rates<S>),
+        h: f64,
+        held: &Constraints<S>,
+        work: &mut Velocities<S>,
+        acc: &mut Rates<S>,
+        counters: &mut Counters,
+    ) -> Result<f64, EngineError> {
+        match self {
+            // v(n) is formed only where a row reads it (`VelocityRule::reads_velocity`).
+            VelocityRule::Absent => {
+                model.accelerations(cfg, forces, v_half, held, acc, counters);
+                Ok(0.0)
+            }
+            VelocityRule::Lagged => {
+                work.v_n.clone_from(v_half);
+                work.total.copy_from(forces);
+                if !model.has_dashpots() {
+                    model.accelerations(cfg, forces, &work.v_n, held, acc, counters);
+                    return Ok(0.0);
+                }
+                model.damping(cfg, &work.v_n, &mut work.total, counters);
+                model.accelerations(cfg, &work.total, &work.v_n, held, acc, counters);
+                Ok(work.total.dissipation)
+            }
+            VelocityRule::Direct(dashpots) => Ok(dashpots.solve(
+                model,
+                cfg,
+                forces,
+                v_half,
+                h,
+                held,
+                acc,
+                Some(&mut work.v_n),
+                counters,
+            )),
+            VelocityRule::Iterated {
+                affine,
+                solved,
+                dofs,
+            } => {
+                model.dashpot_directions(cfg, &mut work.directions);
+                if !*solved {
+                    let rates = (v_half, acc_prev);
+                    let stop_diverging = *affine;
+                    if iterate(
+                        model,
+                        cfg,
+                        forces,
+                        rates,
+                        h,
+                        held,
+                        stop_diverging,
+                        work,
+                        acc,
+                        counters,
+                    ) {
+                        return Ok(dissipation(model, work));
+                    }
+                    // Stiff dashpots (h·|M⁻¹C|/2 ≥ 1): the iteration cannot contract, but
+                    // where the map is affine it is solved directly from now on.
+                    if !*affine {
+                        return Err(EngineError::Failed(format!(
+                            "centred velocity iteration did not converge: the dashpots are too stiff for increment {h:e}; use damping = \"lagged\" or a smaller increment"
+                        )));
+                    }
+                    *solved = true;
+                }
+                centred_affine(
+                    model, cfg, forces, v_half, h, held, dofs, work, acc, counters,
+                )?;
+                Ok(dissipation(model, work))
+            }
+        }
+    }
+}
+
+/// The dashpots' dissipation power at the solved velocity (none without dashpots).
+fn dissipation<S: Space, const FINITE: bool>(
+    model: &Model<S, FINITE>,
+    work: &Velocities<S>,
+) -> f64 {
+    if model.has_dashpots() {
+        work.total.dissipation
+    } else {
+        0.0
+    }
+}
+
+/// The fixed-point iteration v ← v(n−½) + (h/2)·a(v) from the predictor
+/// v(n−½) + (h/2)·a(n−1). True when it met its tolerance (v(n) in `work.v_n`, the
+/// accelerations in `acc`, the dissipation in `work.total`); it gives up early where it
+/// diverges and `stop_diverging`.
+#[allow(clippy::too_many_arguments)]
+fn iterate<S: Space, const FINITE: bool>(
+    model: &Model<S, FINITE>,
+    cfg: &Config<S>,
+    forces: &Forces<S>,
+    (v_half, acc_prev): (&Rates<S>, &Rates<S>),
+    h: f64,
+    held: &Constraints<S>,
+    stop_diverging: bool,
+    work: &mut Velocities<S>,
+    acc: &mut Rates<S>,
+    counters: &mut Counters,
+) -> bool {
+    work.guess.set_plus(v_half, 0.5 * h, acc_prev);
+    work.total.copy_from(forces);
+    let mut previous_change = 0.0;
+    for pass in 0..MAX_DAMPING_ITERATIONS {
+        // Without dashpots the velocity enters through the centripetal and gyroscopic terms
+        // only: the position forces serve every pass as they are.
+        if model.has_dashpots() {
+            work.total.copy_from(forces);
+            model.damping_along(
+                cfg,
+                &work.directions,
+                &work.guess,
+                &mut work.total,
+                counters,
+            );
+        }
+        model.accelerations(cfg, &work.total, &work.guess, held, acc, counters);
+        work.v_n.set_plus(v_half, 0.5 * h, acc);
+        let (change, size) = work.v_n.max_difference(&work.guess);
+        std::mem::swap(&mut work.v_n, &mut work.guess);
+        // The iteration contracts by ρ per pass (ρ ≈ (h/2)·|∂a/∂v|, estimated as change /
+        // previous change), so the iterate just made is within ρ/(1−ρ) · change of the fixed
+        // point. With ρ < ½ that test reads change² ≤ tol·size·(previous − change).
+        let tolerance = VELOCITY_TOLERANCE * size;
+        let contracting = 2.0 * change < previous_change;
+        let bound_met = change * change <= tolerance * (previous_change - change);
+        let diverging = pass >= 3 && change > previous_change;
+        previous_change = change;
+        if change <= tolerance || (contracting && bound_met) {
+            std::mem::swap(&mut work.v_n, &mut work.guess);
+            return true;
+        }
+        if diverging && stop_diverging {
+            break;
+        }
+    }
+    std::mem::swap(&mut work.v_n, &mut work.guess);
+    false
+}
+
+/// The centred velocity v(n) = v(n−½) + (h/2)·a(v(n)) solved directly, for a map that is affine
+/// in v (dashpots along the directions in `work`, frozen for the increment; no centripetal or
+/// gyroscopic term): with g(v) = v(n−½) + (h/2)·a(v) = b + J·v in the free DOFs, (I − J)·v = b,
+/// J from g at the unit rates. Leaves `work` (v(n), the forces and their dissipation) and `acc`
+/// at the solution.
+#[allow(clippy::too_many_arguments)]
+fn centred_affine<S: Space, const FINITE: bool>(
+    model: &Model<S, FINITE>,
+    cfg: &Config<S>,
+    forces: &Forces<S>,
+    v_half: &Rates<S>,
+    h: f64,
+    held: &Constraints<S>,
+    dofs: &[Target<S>],
+    work: &mut Velocities<S>,
+    acc: &mut Rates<S>,
+    counters: &mut Counters,
+) -> Result<(), EngineError> {
+    let directions = &work.directions;
+    let mut map = |v: &Rates<S>, total: &mut Forces<S>, acc: &mut Rates<S>, out: &mut Rates<S>| {
+        total.copy_from(forces);
+        model.damping_along(cfg, directions, v, total, counters);
+        model.accelerations(cfg, total, v, held, acc, counters);
+        out.set_plus(v_half, 0.5 * h, acc);
+    };
+    let n = dofs.len();
+    let mut image = model.zero_rates();
+    map(&model.zero_rates(), &mut work.total, acc, &mut image);
+    let b = DVector::from_iterator(n, dofs.iter().map(|d| model.rate_along(&image, d)));
+    let mut system = DMatrix::identity(n, n);
+    for (j, dj) in dofs.iter().enumerate() {
+        map(&model.unit_rate(dj), &mut work.total, acc, &mut image);
+        for (i, di) in dofs.iter().enumerate() {
+            system[(i, j)] -= model.rate_along(&image, di) - b[i];
+        }
+    }
+    let x = system.lu().solve(&b).ok_or_else(|| {
+        EngineError::Failed(format!(
+            "centred velocity: I + (h/2)·M⁻¹C is singular at increment {h:e}"
+        ))
+    })?;
+    let mut v = model.zero_rates();
+    for (d, xi) in dofs.iter().zip(x.iter()) {
+        v = v.plus(*xi, &model.unit_rate(d));
+    }
+    map(&v, &mut work.total, acc, &mut work.v_n);
+    Ok(())
+}

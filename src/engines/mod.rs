@@ -1,4 +1,5 @@
-//! Engines: each turns a [`Scene`] into time histories behind the one [`Engine`] trait.
+//! Engines: each turns a [`Scene`] into time histories behind the one [`Engine`] trait; the
+//! list of engines is [`registry`]'s ([`all`], [`named`]).
 //!
 //! Engines are cheap to run many times with different [`RunSettings`] (increment, penalty
 //! stiffness, damping treatment) and report what the run cost in [`RunInfo`].
@@ -7,6 +8,9 @@ pub mod analytic;
 pub mod explicit;
 pub mod rapier;
 pub mod reference;
+pub mod registry;
+
+pub use registry::{all, named};
 
 pub use crate::contract::History;
 use crate::scene::{ContactStart, DampingTreatment, IncrementRule, PenaltyRule, Scene};
@@ -145,27 +149,4 @@ pub struct Control {
     pub engine: Option<Box<dyn Engine>>,
     /// The varied scene (`None`: the same scene).
     pub scene: Option<Scene>,
-}
-
-/// Every engine crosscheck has, in report order.
-pub fn all() -> Vec<Box<dyn Engine>> {
-    vec![
-        Box::new(analytic::AnalyticEngine),
-        Box::new(reference::ReferenceEngine),
-        Box::new(explicit::ExplicitEngine::finite()),
-        Box::new(explicit::ExplicitEngine::small()),
-        Box::new(rapier::RapierEngine::matched(rapier::Precision::F64)),
-        Box::new(rapier::RapierEngine::matched(rapier::Precision::F32)),
-        Box::new(rapier::RapierEngine::default_configuration(
-            rapier::Precision::F64,
-        )),
-        Box::new(rapier::RapierEngine::default_configuration(
-            rapier::Precision::F32,
-        )),
-    ]
-}
-
-/// Engine by name.
-pub fn named(name: &str) -> Option<Box<dyn Engine>> {
-    all().into_iter().find(|e| e.name() == name)
 }

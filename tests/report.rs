@@ -3,7 +3,7 @@
 use crosscheck::case;
 use crosscheck::comparison;
 use crosscheck::report::data::read_history;
-use crosscheck::report::markdown::sci;
+use crosscheck::report::format::sci;
 use crosscheck::report::summary::Summary;
 use std::process::Command;
 

@@ -3,7 +3,7 @@
 //! when each engine strikes, what each impact does to the energy, and how deep the node goes
 //! in. Rendered from the summary's `impacts` entries ([`crate::comparison::contact`]).
 
-use super::markdown::sci;
+use super::format::sci;
 use super::summary::{CaseSummary, Summary};
 use crate::contract::IMPACTS_REPORTED;
 use std::fmt::Write;

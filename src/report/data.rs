@@ -6,6 +6,7 @@
 //! Files are written atomically: a temporary file in the same directory is renamed into place, so
 //! an interrupted run leaves either the old file or the new one, never half of one.
 
+use super::format::csv_value;
 use crate::contract::History;
 use std::fs::{self, File};
 use std::io::BufWriter;
@@ -84,21 +85,6 @@ pub fn write_history(
     let path = csv_path(out, case_id, engine);
     write_history_to(&path, history)?;
     Ok(path)
-}
-
-/// Format a number as the CSV stores it: shortest round-trip scientific notation.
-pub fn format_value(x: f64) -> String {
-    format!("{x:e}")
-}
-
-/// [`format_value`] for a finite number, an empty field otherwise (tables where a value may be
-/// missing: the scaling study, the sweep).
-pub fn format_finite(x: f64) -> String {
-    if x.is_finite() {
-        format_value(x)
-    } else {
-        String::new()
-    }
 }
 
 /// Write `history` as CSV to `path`, atomically: the data go to a temporary file in the same
@@ -187,7 +173,7 @@ fn write_csv(tmp: &Path, history: &History) -> Result<(), DataError> {
     let mut fields = Vec::with_capacity(history.columns.len());
     for row in &history.rows {
         fields.clear();
-        fields.extend(row.iter().map(|x| format_value(*x)));
+        fields.extend(row.iter().map(|x| csv_value(*x)));
         w.write_record(&fields).map_err(csv_err)?;
     }
     let buffered = w

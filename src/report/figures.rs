@@ -3,6 +3,7 @@
 
 use crate::comparison;
 use crate::contract::{self, History};
+use crate::report::format::tick;
 use crate::report::palette;
 use crate::scene::Scene;
 use plotters::prelude::*;
@@ -22,33 +23,6 @@ pub fn unit(column: &str) -> &'static str {
         c if c.starts_with('v') => "m/s",
         c if c.starts_with('e') || c.starts_with('w') => "J",
         _ => "",
-    }
-}
-
-/// A tick label: at most 3 significant digits, trailing zeros dropped, and a value within
-/// 1e-6 of the axis span of zero printed as 0 (no round-off noise such as `-1.388e-17`).
-pub fn tick(y: f64, span: f64) -> String {
-    if y.abs() <= 1e-6 * span.abs() || y == 0.0 {
-        return "0".into();
-    }
-    let a = y.abs();
-    if (1e-3..1e4).contains(&a) {
-        let decimals = (2 - a.log10().floor() as i32).max(0) as usize;
-        let text = format!("{y:.decimals$}");
-        if text.contains('.') {
-            text.trim_end_matches('0').trim_end_matches('.').to_string()
-        } else {
-            text
-        }
-    } else {
-        let text = format!("{y:.2e}");
-        let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
-        let mantissa = if mantissa.contains('.') {
-            mantissa.trim_end_matches('0').trim_end_matches('.')
-        } else {
-            mantissa
-        };
-        format!("{mantissa}e{exponent}")
     }
 }
 
@@ -628,14 +602,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn tick_labels_have_three_significant_digits_and_no_round_off_noise() {
-        assert_eq!(tick(-1.388e-17, 0.3), "0");
-        assert_eq!(tick(0.05, 0.3), "0.05");
-        assert_eq!(tick(0.125, 0.3), "0.125");
-        assert_eq!(tick(-0.2, 0.3), "-0.2");
-        assert_eq!(tick(250_000.0, 3e5), "2.5e5");
-        assert_eq!(tick(1.2345e-5, 1e-4), "1.23e-5");
-        assert_eq!(tick(37.0, 100.0), "37");
+    fn columns_have_their_units() {
         assert_eq!(unit("contact_force"), "N");
         assert_eq!(unit("rz"), "rad");
         assert_eq!(unit("ux_node"), "m");

@@ -3,7 +3,7 @@
 //! (CPU time to 1e-2 and 1e-4 of the peak against `explicit`'s), and where it stays stable
 //! (the bisected critical increment); then what changed since the previous report.
 
-use super::markdown::sci;
+use super::format::sci;
 use super::provenance::Provenance;
 use super::summary::{CaseSummary, EngineSummary, Summary};
 use crate::comparison::EXACT_SOLUTIONS;

@@ -1,20 +1,13 @@
 //! `REPORT.md`, rendered from a [`Summary`]: every number in it is one of the summary's.
 
 use super::Timings;
+use super::format::{sci, sci_or_dash};
 use super::provenance::Provenance;
-use super::summary::{CaseSummary, EngineSummary, Summary};
+use super::summary::{CaseSummary, EngineSummary, Summary, not_applicable};
+use super::verdicts::engine_table_header;
 use super::work_precision::{self, SweepRows};
 use crate::comparison::discrepancy::Order;
 use std::fmt::Write;
-
-/// A number as the report prints it.
-pub fn sci(x: f64) -> String {
-    format!("{x:.2e}")
-}
-
-fn opt(x: Option<f64>) -> String {
-    x.map_or("–".into(), sci)
-}
 
 /// The worst column of an engine's comparison against its baseline (the exact solution of its
 /// own model): (name, max, rms, end).
@@ -241,8 +234,8 @@ fn accuracy(s: &Summary, inputs: &Inputs) -> String {
                 },
             };
             let against = r.baseline.as_deref().unwrap_or("–");
-            let closed = opt(total(r));
-            let balance = opt(r.against_analytic.as_ref().and_then(|a| a.energy_balance));
+            let closed = sci_or_dash(total(r));
+            let balance = sci_or_dash(r.against_analytic.as_ref().and_then(|a| a.energy_balance));
             let wall = timings
                 .get(&c.id)
                 .and_then(|t| t.get(&r.engine))
@@ -256,8 +249,8 @@ fn accuracy(s: &Summary, inputs: &Inputs) -> String {
                 "| {} | {} | {against} | {max} | {rms} | {end} | {closed} | {balance} | {margin} | {} | {steps} | {} | {wall} |",
                 c.id,
                 r.engine,
-                opt(r.increment.filter(|h| *h > 0.0)),
-                opt(r.penalty_stiffness)
+                sci_or_dash(r.increment.filter(|h| *h > 0.0)),
+                sci_or_dash(r.penalty_stiffness)
             );
         }
     }
@@ -344,7 +337,7 @@ fn cross_check_section(w: &mut String, s: &Summary) {
             sci(model),
             sci(ex),
             sci(er),
-            opt(d.worst_max)
+            sci_or_dash(d.worst_max)
         );
     }
 }
@@ -581,9 +574,9 @@ fn on_request(w: &mut String, c: &CaseSummary) {
                 r.engine,
                 sci(eps),
                 sci(achieved),
-                opt(r.measures.get("predicted_error").copied()),
-                opt(r.increment),
-                opt(r.penalty_stiffness),
+                sci_or_dash(r.measures.get("predicted_error").copied()),
+                sci_or_dash(r.increment),
+                sci_or_dash(r.penalty_stiffness),
                 r.steps.unwrap_or(0),
                 r.counters.get("pilot_increments").copied().unwrap_or(0)
             ))
@@ -837,16 +830,4 @@ fn equivalence_table(w: &mut String, s: &Summary, engines: &[&String]) {
             cells.join(" | ")
         );
     }
-}
-
-/// Whether a run's error says its engine does not apply to the scene.
-pub(super) fn not_applicable(error: &str) -> bool {
-    error.starts_with(crate::run::NOT_APPLICABLE)
-}
-
-/// The header of a cases × engines table: `case`, then each engine, cells aligned by `align`.
-pub(super) fn engine_table_header(w: &mut String, engines: &[&String], align: &str) {
-    let names: Vec<String> = engines.iter().map(|e| format!("`{e}`")).collect();
-    let _ = writeln!(w, "| case | {} |", names.join(" | "));
-    let _ = writeln!(w, "|---|{}", align.repeat(engines.len()));
 }

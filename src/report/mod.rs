@@ -13,6 +13,7 @@
 //!   engine stays stable and accurate;
 //! - [`contact`]: the report's section on contact that opens and closes;
 //! - [`markdown`]: `REPORT.md`, rendered from the summary and the timings;
+//! - [`format`]: how every number in the report is written (pages, figures, CSVs);
 //! - [`provenance`]: what was run (version, commit, compiler, rapier, machine, date);
 //! - [`staging`]: how a report is assembled beside its target and swapped into place.
 
@@ -20,6 +21,7 @@ pub mod contact;
 pub mod data;
 pub mod figures;
 pub mod first_screen;
+pub mod format;
 pub mod markdown;
 pub mod on_request;
 pub mod palette;

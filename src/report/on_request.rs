@@ -2,7 +2,8 @@
 //! tolerance) and the report section that sets each tolerance asked for against the error the
 //! engine achieved, with what it chose and what it cost.
 
-use crate::report::data::{DataError, format_finite as number, write_atomic};
+use crate::report::data::{DataError, write_atomic};
+use crate::report::format::csv_finite as number;
 use crate::run::on_request::{Request, TOLERANCES};
 use std::fmt::Write;
 use std::path::{Path, PathBuf};

@@ -1,7 +1,7 @@
 //! `figures/rebound.svg`: the first rebound over the drop against the restitution e, every
 //! engine on every drop case, over the exact e² curve.
 
-use super::figures::tick;
+use super::format::tick;
 use super::palette;
 use super::summary::Summary;
 use plotters::prelude::*;

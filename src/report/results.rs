@@ -4,7 +4,7 @@
 //! columns and units are documented in the report directory's `README.md`.
 
 use super::summary::Summary;
-use crate::report::data::format_finite as number;
+use crate::report::format::csv_finite as number;
 use std::path::{Path, PathBuf};
 
 /// The header.

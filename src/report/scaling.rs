@@ -2,7 +2,7 @@
 //! `DIR/figures/scaling.svg` (ns per increment against N, log–log, with each engine's fitted
 //! exponent and the memory-bandwidth limit).
 
-use crate::report::data::format_finite as number;
+use crate::report::format::csv_finite as number;
 use crate::run::scaling::{Study, fitted_exponent};
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};

@@ -7,7 +7,7 @@
 //! symbols (grounded elements, supports, arrows) have fixed pixel sizes, and the scale is chosen
 //! so that both fit. Labels are placed greedily where they cover no other label, line or node.
 
-use crate::report::figures::tick;
+use crate::report::format::tick;
 use crate::scene::{
     Attachment, BodyId, Connection, Dimension, Dof, Element, NodeId, Scene, Solid, StepKind,
     Surface,

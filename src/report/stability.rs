@@ -3,7 +3,7 @@
 //! ratio, outcome as colour, the critical increment marked), and the report section that says
 //! in words where each engine stays stable and accurate.
 
-use crate::report::data::format_finite as number;
+use crate::report::format::csv_finite as number;
 use crate::run::stability::{
     BISECTION_WIDTH, Bound, Critical, ENERGY_GROWTH_LIMIT, ENGINES, Map, Outcome, Point, RATIOS,
 };

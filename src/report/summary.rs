@@ -525,3 +525,8 @@ fn engine_summary(
         }
     }
 }
+
+/// Whether a run's error says its engine does not apply to the scene.
+pub(super) fn not_applicable(error: &str) -> bool {
+    error.starts_with(crate::run::NOT_APPLICABLE)
+}

@@ -3,8 +3,8 @@
 //! verdict matrix; the model-form gap, apart from every engine's error; and what each engine
 //! is held to, and why.
 
-use super::markdown::{engine_table_header, not_applicable, sci};
-use super::summary::{EngineSummary, Summary, ToleranceCheck};
+use super::format::sci;
+use super::summary::{EngineSummary, Summary, ToleranceCheck, not_applicable};
 use crate::comparison::attribution::{Attribution, ControlRun, EXPLAINS, FLAG_RATIO, Flag};
 use crate::comparison::{CLOSED_FORM, EXACT_SOLUTIONS, FINITE_ROTATION_REFERENCE};
 use crate::engines::ControlKind;
@@ -394,4 +394,11 @@ fn policy(w: &mut String, s: &Summary) {
         })
         .collect();
     let _ = writeln!(w, "Declared in the case files: {}.\n", listed.join("; "));
+}
+
+/// The header of a cases × engines table: `case`, then each engine, cells aligned by `align`.
+pub(super) fn engine_table_header(w: &mut String, engines: &[&String], align: &str) {
+    let names: Vec<String> = engines.iter().map(|e| format!("`{e}`")).collect();
+    let _ = writeln!(w, "| case | {} |", names.join(" | "));
+    let _ = writeln!(w, "|---|{}", align.repeat(engines.len()));
 }

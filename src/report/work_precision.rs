@@ -4,9 +4,7 @@
 //! case's tolerances).
 
 use crate::comparison::work_precision::{self, COLUMNS, CaseSweep, Row};
-use crate::report::data::format_finite as number;
-use crate::report::figures::tick;
-use crate::report::markdown::sci;
+use crate::report::format::{csv_finite as number, sci, tick};
 use crate::report::palette;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};

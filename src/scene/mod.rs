@@ -1,6 +1,6 @@
 //! The validated scene: the one type every engine reads.
 //!
-//! A [`Scene`] is built from a case file by the case reader (`src/case/build.rs`) and is then immutable; this module
+//! A [`Scene`] is built from a case file by the case reader (`src/case/build/`) and is then immutable; this module
 //! knows nothing of files, TOML or spans. Positions and directions are stored as 3-vectors; in a 2D scene every z component
 //! is zero and only the in-plane DOFs (`ux`, `uy`, `rz`) exist.
 

@@ -1,0 +1,286 @@
+//! Contact pairs: a node against a body's surface (a plane or a convex solid), and how the
+//! pair starts.
+
+use super::{Builder, err, identifier, in_range};
+use crate::case::file::{CaseFile, ContactPairTable};
+use crate::scene::*;
+use nalgebra::Vector3;
+
+/// The case's contact pairs, in file order, each id defined once.
+pub(super) fn contacts(
+    b: &Builder,
+    case: &CaseFile,
+    nodes: &[Node],
+) -> Result<Vec<ContactPair>, SceneError> {
+    let mut contacts = Vec::new();
+    for (i, c) in case.contacts.iter().enumerate() {
+        let pair = contact_pair(b, nodes, i, c, &contacts)?;
+        contacts.push(pair);
+    }
+    Ok(contacts)
+}
+
+/// Contact pair `i`: an independent node, a body's surface, and how it starts (on the surface
+/// or clear of it, as it says); its id not among `earlier`.
+fn contact_pair(
+    b: &Builder,
+    nodes: &[Node],
+    i: usize,
+    c: &ContactPairTable,
+    earlier: &[ContactPair],
+) -> Result<ContactPair, SceneError> {
+    let field = format!("contacts[{i}]");
+    let node = b.node(&format!("{field}.node"), &c.node)?;
+    let body = b.body(&format!("{field}.body"), &c.body)?;
+    if nodes[node].attachment != Attachment::Free {
+        return err(
+            format!("{field}.node"),
+            "the contact node must be an independent node, not part of a body",
+        );
+    }
+    let surface = b.surface(&field, c)?;
+    let initially = match c.initially.as_deref() {
+        None | Some("closed") => ContactState::Closed,
+        Some("open") => ContactState::Open,
+        Some(other) => {
+            return err(
+                format!("{field}.initially"),
+                format!("`{other}`: use closed (the node starts on the surface) or open"),
+            );
+        }
+    };
+    let restitution = restitution(&field, c)?;
+    starts_as_said(&field, c, &nodes[node].position, &surface, initially)?;
+    identifier(&format!("{field}.id"), &c.id)?;
+    if earlier.iter().any(|p: &ContactPair| p.name == c.id) {
+        return err(
+            format!("{field}.id"),
+            format!("`{}` is defined twice", c.id),
+        );
+    }
+    Ok(ContactPair {
+        name: c.id.clone(),
+        node,
+        body,
+        surface,
+        initially,
+        restitution,
+    })
+}
+
+/// A pair's coefficient of restitution: in [0, 1], 1 when not given.
+fn restitution(field: &str, c: &ContactPairTable) -> Result<f64, SceneError> {
+    Ok(match c.restitution {
+        None => 1.0,
+        Some(e) if e.is_finite() && (0.0..=1.0).contains(&e) => {
+            in_range(&format!("{field}.restitution"), e)?
+        }
+        Some(e) => {
+            return err(
+                format!("{field}.restitution"),
+                format!("a coefficient of restitution is in [0, 1], got {e}"),
+            );
+        }
+    })
+}
+
+/// A closed pair's node starts on the surface, an open pair's clear of it.
+fn starts_as_said(
+    field: &str,
+    c: &ContactPairTable,
+    position: &Vector3<f64>,
+    surface: &Surface,
+    initially: ContactState,
+) -> Result<(), SceneError> {
+    let (gap, _) = surface_distance(surface, position);
+    let scale = 1.0
+        + position.norm().max(match surface {
+            Surface::Plane { point, .. } => point.norm(),
+            Surface::Solid { centre, .. } => centre.norm(),
+        });
+    let on_it = gap.abs() <= 1e-9 * scale;
+    match initially {
+        ContactState::Closed if !on_it => {
+            return err(
+                format!("{field}.node"),
+                format!(
+                    "node `{}` is {gap:e} from the {} at t = 0; a closed contact must start on it (or say `initially = \"open\"`)",
+                    c.node,
+                    surface_name(surface)
+                ),
+            );
+        }
+        ContactState::Open if gap <= 0.0 || on_it => {
+            return err(
+                format!("{field}.node"),
+                format!(
+                    "node `{}` is {} the {} at t = 0 (gap {gap:e}); an open contact must start clear of it (or say `initially = \"closed\"` for a node on it)",
+                    c.node,
+                    if on_it { "on" } else { "inside" },
+                    surface_name(surface)
+                ),
+            );
+        }
+        _ => {}
+    }
+    Ok(())
+}
+
+/// How an error message names a surface.
+fn surface_name(surface: &Surface) -> String {
+    match surface {
+        Surface::Plane { .. } => "face".into(),
+        Surface::Solid { solid, .. } => format!("{}'s surface", solid.name()),
+    }
+}
+
+impl Builder<'_> {
+    /// The surface of a contact pair: a plane, or a solid with positive extents.
+    fn surface(&self, field: &str, c: &ContactPairTable) -> Result<Surface, SceneError> {
+        let shape = c.shape.as_deref().unwrap_or("plane");
+        let allowed = surface_keys(field, shape)?;
+        keys_given(field, shape, allowed, c)?;
+        let centre = || {
+            self.vector(
+                &format!("{field}.centre"),
+                c.centre.as_deref().unwrap_or_default(),
+            )
+        };
+        let radius = || {
+            self.positive(
+                &format!("{field}.radius"),
+                c.radius.unwrap_or_default(),
+                "a radius",
+            )
+        };
+        Ok(match shape {
+            "plane" => Surface::Plane {
+                point: self.vector(
+                    &format!("{field}.face_point"),
+                    c.face_point.as_deref().unwrap_or_default(),
+                )?,
+                normal: self.unit(
+                    &format!("{field}.face_normal"),
+                    c.face_normal.as_deref().unwrap_or_default(),
+                )?,
+            },
+            "ball" => Surface::Solid {
+                solid: Solid::Ball { radius: radius()? },
+                centre: centre()?,
+            },
+            "cuboid" => Surface::Solid {
+                solid: self.cuboid(field, c)?,
+                centre: centre()?,
+            },
+            "convex" => Surface::Solid {
+                solid: self.convex(field, c)?,
+                centre: centre()?,
+            },
+            _ => Surface::Solid {
+                solid: Solid::Capsule {
+                    half_height: self.positive(
+                        &format!("{field}.half_height"),
+                        c.half_height.unwrap_or_default(),
+                        "a half height",
+                    )?,
+                    radius: radius()?,
+                },
+                centre: centre()?,
+            },
+        })
+    }
+
+    /// A cuboid of positive half extents.
+    fn cuboid(&self, field: &str, c: &ContactPairTable) -> Result<Solid, SceneError> {
+        let key = format!("{field}.half_extents");
+        let h = self.vector(&key, c.half_extents.as_deref().unwrap_or_default())?;
+        for i in 0..self.dim.count() {
+            self.positive(&key, h[i], "every half extent")?;
+        }
+        Ok(Solid::Cuboid { half_extents: h })
+    }
+
+    /// A convex polytope: the hull of its vertices, every one a corner.
+    fn convex(&self, field: &str, c: &ContactPairTable) -> Result<Solid, SceneError> {
+        let corners = c
+            .vertices
+            .as_deref()
+            .unwrap_or_default()
+            .iter()
+            .enumerate()
+            .map(|(i, v)| self.vector(&format!("{field}.vertices[{i}]"), v))
+            .collect::<Result<Vec<_>, _>>()?;
+        let polytope = match Polytope::new(&corners, self.dim == Dimension::Two) {
+            Ok(p) => p,
+            Err(e) => {
+                let at = match e {
+                    polytope::PolytopeError::NotCorner { index, .. }
+                    | polytope::PolytopeError::Straight { index, .. }
+                    | polytope::PolytopeError::Repeated { index, .. } => {
+                        format!("{field}.vertices[{index}]")
+                    }
+                    _ => format!("{field}.vertices"),
+                };
+                return err(at, e.to_string());
+            }
+        };
+        Ok(Solid::Convex {
+            polytope: std::sync::Arc::new(polytope),
+        })
+    }
+}
+
+/// The keys a contact of `shape` takes.
+fn surface_keys(field: &str, shape: &str) -> Result<&'static [&'static str], SceneError> {
+    Ok(match shape {
+        "plane" => &["face_point", "face_normal"],
+        "ball" => &["centre", "radius"],
+        "cuboid" => &["centre", "half_extents"],
+        "capsule" => &["centre", "radius", "half_height"],
+        "convex" => &["centre", "vertices"],
+        other => {
+            return err(
+                format!("{field}.shape"),
+                format!("`{other}`: use plane, ball, cuboid, capsule or convex"),
+            );
+        }
+    })
+}
+
+/// A contact gives every key its shape takes, and no other.
+fn keys_given(
+    field: &str,
+    shape: &str,
+    allowed: &[&str],
+    c: &ContactPairTable,
+) -> Result<(), SceneError> {
+    let given = [
+        ("face_point", c.face_point.is_some()),
+        ("face_normal", c.face_normal.is_some()),
+        ("centre", c.centre.is_some()),
+        ("radius", c.radius.is_some()),
+        ("half_extents", c.half_extents.is_some()),
+        ("half_height", c.half_height.is_some()),
+        ("vertices", c.vertices.is_some()),
+    ];
+    for (key, present) in given {
+        if present && !allowed.contains(&key) {
+            return err(
+                format!("{field}.{key}"),
+                format!(
+                    "a {shape} contact has no `{key}`; it takes {}",
+                    allowed.join(" and ")
+                ),
+            );
+        }
+    }
+    for key in allowed {
+        if !given.iter().any(|(k, present)| k == key && *present) {
+            return err(
+                format!("{field}.{key}"),
+                format!("a {shape} contact needs `{key}`"),
+            );
+        }
+    }
+    Ok(())
+}

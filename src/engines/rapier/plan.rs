@@ -67,11 +67,16 @@
 //! scene defines them (the first one after the scene's initial velocities are applied,
 //! converted to centre-of-mass velocities v_G = v_O + ω × (R c); [`BodyState::hold`]).
 
-use super::steps::{Placement, groups, held_in_every_dof, locked_axes, moved, static_check, turns};
+mod bodies;
+mod contacts;
+mod dynamic_steps;
+mod joints;
+mod static_steps;
+
+use super::steps::groups;
 use crate::engines::EngineError;
-use crate::scene::{
-    Attachment, BodyId, Connection, Dimension, Dof, NodeId, Scene, Solid, StepKind, Surface,
-};
+use crate::scene::{Attachment, Dimension, Dof, NodeId, Scene, StepKind, Surface};
+use dynamic_steps::PlanSoFar;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 /// Which kind of rapier body.
@@ -469,9 +474,62 @@ pub fn plan(scene: &Scene) -> Result<Plan, EngineError> {
     plan_with(scene, Holding::Fixed)
 }
 
-/// Build the plan of a scene, with bodies held in every DOF made as `holding` says.
+/// Build the plan of a scene, with bodies held in every DOF made as `holding` says: the bodies
+/// and where each node lives, the static steps' placement, the initial velocities, the
+/// permanent joints, the dynamic steps, the colliders and the loads, in that order.
 pub fn plan_with(scene: &Scene, holding: Holding) -> Result<Plan, EngineError> {
-    let dim = scene.dimension;
+    let first_dynamic = first_dynamic_step(scene)?;
+    let (mut bodies, body_of_scene_body) = bodies::bodies(scene)?;
+    let nodes = bodies::nodes(scene, &mut bodies, &body_of_scene_body)?;
+    let element_groups = groups(scene);
+    let placement = static_steps::placement(
+        scene,
+        first_dynamic,
+        &bodies,
+        &nodes,
+        &body_of_scene_body,
+        &element_groups,
+    )?;
+    for (b, body) in bodies.iter_mut().enumerate() {
+        body.position = placement.position[b];
+        body.rotation = placement.rotation[b];
+    }
+    bodies::initial_velocities(scene, &nodes, &mut bodies);
+    let permanent = joints::permanent(scene, &nodes, &bodies, &element_groups)?;
+    let steps = PlanSoFar {
+        scene,
+        holding,
+        nodes: &nodes,
+        bodies: &bodies,
+        placement: &placement,
+        element_groups: &element_groups,
+    }
+    .steps(first_dynamic)?;
+    let (colliders, contacts) = contacts::colliders(scene, &nodes, &body_of_scene_body)?;
+    let loads = scene
+        .loads
+        .iter()
+        .filter(|l| nodes[l.node].body != 0)
+        .map(|l| LoadSpec {
+            body: nodes[l.node].body,
+            local: nodes[l.node].local,
+            force: l.force,
+        })
+        .collect();
+    Ok(Plan {
+        dimension: scene.dimension,
+        bodies,
+        nodes,
+        permanent,
+        steps,
+        colliders,
+        contacts,
+        loads,
+    })
+}
+
+/// The index of the scene's first dynamic step; no static step may follow one.
+fn first_dynamic_step(scene: &Scene) -> Result<usize, EngineError> {
     let first_dynamic = scene
         .steps
         .iter()
@@ -485,513 +543,5 @@ pub fn plan_with(scene: &Scene, holding: Holding) -> Result<Plan, EngineError> {
             "a static step after a dynamic one (rapier has no static solve to restart from)",
         );
     }
-
-    // Bodies and where each node lives.
-    let mut bodies = vec![BodySpec {
-        kind: BodyKind::Ground,
-        mass: 0.0,
-        com: Vector3::zeros(),
-        inertia: Matrix3::zeros(),
-        position: Vector3::zeros(),
-        rotation: UnitQuaternion::identity(),
-        linvel: Vector3::zeros(),
-        angvel: Vector3::zeros(),
-    }];
-    let mut body_of_scene_body: Vec<usize> = Vec::with_capacity(scene.bodies.len());
-    for b in &scene.bodies {
-        let c = b.centre_offset;
-        let parallel = match dim {
-            Dimension::Two => {
-                let mut m = Matrix3::zeros();
-                m[(2, 2)] = b.mass * (c.x * c.x + c.y * c.y);
-                m
-            }
-            Dimension::Three => {
-                b.mass * (Matrix3::identity() * c.norm_squared() - c * c.transpose())
-            }
-        };
-        let inertia = b.inertia - parallel;
-        let check = match dim {
-            Dimension::Two => inertia[(2, 2)] > 0.0,
-            Dimension::Three => inertia
-                .symmetric_eigenvalues()
-                .iter()
-                .all(|&e| e > -1e-12 * inertia.norm()),
-        };
-        if b.mass <= 0.0 || !check {
-            return unsupported(format!(
-                "body `{}`: mass {} and inertia about the centre of mass {} are not a rigid body's",
-                b.name, b.mass, inertia
-            ));
-        }
-        body_of_scene_body.push(bodies.len());
-        bodies.push(BodySpec {
-            kind: BodyKind::Rigid,
-            mass: b.mass,
-            com: c,
-            inertia,
-            position: scene.nodes[b.reference].position,
-            rotation: UnitQuaternion::identity(),
-            linvel: Vector3::zeros(),
-            angvel: Vector3::zeros(),
-        });
-    }
-    let mut nodes = Vec::with_capacity(scene.nodes.len());
-    for (id, n) in scene.nodes.iter().enumerate() {
-        nodes.push(match n.attachment {
-            Attachment::Free if is_ground(scene, id) => NodeRef {
-                body: 0,
-                local: n.position,
-            },
-            Attachment::Free if n.mass > 0.0 => {
-                bodies.push(BodySpec {
-                    kind: BodyKind::Particle,
-                    mass: n.mass,
-                    com: Vector3::zeros(),
-                    inertia: Matrix3::zeros(),
-                    position: n.position,
-                    rotation: UnitQuaternion::identity(),
-                    linvel: Vector3::zeros(),
-                    angvel: Vector3::zeros(),
-                });
-                NodeRef {
-                    body: bodies.len() - 1,
-                    local: Vector3::zeros(),
-                }
-            }
-            Attachment::Free => {
-                return unsupported(format!(
-                    "node `{}` has no mass and is not held in every translation in every step (a rapier body needs mass)",
-                    n.name
-                ));
-            }
-            Attachment::Reference(b) | Attachment::OnBody(b) => NodeRef {
-                body: body_of_scene_body[b],
-                local: n.position - scene.nodes[scene.bodies[b].reference].position,
-            },
-        });
-    }
-    let reference_of = |body: usize| -> Option<(BodyId, NodeId)> {
-        scene
-            .bodies
-            .iter()
-            .enumerate()
-            .find(|(b, _)| body_of_scene_body[*b] == body)
-            .map(|(b, sb)| (b, sb.reference))
-    };
-
-    let element_groups = groups(scene);
-
-    // Static steps: prescribed displacements, then the force check on the DOFs left free.
-    let mut placement = Placement {
-        position: bodies.iter().map(|b| b.position).collect(),
-        rotation: bodies.iter().map(|b| b.rotation).collect(),
-    };
-    for step in &scene.steps[..first_dynamic] {
-        for c in &step.conditions {
-            let Some(v) = c.value else { continue };
-            let node = &scene.nodes[c.node];
-            let r = nodes[c.node];
-            if r.body == 0 {
-                if v != 0.0 {
-                    return unsupported(format!(
-                        "node `{}` is prescribed a displacement but is ground",
-                        node.name
-                    ));
-                }
-                continue;
-            }
-            match c.dof {
-                Dof::Translation(i) => {
-                    let e: Vector3<f64> = node.frame.column(i).into_owned();
-                    let x0 = node.position;
-                    let current = (placement.point(&r) - x0).dot(&e);
-                    placement.position[r.body] += e * (v - current);
-                }
-                Dof::Rotation(i) => {
-                    let a: Vector3<f64> = node.frame.column(i).into_owned();
-                    let q = placement.rotation[r.body];
-                    let change = UnitQuaternion::from_scaled_axis(a * (v - twist(&q, &a)));
-                    placement.rotation[r.body] = change * q;
-                }
-            }
-        }
-        static_check(
-            scene,
-            step,
-            &nodes,
-            &placement,
-            &element_groups,
-            &reference_of,
-        )?;
-    }
-    for (b, body) in bodies.iter_mut().enumerate() {
-        body.position = placement.position[b];
-        body.rotation = placement.rotation[b];
-    }
-
-    // Initial velocities (centre-of-mass velocities for rigid bodies).
-    for iv in &scene.initial_velocities {
-        let r = nodes[iv.node];
-        if r.body == 0 {
-            continue;
-        }
-        let body = &mut bodies[r.body];
-        match body.kind {
-            BodyKind::Particle => body.linvel = iv.velocity,
-            BodyKind::Rigid => {
-                let arm = body.rotation * (body.com - r.local);
-                body.linvel = iv.velocity + iv.angular.cross(&arm);
-                body.angvel = iv.angular;
-            }
-            BodyKind::Ground => {}
-        }
-    }
-
-    // Fixed-direction and axial elements: permanent joints.
-    let mut permanent = Vec::new();
-    for g in &element_groups {
-        match &g.connection {
-            Connection::Grounded { .. } => {}
-            Connection::FixedDirection {
-                nodes: pair,
-                direction,
-            } => {
-                let (ra, rb) = (nodes[pair[0]], nodes[pair[1]]);
-                if ra.body == rb.body {
-                    continue;
-                }
-                let steady = |r: &NodeRef| bodies[r.body].kind != BodyKind::Rigid;
-                // Body 1 must not rotate: the ground, or a particle.
-                let (a, b) = if ra.body == 0 || (rb.body != 0 && steady(&ra)) {
-                    (pair[0], pair[1])
-                } else if steady(&rb) {
-                    (pair[1], pair[0])
-                } else {
-                    return unsupported(format!(
-                        "a fixed-direction element between nodes `{}` and `{}` of two rotating bodies (its direction needs a non-rotating frame)",
-                        scene.nodes[pair[0]].name, scene.nodes[pair[1]].name
-                    ));
-                };
-                let (ra, rb) = (nodes[a], nodes[b]);
-                let (xa, xb) = (scene.nodes[a].position, scene.nodes[b].position);
-                let rotation = x_to(direction, dim);
-                permanent.push(JointSpec {
-                    body1: ra.body,
-                    body2: rb.body,
-                    frame1: Frame {
-                        origin: ra.local + (xb - xa),
-                        rotation,
-                    },
-                    frame2: Frame {
-                        origin: rb.local,
-                        rotation,
-                    },
-                    kind: JointKind::Generic {
-                        locked: [false; 6],
-                        motors: vec![Motor {
-                            axis: 0,
-                            stiffness: g.stiffness,
-                            damping: g.damping,
-                        }],
-                    },
-                    refit: [false; 6],
-                });
-            }
-            Connection::Axial { nodes: pair } => {
-                let (mut a, mut b) = (pair[0], pair[1]);
-                if nodes[b].body == 0 {
-                    std::mem::swap(&mut a, &mut b);
-                }
-                let (ra, rb) = (nodes[a], nodes[b]);
-                if ra.body == rb.body {
-                    continue;
-                }
-                let rest = (scene.nodes[b].position - scene.nodes[a].position).norm();
-                if rest <= 0.0 {
-                    return unsupported(format!(
-                        "axial element between coincident nodes `{}` and `{}`",
-                        scene.nodes[a].name, scene.nodes[b].name
-                    ));
-                }
-                permanent.push(JointSpec {
-                    body1: ra.body,
-                    body2: rb.body,
-                    frame1: Frame {
-                        origin: ra.local,
-                        rotation: UnitQuaternion::identity(),
-                    },
-                    frame2: Frame {
-                        origin: rb.local,
-                        rotation: UnitQuaternion::identity(),
-                    },
-                    kind: JointKind::Spring {
-                        rest,
-                        stiffness: g.stiffness,
-                        damping: g.damping,
-                    },
-                    refit: [false; 6],
-                });
-            }
-        }
-    }
-
-    // Dynamic steps: fixed bodies, ground joints (holds + grounded motors), held velocities.
-    let mut steps = Vec::new();
-    // Per node, the joint axes some earlier dynamic step left free.
-    let mut was_free = vec![[false; 6]; scene.nodes.len()];
-    // Per plan body, whether an earlier dynamic step let it turn.
-    let mut turned = vec![false; bodies.len()];
-    for step in &scene.steps[first_dynamic..] {
-        let StepKind::Dynamic { duration } = step.kind else {
-            unreachable!("checked above")
-        };
-        let mut joints = Vec::new();
-        let mut held = Vec::new();
-        let (mut fixed, mut locks) = match holding {
-            Holding::Fixed => (
-                held_in_every_dof(scene, step, &nodes, &bodies, &placement),
-                locked_axes(scene, step, &nodes, &bodies, &placement),
-            ),
-            Holding::Joints => (
-                bodies.iter().map(|b| b.kind == BodyKind::Ground).collect(),
-                vec![None; bodies.len()],
-            ),
-        };
-        for b in (1..bodies.len())
-            .filter(|&b| moved(scene, &nodes, &element_groups, &placement, &turned, b))
-        {
-            fixed[b] = false;
-            locks[b] = None;
-        }
-        for (id, node) in scene.nodes.iter().enumerate() {
-            let r = nodes[id];
-            if r.body == 0 || fixed[r.body] {
-                // The ground and a fixed body need no joint, and their velocity is zero.
-                continue;
-            }
-            // The DOFs the step holds here; a joint locks them unless the body's locked axes do.
-            let mut held_here = [false; 6];
-            for c in step.conditions.iter().filter(|c| c.node == id) {
-                held_here[joint_axis(c.dof)] = true;
-                match c.dof {
-                    Dof::Translation(i) => held.push(HeldVelocity::Translation {
-                        body: r.body,
-                        local: r.local,
-                        direction: node.frame.column(i).into_owned(),
-                    }),
-                    Dof::Rotation(i) => held.push(HeldVelocity::Rotation {
-                        body: r.body,
-                        axis: node.frame.column(i).into_owned(),
-                    }),
-                }
-            }
-            // A particle never rotates: its rotations are not the joint's business.
-            if bodies[r.body].kind == BodyKind::Particle {
-                held_here[3..].fill(false);
-            }
-            let locked = if locks[r.body].is_some() {
-                [false; 6]
-            } else {
-                held_here
-            };
-            let refit: [bool; 6] = std::array::from_fn(|i| locked[i] && was_free[id][i]);
-            for (free, h) in was_free[id].iter_mut().zip(held_here) {
-                *free |= !h;
-            }
-            let motors: Vec<Motor> = element_groups
-                .iter()
-                .filter_map(|g| match g.connection {
-                    Connection::Grounded { node: n, dof } if n == id => Some(Motor {
-                        axis: joint_axis(dof),
-                        stiffness: g.stiffness,
-                        damping: g.damping,
-                    }),
-                    _ => None,
-                })
-                .filter(|m| !held_here[m.axis])
-                .collect();
-            if !locked.iter().any(|&l| l) && motors.is_empty() {
-                continue;
-            }
-            let free_rotations = locked[3..].iter().filter(|l| !**l).count();
-            if refit[3..].iter().any(|&r| r)
-                && free_rotations > 1
-                && motors.iter().any(|m| m.axis >= 3)
-            {
-                return unsupported(format!(
-                    "node `{}`: a rotation held again after a dynamic step left it free, with a grounded rotational spring or dashpot on one of two rotations still free",
-                    node.name
-                ));
-            }
-            // Held where the static steps left it; motors measured from t = 0.
-            let x0 = node.position;
-            let u = placement.point(&r) - x0;
-            let mut origin = x0;
-            let q = placement.rotation[r.body];
-            for (i, _) in locked.iter().enumerate().filter(|(_, l)| **l) {
-                if i < 3 {
-                    let e: Vector3<f64> = node.frame.column(i).into_owned();
-                    origin += e * e.dot(&u);
-                } else {
-                    let a: Vector3<f64> = node.frame.column(i - 3).into_owned();
-                    if twist(&q, &a).abs() > 1e-12 {
-                        return unsupported(format!(
-                            "node `{}`: rotation {} is held in a dynamic step after a static step turned it",
-                            node.name,
-                            Dof::Rotation(i - 3)
-                        ));
-                    }
-                }
-            }
-            let rotation = frame_rotation(&node.frame);
-            joints.push(JointSpec {
-                body1: 0,
-                body2: r.body,
-                frame1: Frame { origin, rotation },
-                frame2: Frame {
-                    origin: r.local,
-                    rotation,
-                },
-                kind: JointKind::Generic { locked, motors },
-                refit,
-            });
-        }
-        for (b, t) in turned.iter_mut().enumerate() {
-            *t |= !fixed[b] && turns(scene, step, &nodes, &bodies, b);
-        }
-        steps.push(StepSpec {
-            duration,
-            joints,
-            held,
-            fixed,
-            locks: locks.into_iter().map(Option::unwrap_or_default).collect(),
-        });
-    }
-
-    // Contact: a slab (or the solid) on the face's body, a small ball on the node's body.
-    let mut colliders = Vec::new();
-    let mut contacts = Vec::new();
-    for pair in &scene.contacts {
-        let face_body = body_of_scene_body[pair.body];
-        let r = nodes[pair.node];
-        if r.body == face_body {
-            return unsupported(format!(
-                "contact `{}`: the node is on the face's own body",
-                pair.name
-            ));
-        }
-        let origin = scene.nodes[scene.bodies[pair.body].reference].position;
-        let spread = scene
-            .nodes
-            .iter()
-            .enumerate()
-            .filter(|(i, n)| {
-                *i == pair.node
-                    || matches!(n.attachment, Attachment::Reference(b) | Attachment::OnBody(b) if b == pair.body)
-            })
-            .map(|(_, n)| (n.position - pair.anchor()).norm())
-            .fold(0.0f64, f64::max);
-        let size = 2.0 * spread.max(f64::MIN_POSITIVE.sqrt());
-        let (collider, surface, radius) = match pair.surface.clone() {
-            Surface::Plane { point, normal } => {
-                let radius = 1e-3 * size;
-                let face_point = point - origin;
-                (
-                    ColliderSpec {
-                        body: face_body,
-                        shape: Shape::Cuboid(Vector3::new(0.5 * size, size, size)),
-                        frame: Frame {
-                            origin: face_point - normal * (radius + 0.5 * size),
-                            rotation: x_to(&normal, dim),
-                        },
-                    },
-                    Surface::Plane {
-                        point: face_point,
-                        normal,
-                    },
-                    radius,
-                )
-            }
-            Surface::Solid { solid, centre } => {
-                // The solid shrunk by the node's ball radius, so the ball's centre (the node)
-                // touches where it touches the solid itself (corners rounded by the radius).
-                let radius = (1e-3 * size).min(0.1 * solid.half_thickness());
-                let shape = match solid {
-                    Solid::Ball { radius: a } => Shape::Ball(a - radius),
-                    Solid::Cuboid { half_extents } => {
-                        Shape::Cuboid(half_extents.map(|h| (h - radius).max(0.0)))
-                    }
-                    Solid::Capsule {
-                        half_height,
-                        radius: a,
-                    } => Shape::Capsule(half_height, a - radius),
-                    Solid::Convex { ref polytope } => match polytope.eroded(radius) {
-                        Some(corners) => Shape::ConvexHull(corners),
-                        None => {
-                            return unsupported(format!(
-                                "contact `{}`: the polytope eroded by the node's ball radius \
-                                 {radius:e} leaves nothing",
-                                pair.name
-                            ));
-                        }
-                    },
-                };
-                (
-                    ColliderSpec {
-                        body: face_body,
-                        shape,
-                        frame: Frame {
-                            origin: centre - origin,
-                            rotation: UnitQuaternion::identity(),
-                        },
-                    },
-                    Surface::Solid {
-                        solid,
-                        centre: centre - origin,
-                    },
-                    radius,
-                )
-            }
-        };
-        colliders.push(collider);
-        colliders.push(ColliderSpec {
-            body: r.body,
-            shape: Shape::Ball(radius),
-            frame: Frame {
-                origin: r.local,
-                rotation: UnitQuaternion::identity(),
-            },
-        });
-        contacts.push(ContactSpec {
-            ball: colliders.len() - 1,
-            slab: colliders.len() - 2,
-            node: pair.node,
-            body: face_body,
-            surface,
-            restitution: pair.restitution,
-        });
-    }
-
-    let loads = scene
-        .loads
-        .iter()
-        .filter(|l| nodes[l.node].body != 0)
-        .map(|l| LoadSpec {
-            body: nodes[l.node].body,
-            local: nodes[l.node].local,
-            force: l.force,
-        })
-        .collect();
-
-    Ok(Plan {
-        dimension: dim,
-        bodies,
-        nodes,
-        permanent,
-        steps,
-        colliders,
-        contacts,
-        loads,
-    })
+    Ok(first_dynamic)
 }

@@ -1,0 +1,145 @@
+//! Contact: per contact pair, a collider on the face's body (a slab behind a plane face, or
+//! the solid shrunk by the node's ball) and a small ball on the node's body, centred on it.
+
+use super::{ColliderSpec, ContactSpec, Frame, NodeRef, Shape, unsupported, x_to};
+use crate::engines::EngineError;
+use crate::scene::{Attachment, ContactPair, Dimension, Scene, Solid, Surface};
+use nalgebra::{UnitQuaternion, Vector3};
+
+/// The colliders and the contacts between them, two colliders per contact pair: the face's
+/// (the slab) then the node's ball.
+pub(super) fn colliders(
+    scene: &Scene,
+    nodes: &[NodeRef],
+    body_of_scene_body: &[usize],
+) -> Result<(Vec<ColliderSpec>, Vec<ContactSpec>), EngineError> {
+    let mut colliders = Vec::new();
+    let mut contacts = Vec::new();
+    for pair in &scene.contacts {
+        let face_body = body_of_scene_body[pair.body];
+        let r = nodes[pair.node];
+        if r.body == face_body {
+            return unsupported(format!(
+                "contact `{}`: the node is on the face's own body",
+                pair.name
+            ));
+        }
+        let origin = scene.nodes[scene.bodies[pair.body].reference].position;
+        let size = size(scene, pair);
+        let (collider, surface, radius) = match pair.surface.clone() {
+            Surface::Plane { point, normal } => {
+                plane(scene.dimension, face_body, point - origin, normal, size)
+            }
+            Surface::Solid { solid, centre } => {
+                solid_face(pair, face_body, solid, centre - origin, size)?
+            }
+        };
+        colliders.push(collider);
+        colliders.push(ColliderSpec {
+            body: r.body,
+            shape: Shape::Ball(radius),
+            frame: Frame {
+                origin: r.local,
+                rotation: UnitQuaternion::identity(),
+            },
+        });
+        contacts.push(ContactSpec {
+            ball: colliders.len() - 1,
+            slab: colliders.len() - 2,
+            node: pair.node,
+            body: face_body,
+            surface,
+            restitution: pair.restitution,
+        });
+    }
+    Ok((colliders, contacts))
+}
+
+/// The size of a pair's colliders: twice the spread of the face body's nodes and the contact
+/// node about the surface's anchor (never zero).
+fn size(scene: &Scene, pair: &ContactPair) -> f64 {
+    let spread = scene
+        .nodes
+        .iter()
+        .enumerate()
+        .filter(|(i, n)| {
+            *i == pair.node
+                || matches!(n.attachment, Attachment::Reference(b) | Attachment::OnBody(b) if b == pair.body)
+        })
+        .map(|(_, n)| (n.position - pair.anchor()).norm())
+        .fold(0.0f64, f64::max);
+    2.0 * spread.max(f64::MIN_POSITIVE.sqrt())
+}
+
+/// A plane face through `face_point` (body coordinates): a slab `size` thick behind it, moved
+/// back by the node's ball radius r = 1e-3 `size` so the two touch exactly at t = 0; the face
+/// in body coordinates, and r.
+fn plane(
+    dim: Dimension,
+    face_body: usize,
+    face_point: Vector3<f64>,
+    normal: Vector3<f64>,
+    size: f64,
+) -> (ColliderSpec, Surface, f64) {
+    let radius = 1e-3 * size;
+    (
+        ColliderSpec {
+            body: face_body,
+            shape: Shape::Cuboid(Vector3::new(0.5 * size, size, size)),
+            frame: Frame {
+                origin: face_point - normal * (radius + 0.5 * size),
+                rotation: x_to(&normal, dim),
+            },
+        },
+        Surface::Plane {
+            point: face_point,
+            normal,
+        },
+        radius,
+    )
+}
+
+/// A solid centred at `centre` (body coordinates), shrunk by the node's ball radius, so the
+/// ball's centre (the node) touches where it touches the solid itself (corners rounded by the
+/// radius); the solid in body coordinates, and the radius.
+fn solid_face(
+    pair: &ContactPair,
+    face_body: usize,
+    solid: Solid,
+    centre: Vector3<f64>,
+    size: f64,
+) -> Result<(ColliderSpec, Surface, f64), EngineError> {
+    let radius = (1e-3 * size).min(0.1 * solid.half_thickness());
+    let shape = match solid {
+        Solid::Ball { radius: a } => Shape::Ball(a - radius),
+        Solid::Cuboid { half_extents } => {
+            Shape::Cuboid(half_extents.map(|h| (h - radius).max(0.0)))
+        }
+        Solid::Capsule {
+            half_height,
+            radius: a,
+        } => Shape::Capsule(half_height, a - radius),
+        Solid::Convex { ref polytope } => match polytope.eroded(radius) {
+            Some(corners) => Shape::ConvexHull(corners),
+            None => {
+                return unsupported(format!(
+                    "contact `{}`: the polytope eroded by the node's ball radius \
+                     {radius:e} leaves nothing",
+                    pair.name
+                ));
+            }
+        },
+    };
+    Ok((
+        ColliderSpec {
+            body: face_body,
+            shape,
+            frame: Frame {
+                origin: centre,
+                rotation: UnitQuaternion::identity(),
+            },
+        },
+        Surface::Solid { solid, centre },
+        radius,
+    ))
+}

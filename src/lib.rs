@@ -14,13 +14,16 @@
 //!   lives here), runs them in parallel and returns data; it writes nothing;
 //! - [`comparison`]: the metrics of one history against another;
 //! - [`report`]: writes what a run returned: CSVs, figures, summary, REPORT.md, staged and
-//!   swapped into place.
+//!   swapped into place;
+//! - [`pipeline`]: a run from end to end: the jobs, the studies, the report put in place (the
+//!   command line parses the options and calls it).
 
 pub mod case;
 pub mod comparison;
 pub mod contract;
 pub mod engines;
 pub mod interrupt;
+pub mod pipeline;
 pub mod report;
 pub mod run;
 pub mod scene;

@@ -8,15 +8,12 @@
 
 use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand, ValueEnum};
 use crosscheck::case;
-use crosscheck::comparison::{self, discrepancy, work_precision};
+use crosscheck::comparison::{self, work_precision};
 use crosscheck::engines::RunSettings;
-use crosscheck::interrupt;
 use crosscheck::report::{self, staging};
-use crosscheck::run::refinement::Depth;
 use crosscheck::run::{self, LoadError, Plan, budget, sweep};
-use crosscheck::scene::{
-    ContactStart, DampingTreatment, Dimension, IncrementRule, PenaltyRule, Scene,
-};
+use crosscheck::scene::{ContactStart, DampingTreatment, Dimension, IncrementRule, PenaltyRule};
+use crosscheck::{interrupt, pipeline};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -323,6 +320,32 @@ fn scaling(max_n: usize, out: &Path, quiet: bool) -> ExitCode {
         }
     };
     let mut stdout = Stdout::default();
+    print_scaling(&mut stdout, &study);
+    let csv = written::csv(&study);
+    let result =
+        report::data::write_atomic(&written::csv_path(&target), csv.as_bytes()).and_then(|_| {
+            match written::render(&study) {
+                Some(svg) => {
+                    report::data::write_atomic(&written::figure_path(&target), svg.as_bytes())
+                }
+                None => Ok(()),
+            }
+        });
+    if let Err(e) = result {
+        eprintln!("error: {e}");
+        return stdout.finish(ExitCode::FAILURE);
+    }
+    stdout.print(&format!(
+        "written: {}\n",
+        written::csv_path(&target).display()
+    ));
+    stdout.finish(ExitCode::SUCCESS)
+}
+
+/// The scaling study as a table: one row per point, then the points not run and the fitted
+/// exponents.
+fn print_scaling(stdout: &mut Stdout, study: &crosscheck::run::scaling::Study) {
+    use crosscheck::report::scaling as written;
     stdout.print(&format!(
         "{:<12} {:>9} {:>7} {:>14} {:>10} {:>10} {:>12} {:>10} {:>10}\n",
         "engine", "n", "steps", "ns/increment", "ns/DOF", "limit", "peak RSS", "error", "predicted"
@@ -347,31 +370,12 @@ fn scaling(max_n: usize, out: &Path, quiet: bool) -> ExitCode {
             s.engine, s.n, s.reason
         ));
     }
-    for (engine, slope) in written::exponents(&study) {
+    for (engine, slope) in written::exponents(study) {
         stdout.print(&format!(
             "{engine}: fitted exponent {slope:.3} over N >= {}\n",
             written::FIT_FROM_N
         ));
     }
-    let csv = written::csv(&study);
-    let result =
-        report::data::write_atomic(&written::csv_path(&target), csv.as_bytes()).and_then(|_| {
-            match written::render(&study) {
-                Some(svg) => {
-                    report::data::write_atomic(&written::figure_path(&target), svg.as_bytes())
-                }
-                None => Ok(()),
-            }
-        });
-    if let Err(e) = result {
-        eprintln!("error: {e}");
-        return stdout.finish(ExitCode::FAILURE);
-    }
-    stdout.print(&format!(
-        "written: {}\n",
-        written::csv_path(&target).display()
-    ));
-    stdout.finish(ExitCode::SUCCESS)
 }
 
 /// Standard output that may be closed (`| head`) or full: the first failure is kept and
@@ -584,6 +588,8 @@ fn lock_and_stage(
     }
 }
 
+/// `crosscheck run`: check the options and load the cases, run them through the pipeline, and
+/// print the jobs' table, the tolerance count and the stage times.
 fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
     let started = std::time::Instant::now();
     let engines = match run::select_engines(&args.engines) {
@@ -623,126 +629,43 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
         Ok(x) => x,
         Err(code) => return code,
     };
-    let loaded = started.elapsed().as_secs_f64();
-    let outcome = run::execute(&plan, !args.quiet);
-    let ran = started.elapsed().as_secs_f64();
-    if interrupt::requested() {
-        return interrupted();
-    }
-    let budgets = discrepancy::measure(&plan, &outcome, Depth::Basic, !args.quiet);
-    let attributions = comparison::attribution::measure(&plan, &outcome, !args.quiet);
-    let budgeted = started.elapsed().as_secs_f64();
-    if interrupt::requested() {
-        return interrupted();
-    }
-    let names: Vec<&str> = plan.engines.iter().map(|e| e.name()).collect();
-    // Accuracy on request covers the seed cases; the sweep those and the cases that ask for it
-    // (`sweep = true`); the whole stress family is the stability map's.
-    let seeds = case::discover(dir).unwrap_or_default();
-    let is_seed = |s: &Scene| {
-        seeds
-            .iter()
-            .any(|p| p.file_stem().is_some_and(|f| *f == *s.id))
+    let studies = pipeline::Studies {
+        sweep: args.sweep.then_some(args.repeat as usize),
+        stability: args.stability,
+        on_request: args.on_request,
     };
-    let subplan = |keep: &dyn Fn(&Scene) -> bool| Plan {
-        cases: plan.cases.iter().filter(|s| keep(s)).cloned().collect(),
-        engines: Vec::new(),
-        settings: plan.settings,
-    };
-    let seed_plan = subplan(&is_seed);
-    let sweep_plan = subplan(&|s: &Scene| is_seed(s) || s.sweep);
-    let sweeps = if args.sweep {
-        let grid = sweep::Grid {
-            repeat: args.repeat as usize,
-            ..sweep::Grid::default()
-        };
-        work_precision::measure(&sweep_plan, &outcome, &names, &grid, !args.quiet)
-    } else {
-        Vec::new()
-    };
-    let swept = started.elapsed().as_secs_f64();
-    if interrupt::requested() {
-        return interrupted();
+    match pipeline::run(&plan, dir, &studies, staging, started, !args.quiet) {
+        Ok(finished) => print_run(&finished, &args.out),
+        Err(e) => stopped("the report", e),
     }
-    let maps = if args.stability {
-        comparison::stability::measure(&plan, &outcome, &names, !args.quiet)
-    } else {
-        Default::default()
-    };
-    let mapped = started.elapsed().as_secs_f64();
-    if interrupt::requested() {
-        return interrupted();
-    }
-    let requests = if args.on_request {
-        comparison::on_request::measure(&seed_plan, &outcome, &names, !args.quiet)
-    } else {
-        Vec::new()
-    };
-    let requested = started.elapsed().as_secs_f64();
-    if interrupt::requested() {
-        return interrupted();
-    }
-    let mut parts = vec![
-        ("load and check", loaded),
-        ("jobs", ran - loaded),
-        ("discrepancy budget and controls", budgeted - ran),
-    ];
-    if args.sweep {
-        parts.push(("sweep", swept - budgeted));
-    }
-    if args.stability {
-        parts.push(("stability map", mapped - swept));
-    }
-    if args.on_request {
-        parts.push(("accuracy on request", requested - mapped));
-    }
-    let study = report::Study {
-        budgets: &budgets,
-        attributions: &attributions,
-        sweeps: &sweeps,
-        stability: &maps,
-        requests: &requests,
-        parts,
-    };
-    let summary = match report::write(staging.path(), &plan, &outcome, &study, staging.target()) {
-        Ok(s) => s,
-        Err(report::data::DataError::Interrupted) => return interrupted(),
-        Err(e) => {
-            eprintln!("error: cannot write the report (the previous one is unchanged): {e}");
-            return ExitCode::FAILURE;
-        }
-    };
-    if interrupt::checkpoint("swap").is_err() {
-        return interrupted();
-    }
-    let written = started.elapsed().as_secs_f64();
-    if let Err(e) = staging.commit() {
-        eprintln!("error: cannot put the report in place (the previous one is unchanged): {e}");
-        return ExitCode::FAILURE;
-    }
-    let swapped = started.elapsed().as_secs_f64();
+}
+
+/// What a finished run prints: the jobs' table, the tolerance count, the stage times; exit 1
+/// when a job failed.
+fn print_run(finished: &pipeline::Finished, out_dir: &Path) -> ExitCode {
+    let (outcome, t) = (&finished.outcome, &finished.times);
     let mut out = Stdout::default();
     out.print(&outcome.table());
-    let checks = summary.tolerance_checks();
+    let checks = finished.summary.tolerance_checks();
     out.print(&format!(
         "{} job(s), {} failed; report: {} ({} of {} cells meet their tolerance)\n",
         outcome.jobs.len(),
         outcome.failures(),
-        report::report_path(&args.out).display(),
+        report::report_path(out_dir).display(),
         checks.iter().filter(|c| c.met()).count(),
         checks.len()
     ));
     out.print(&format!(
         "time: load and check {:.2} s, jobs {:.2} s, budget {:.2} s, sweep {:.2} s, stability map {:.2} s, accuracy on request {:.2} s, report {:.2} s, swap {:.2} s; total {:.2} s\n",
-        loaded,
-        ran - loaded,
-        budgeted - ran,
-        swept - budgeted,
-        mapped - swept,
-        requested - mapped,
-        written - requested,
-        swapped - written,
-        swapped
+        t.loaded,
+        t.ran - t.loaded,
+        t.budgeted - t.ran,
+        t.swept - t.budgeted,
+        t.mapped - t.swept,
+        t.requested - t.mapped,
+        t.written - t.requested,
+        t.swapped - t.written,
+        t.swapped
     ));
     if interrupt::requested() {
         eprintln!("interrupted after the new report was put in place");
@@ -753,6 +676,22 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
     } else {
         ExitCode::FAILURE
     })
+}
+
+/// The exit code of a run or study that stopped before its files were in place (130
+/// interrupted, 1 else), with the message saying why; `what` names the files.
+fn stopped(what: &str, e: pipeline::Stopped) -> ExitCode {
+    match e {
+        pipeline::Stopped::Interrupted => interrupted(),
+        pipeline::Stopped::Write(e) => {
+            eprintln!("error: cannot write {what} (the previous one is unchanged): {e}");
+            ExitCode::FAILURE
+        }
+        pipeline::Stopped::Swap(e) => {
+            eprintln!("error: cannot put {what} in place (the previous one is unchanged): {e}");
+            ExitCode::FAILURE
+        }
+    }
 }
 
 fn sweep_command(args: SweepArgs, dir: &Path) -> ExitCode {
@@ -769,7 +708,7 @@ fn sweep_command(args: SweepArgs, dir: &Path) -> ExitCode {
         Ok(x) => x,
         Err(code) => return code,
     };
-    let (plan, outcome) = exact_solutions(cases);
+    let (plan, outcome) = pipeline::exact_solutions(cases);
     if interrupt::requested() {
         return interrupted();
     }
@@ -782,10 +721,9 @@ fn sweep_command(args: SweepArgs, dir: &Path) -> ExitCode {
     if interrupt::requested() {
         return interrupted();
     }
-    if let Err(code) = put_in_place(staging, "the sweep", |dir| {
-        written::write(dir, &sweeps, &plan.cases)
-    }) {
-        return code;
+    if let Err(e) = pipeline::put_in_place(staging, |dir| written::write(dir, &sweeps, &plan.cases))
+    {
+        return stopped("the sweep", e);
     }
     let mut out = Stdout::default();
     out.print(&written::text(&sweeps));
@@ -813,7 +751,7 @@ fn stability_command(args: StabilityArgs, dir: &Path) -> ExitCode {
             Ok(x) => x,
             Err(code) => return code,
         };
-    let (plan, outcome) = exact_solutions(cases);
+    let (plan, outcome) = pipeline::exact_solutions(cases);
     if interrupt::requested() {
         return interrupted();
     }
@@ -821,10 +759,8 @@ fn stability_command(args: StabilityArgs, dir: &Path) -> ExitCode {
     if interrupt::requested() {
         return interrupted();
     }
-    if let Err(code) = put_in_place(staging, "the stability map", |dir| {
-        written::write(dir, &map)
-    }) {
-        return code;
+    if let Err(e) = pipeline::put_in_place(staging, |dir| written::write(dir, &map)) {
+        return stopped("the stability map", e);
     }
     let mut out = Stdout::default();
     let mut text = String::new();
@@ -860,43 +796,4 @@ fn chosen_engines(
                 })
         })
         .collect()
-}
-
-/// The exact solutions (`analytic`, `reference`) of `cases`, which every study's runs are
-/// measured against.
-fn exact_solutions(cases: Vec<crosscheck::scene::Scene>) -> (Plan, run::Outcome) {
-    let plan = Plan {
-        cases,
-        engines: ["analytic", "reference"]
-            .iter()
-            .filter_map(|n| crosscheck::engines::named(n))
-            .collect(),
-        settings: RunSettings::default(),
-    };
-    let outcome = run::execute(&plan, false);
-    (plan, outcome)
-}
-
-/// Write a study's files into the staging directory with `write`, then swap them into place;
-/// on failure the previous files stay, and the exit code says why (130 interrupted, 1 else).
-fn put_in_place(
-    staging: staging::Staging,
-    what: &str,
-    write: impl FnOnce(&Path) -> Result<(), report::data::DataError>,
-) -> Result<(), ExitCode> {
-    match write(staging.path()) {
-        Ok(()) => {}
-        Err(report::data::DataError::Interrupted) => return Err(interrupted()),
-        Err(e) => {
-            eprintln!("error: cannot write {what} (the previous one is unchanged): {e}");
-            return Err(ExitCode::FAILURE);
-        }
-    }
-    if interrupt::checkpoint("swap").is_err() {
-        return Err(interrupted());
-    }
-    staging.commit().map_err(|e| {
-        eprintln!("error: cannot put {what} in place (the previous one is unchanged): {e}");
-        ExitCode::FAILURE
-    })
 }

@@ -1,0 +1,257 @@
+//! A run from end to end, in the order of the data flow: the jobs, the studies that measure
+//! them against the exact solutions, and the files written into a staging directory and
+//! swapped into place. The command line chooses what runs and prints what it returns; this
+//! module is the last in the flow (it uses the modules before it, and none of them uses it).
+
+use crate::comparison::{self, discrepancy, work_precision};
+use crate::engines::{self, RunSettings};
+use crate::interrupt;
+use crate::report::data::DataError;
+use crate::report::staging::Staging;
+use crate::report::summary::Summary;
+use crate::report::{self, Study};
+use crate::run::on_request::Request;
+use crate::run::refinement::Depth;
+use crate::run::stability::Map;
+use crate::run::{self, Outcome, Plan, sweep};
+use crate::scene::Scene;
+use std::path::Path;
+use std::time::Instant;
+
+/// The studies a run makes beyond the jobs, their discrepancy budgets and their causes.
+#[derive(Debug, Clone, Copy)]
+pub struct Studies {
+    /// The sweep (what accuracy costs), each setting timed `repeat` times; `None`: not run.
+    pub sweep: Option<usize>,
+    /// The stability map.
+    pub stability: bool,
+    /// Accuracy on request.
+    pub on_request: bool,
+}
+
+/// When each stage of a run ended, seconds after it started.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct StageTimes {
+    /// The cases loaded and checked, the output locked and staged.
+    pub loaded: f64,
+    /// The jobs.
+    pub ran: f64,
+    /// The discrepancy budgets and the control experiments.
+    pub budgeted: f64,
+    /// The sweep.
+    pub swept: f64,
+    /// The stability map.
+    pub mapped: f64,
+    /// Accuracy on request.
+    pub requested: f64,
+    /// The report written into the staging directory.
+    pub written: f64,
+    /// The report swapped into place.
+    pub swapped: f64,
+}
+
+/// Why a run stopped before its files were in place (the previous ones are unchanged).
+#[derive(Debug)]
+pub enum Stopped {
+    /// A signal asked it to stop.
+    Interrupted,
+    /// The files could not be written.
+    Write(DataError),
+    /// The files could not be swapped into place.
+    Swap(std::io::Error),
+}
+
+/// A run whose report is in place: the jobs' outcome, the report's summary, the stage times.
+pub struct Finished {
+    /// What the jobs returned.
+    pub outcome: Outcome,
+    /// The report's summary.
+    pub summary: Summary,
+    /// When each stage ended.
+    pub times: StageTimes,
+}
+
+/// What the optional studies measured (each empty when it did not run).
+struct Measured {
+    sweeps: Vec<comparison::work_precision::CaseSweep>,
+    maps: Map,
+    requests: Vec<Request>,
+}
+
+/// Run `plan`'s jobs and `studies`, write the report into `staging` and swap it into place.
+/// `cases_dir` says which cases are seeds (accuracy on request covers those, the sweep those
+/// and the cases that ask for it); `started` is when the run began (its loading included).
+pub fn run(
+    plan: &Plan,
+    cases_dir: &Path,
+    studies: &Studies,
+    staging: Staging,
+    started: Instant,
+    progress: bool,
+) -> Result<Finished, Stopped> {
+    let mut times = StageTimes {
+        loaded: seconds_since(started),
+        ..StageTimes::default()
+    };
+    let outcome = run::execute(plan, progress);
+    times.ran = seconds_since(started);
+    stop_if_interrupted()?;
+    let budgets = discrepancy::measure(plan, &outcome, Depth::Basic, progress);
+    let attributions = comparison::attribution::measure(plan, &outcome, progress);
+    times.budgeted = seconds_since(started);
+    stop_if_interrupted()?;
+    let measured = measure(
+        plan, &outcome, cases_dir, studies, progress, started, &mut times,
+    )?;
+    let study = Study {
+        budgets: &budgets,
+        attributions: &attributions,
+        sweeps: &measured.sweeps,
+        stability: &measured.maps,
+        requests: &measured.requests,
+        parts: times.parts(studies),
+    };
+    let summary = report::write(staging.path(), plan, &outcome, &study, staging.target())
+        .map_err(written_or_interrupted)?;
+    if interrupt::checkpoint("swap").is_err() {
+        return Err(Stopped::Interrupted);
+    }
+    times.written = seconds_since(started);
+    staging.commit().map_err(Stopped::Swap)?;
+    times.swapped = seconds_since(started);
+    Ok(Finished {
+        outcome,
+        summary,
+        times,
+    })
+}
+
+/// The optional studies, in order (sweep, stability map, accuracy on request), each stage's
+/// end noted in `times`.
+fn measure(
+    plan: &Plan,
+    outcome: &Outcome,
+    cases_dir: &Path,
+    studies: &Studies,
+    progress: bool,
+    started: Instant,
+    times: &mut StageTimes,
+) -> Result<Measured, Stopped> {
+    let names: Vec<&str> = plan.engines.iter().map(|e| e.name()).collect();
+    let seeds = crate::case::discover(cases_dir).unwrap_or_default();
+    let is_seed = |s: &Scene| {
+        seeds
+            .iter()
+            .any(|p| p.file_stem().is_some_and(|f| *f == *s.id))
+    };
+    let subplan = |keep: &dyn Fn(&Scene) -> bool| Plan {
+        cases: plan.cases.iter().filter(|s| keep(s)).cloned().collect(),
+        engines: Vec::new(),
+        settings: plan.settings,
+    };
+    let seed_plan = subplan(&is_seed);
+    let sweep_plan = subplan(&|s: &Scene| is_seed(s) || s.sweep);
+    let sweeps = match studies.sweep {
+        Some(repeat) => {
+            let grid = sweep::Grid {
+                repeat,
+                ..sweep::Grid::default()
+            };
+            work_precision::measure(&sweep_plan, outcome, &names, &grid, progress)
+        }
+        None => Vec::new(),
+    };
+    times.swept = seconds_since(started);
+    stop_if_interrupted()?;
+    let maps = if studies.stability {
+        comparison::stability::measure(plan, outcome, &names, progress)
+    } else {
+        Default::default()
+    };
+    times.mapped = seconds_since(started);
+    stop_if_interrupted()?;
+    let requests = if studies.on_request {
+        comparison::on_request::measure(&seed_plan, outcome, &names, progress)
+    } else {
+        Vec::new()
+    };
+    times.requested = seconds_since(started);
+    stop_if_interrupted()?;
+    Ok(Measured {
+        sweeps,
+        maps,
+        requests,
+    })
+}
+
+impl StageTimes {
+    /// How long each part of the run took, seconds, in order, for the report: the parts that
+    /// ran.
+    fn parts(&self, studies: &Studies) -> Vec<(&'static str, f64)> {
+        let mut parts = vec![
+            ("load and check", self.loaded),
+            ("jobs", self.ran - self.loaded),
+            ("discrepancy budget and controls", self.budgeted - self.ran),
+        ];
+        if studies.sweep.is_some() {
+            parts.push(("sweep", self.swept - self.budgeted));
+        }
+        if studies.stability {
+            parts.push(("stability map", self.mapped - self.swept));
+        }
+        if studies.on_request {
+            parts.push(("accuracy on request", self.requested - self.mapped));
+        }
+        parts
+    }
+}
+
+/// The exact solutions (`analytic`, `reference`) of `cases`, which every study's runs are
+/// measured against.
+pub fn exact_solutions(cases: Vec<Scene>) -> (Plan, Outcome) {
+    let plan = Plan {
+        cases,
+        engines: ["analytic", "reference"]
+            .iter()
+            .filter_map(|n| engines::named(n))
+            .collect(),
+        settings: RunSettings::default(),
+    };
+    let outcome = run::execute(&plan, false);
+    (plan, outcome)
+}
+
+/// Write a study's files into the staging directory with `write`, then swap them into place;
+/// on failure the previous files stay.
+pub fn put_in_place(
+    staging: Staging,
+    write: impl FnOnce(&Path) -> Result<(), DataError>,
+) -> Result<(), Stopped> {
+    write(staging.path()).map_err(written_or_interrupted)?;
+    if interrupt::checkpoint("swap").is_err() {
+        return Err(Stopped::Interrupted);
+    }
+    staging.commit().map_err(Stopped::Swap)
+}
+
+/// A write that failed because a signal asked it to stop is an interruption.
+fn written_or_interrupted(e: DataError) -> Stopped {
+    match e {
+        DataError::Interrupted => Stopped::Interrupted,
+        e => Stopped::Write(e),
+    }
+}
+
+/// `Err(Interrupted)` once a signal has asked the run to stop.
+fn stop_if_interrupted() -> Result<(), Stopped> {
+    if interrupt::requested() {
+        Err(Stopped::Interrupted)
+    } else {
+        Ok(())
+    }
+}
+
+/// Seconds since `started`.
+fn seconds_since(started: Instant) -> f64 {
+    started.elapsed().as_secs_f64()
+}

@@ -398,8 +398,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         if !self.started {
             self.start_state(&held);
         }
-        let plan = self.plan(si, duration, held);
-        let mut plan = plan;
+        let mut plan = self.plan(si, duration, held);
         for n in plan.first..=plan.first + plan.count {
             if n == plan.first + plan.count && !plan.last {
                 break; // the next step starts from this configuration

@@ -280,7 +280,9 @@ pub fn render(engine: &str, points: &[&Point], critical: &[&Critical]) -> Option
             let label = match o {
                 Outcome::Accurate => "accurate (within the case's tolerance)".to_string(),
                 Outcome::Inaccurate => "inaccurate (bounded)".to_string(),
-                Outcome::Unstable => format!("unstable (energy > {ENERGY_GROWTH_LIMIT}×)"),
+                Outcome::Unstable => {
+                    format!("unstable (energy > {ENERGY_GROWTH_LIMIT}×, ÷ (1 − r²) below 1)")
+                }
                 Outcome::Failed => "failed".to_string(),
                 Outcome::NotApplicable => "not applicable".to_string(),
             };

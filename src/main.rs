@@ -38,10 +38,16 @@ enum Command {
     List,
     /// Run cases through engines and write `OUT/data/<case>/<engine>.csv`.
     Run(RunArgs),
-    /// Scaling study: ns per increment of `explicit` and `rapier_f64` on a chain of N masses
-    /// (N = 10, 100, …), against the machine's memory-bandwidth limit; writes
-    /// `OUT/scaling.csv` and `OUT/figures/scaling.svg`.
+    /// Cost studies. `chain`: ns per increment of `explicit` and `rapier_f64` on a chain of N
+    /// masses (N = 10, 100, …), against the machine's memory-bandwidth limit; writes
+    /// `OUT/scaling.csv` and `OUT/figures/scaling.svg`. `elements`: `explicit`'s cost per
+    /// element on a generated family of scenes (1–16 bodies, 0–16 contacts, 1–64 particles),
+    /// a cost model fitted to it, and the seed cases predicted by that model; writes
+    /// `OUT/elements.csv` and `OUT/figures/elements.svg`.
     Scaling {
+        /// Which study.
+        #[arg(long, value_enum, default_value = "all")]
+        study: ScalingStudy,
         /// Largest chain (masses; at most 10^6, which holds about 1.3 GB).
         #[arg(long, value_name = "N", default_value_t = 1_000_000, value_parser = clap::value_parser!(u64).range(10..=1_000_000))]
         max_n: u64,
@@ -178,6 +184,16 @@ struct RunArgs {
     repeat: u64,
 }
 
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum ScalingStudy {
+    /// The chain of N masses.
+    Chain,
+    /// The cost per element on generated scenes and the seed cases.
+    Elements,
+    /// Both.
+    All,
+}
+
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum DampingArg {
     /// Mid-step velocity, second order.
@@ -272,15 +288,18 @@ fn main() -> ExitCode {
         Some(Command::List) => list(&dir),
         Some(Command::Run(args)) => run_command(args, &dir),
         Some(Command::Check { files }) => check(files, &dir),
-        Some(Command::Scaling { max_n, out, quiet }) => scaling(max_n as usize, &out, quiet),
+        Some(Command::Scaling {
+            study,
+            max_n,
+            out,
+            quiet,
+        }) => scaling(study, max_n as usize, &out, quiet, &dir),
         Some(Command::Sweep(args)) => sweep_command(args, &dir),
         Some(Command::Stability(args)) => stability_command(args, &dir),
     }
 }
 
-fn scaling(max_n: usize, out: &Path, quiet: bool) -> ExitCode {
-    use crosscheck::report::scaling as written;
-    use crosscheck::run::scaling;
+fn scaling(study: ScalingStudy, max_n: usize, out: &Path, quiet: bool, dir: &Path) -> ExitCode {
     let target = match staging::resolve_output(out) {
         Ok(t) => t,
         Err(e) => {
@@ -296,16 +315,107 @@ fn scaling(max_n: usize, out: &Path, quiet: bool) -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    let sizes = scaling::sizes(max_n);
+    let mut stdout = Stdout::default();
+    if study != ScalingStudy::Elements {
+        let code = chain_study(max_n, &target, quiet, &mut stdout);
+        if code != ExitCode::SUCCESS {
+            return stdout.finish(code);
+        }
+    }
+    if study != ScalingStudy::Chain {
+        let code = element_study(&target, quiet, dir, &mut stdout);
+        return stdout.finish(code);
+    }
+    stdout.finish(ExitCode::SUCCESS)
+}
+
+/// A progress bar of `len` steps on standard error (hidden when `quiet` or not a terminal).
+fn progress_bar(len: u64, quiet: bool, unit: &str) -> indicatif::ProgressBar {
     let bar = if quiet || !std::io::IsTerminal::is_terminal(&std::io::stderr()) {
         indicatif::ProgressBar::hidden()
     } else {
-        indicatif::ProgressBar::new(2 * sizes.len() as u64)
+        indicatif::ProgressBar::new(len)
     };
     bar.set_style(
-        indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} points  {msg}")
-            .expect("a valid template"),
+        indicatif::ProgressStyle::with_template(&format!(
+            "{{bar:30}} {{pos}}/{{len}} {unit}  {{msg}}"
+        ))
+        .expect("a valid template"),
     );
+    bar
+}
+
+/// Write `text` to `path` and, where given, the figure to `figure`.
+fn write_study(
+    path: &Path,
+    text: &str,
+    figure: Option<(PathBuf, String)>,
+) -> Result<(), report::data::DataError> {
+    report::data::write_atomic(path, text.as_bytes())?;
+    match figure {
+        Some((path, svg)) => report::data::write_atomic(&path, svg.as_bytes()),
+        None => Ok(()),
+    }
+}
+
+/// The element-cost study: run, print the model and how well it predicts, write the files.
+fn element_study(target: &Path, quiet: bool, dir: &Path, stdout: &mut Stdout) -> ExitCode {
+    use crosscheck::report::element_cost as written;
+    use crosscheck::run::element_cost;
+    let seeds = match case::discover(dir)
+        .map_err(|e| format!("{}: {e}", dir.display()))
+        .and_then(|paths| {
+            paths
+                .iter()
+                .map(|p| case::load(p).map_err(|e| e.to_string()))
+                .collect::<Result<Vec<_>, _>>()
+        }) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let bar = progress_bar(
+        (element_cost::family().len() + seeds.len()) as u64,
+        quiet,
+        "scenes",
+    );
+    let study = element_cost::study(&seeds, |id| {
+        bar.set_message(id.to_string());
+        bar.inc(1);
+    });
+    bar.finish_and_clear();
+    let study = match study {
+        Ok(s) => s,
+        Err(_) if interrupt::requested() => return interrupted(),
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    stdout.print(&format!(
+        "explicit, ns per increment = sum of coefficient × count:\n\n{}",
+        written::summary(&study)
+    ));
+    let figure = written::render(&study).map(|svg| (written::figure_path(target), svg));
+    if let Err(e) = write_study(&written::csv_path(target), &written::csv(&study), figure) {
+        eprintln!("error: {e}");
+        return ExitCode::FAILURE;
+    }
+    stdout.print(&format!(
+        "written: {}\n",
+        written::csv_path(target).display()
+    ));
+    ExitCode::SUCCESS
+}
+
+/// The chain study: run, print, write the files.
+fn chain_study(max_n: usize, target: &Path, quiet: bool, stdout: &mut Stdout) -> ExitCode {
+    use crosscheck::report::scaling as written;
+    use crosscheck::run::scaling;
+    let sizes = scaling::sizes(max_n);
+    let bar = progress_bar(2 * sizes.len() as u64, quiet, "points");
     let study = scaling::study(max_n, |engine, n| {
         bar.set_message(format!("{engine}, N = {n}"));
         bar.inc(1);
@@ -319,27 +429,17 @@ fn scaling(max_n: usize, out: &Path, quiet: bool) -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    let mut stdout = Stdout::default();
-    print_scaling(&mut stdout, &study);
-    let csv = written::csv(&study);
-    let result =
-        report::data::write_atomic(&written::csv_path(&target), csv.as_bytes()).and_then(|_| {
-            match written::render(&study) {
-                Some(svg) => {
-                    report::data::write_atomic(&written::figure_path(&target), svg.as_bytes())
-                }
-                None => Ok(()),
-            }
-        });
-    if let Err(e) = result {
+    print_scaling(stdout, &study);
+    let figure = written::render(&study).map(|svg| (written::figure_path(target), svg));
+    if let Err(e) = write_study(&written::csv_path(target), &written::csv(&study), figure) {
         eprintln!("error: {e}");
-        return stdout.finish(ExitCode::FAILURE);
+        return ExitCode::FAILURE;
     }
     stdout.print(&format!(
         "written: {}\n",
-        written::csv_path(&target).display()
+        written::csv_path(target).display()
     ));
-    stdout.finish(ExitCode::SUCCESS)
+    ExitCode::SUCCESS
 }
 
 /// The scaling study as a table: one row per point, then the points not run and the fitted

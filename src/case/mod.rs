@@ -3,6 +3,7 @@
 pub mod build;
 pub mod chain;
 pub mod diagnostic;
+pub mod family;
 pub mod file;
 
 use crate::scene::{Scene, SceneError};

@@ -19,6 +19,7 @@
 
 pub mod contact;
 pub mod data;
+pub mod element_cost;
 pub mod figures;
 pub mod first_screen;
 pub mod format;

@@ -29,6 +29,7 @@
 
 pub mod budget;
 pub mod controls;
+pub mod element_cost;
 pub mod floor;
 pub mod load;
 pub mod matching;

@@ -24,7 +24,10 @@ fn ns_per_increment(dir: &Path, group: &str) -> BTreeMap<String, f64> {
         else {
             continue;
         };
-        let id = bench["function_id"].as_str().unwrap_or_default().to_string();
+        let id = bench["function_id"]
+            .as_str()
+            .unwrap_or_default()
+            .to_string();
         let increments = bench["throughput"]["Elements"].as_f64();
         let median = estimates["median"]["point_estimate"].as_f64();
         if let (Some(n), Some(ns)) = (increments, median) {
@@ -59,7 +62,10 @@ fn main() {
         .filter_map(|id| id.strip_suffix("/explicit"))
         .collect();
     if cases.is_empty() {
-        eprintln!("no `increment/<case>/explicit` results under {}", dir.display());
+        eprintln!(
+            "no `increment/<case>/explicit` results under {}",
+            dir.display()
+        );
         std::process::exit(2);
     }
     println!(

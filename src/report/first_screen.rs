@@ -207,15 +207,20 @@ fn conclusions(w: &mut String, s: &Summary, engines: &[&str]) {
     let base = critical_ratios(s, BASE);
     if let Some(low) = base.first() {
         let below = base.iter().filter(|x| x.0 < 0.98).count();
-        lines.push(format!(
+        let bounded = format!(
             "`{BASE}` stays bounded up to its computed stable increment (within 2 %) on {} of {} \
-             mapped cases and goes unstable below it on {below}, down to {:.2}× on {} (penalty \
-             impacts).",
+             mapped cases",
             base.len() - below,
-            base.len(),
-            low.0,
-            low.1
-        ));
+            base.len()
+        );
+        lines.push(if below == 0 {
+            format!("{bounded} (the lowest limit: {:.2}× on {}).", low.0, low.1)
+        } else {
+            format!(
+                "{bounded} and goes unstable below it on {below}, down to {:.2}× on {}.",
+                low.0, low.1
+            )
+        });
     }
     let rapiers: Vec<(f64, &str, bool)> = engines
         .iter()

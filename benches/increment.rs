@@ -22,14 +22,16 @@
 //! as the explicit engine's on the single damped oscillator (`tests/floor.rs`: equal to
 //! round-off), written out by hand, at the same increment and length as `increment/<case>/…`:
 //! with the state in registers (the dependent chain alone) and in heap slices, one pass per
-//! stage (what a scene-driven engine must at least do).
+//! stage (what a scene-driven engine must at least do). `floor/<case>/slices` of the pinned 2D
+//! rigid cases: the least arithmetic of the same scheme on a body turning about a pin
+//! (`run::floor::PinnedBody`), in heap slices.
 //!
 //! Run with `cargo bench --bench increment`; `BENCHMARKS.md` gives the table.
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use crosscheck::case;
 use crosscheck::engines::explicit::ExplicitEngine;
 use crosscheck::engines::{self, RunSettings};
-use crosscheck::run::floor::DampedOscillator;
+use crosscheck::run::floor::{DampedOscillator, PinnedBody};
 use crosscheck::run::matching;
 use crosscheck::scene::IncrementRule;
 use std::hint::black_box;
@@ -135,6 +137,20 @@ fn floor(c: &mut Criterion) {
         });
         group.bench_function(format!("{}/slices", scene.id), |b| {
             b.iter(|| black_box(oscillator).in_slices(black_box(h), steps))
+        });
+    }
+    for scene in seed_cases() {
+        let Some(body) = PinnedBody::of(&scene) else {
+            continue;
+        };
+        let IncrementRule::Given(h) = scene.settings.increment else {
+            continue;
+        };
+        let h = h / REFINEMENT;
+        let steps = (body.duration / h).round() as u64;
+        group.throughput(Throughput::Elements(steps));
+        group.bench_function(format!("{}/slices", scene.id), |b| {
+            b.iter(|| black_box(&body).in_slices(black_box(h), steps))
         });
     }
     group.finish();

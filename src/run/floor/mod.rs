@@ -167,3 +167,6 @@ fn compensated_add(x: &mut f64, carry: &mut f64, dx: f64) {
     *carry = (t - *x) - y;
     *x = t;
 }
+
+mod pinned_body;
+pub use pinned_body::PinnedBody;

@@ -267,26 +267,7 @@ impl Size {
                 "stiffness = 1.0e4\n",
             ),
         }
-        let neighbour = (p >= self.bodies).then(|| format!("N{}", p - self.bodies));
-        match (p % 6, neighbour) {
-            (0, _) => self.element(
-                s,
-                "dashpots",
-                "grounded",
-                &[&node],
-                "dof = \"ux\"\ndamping = 1.0\n",
-            ),
-            (2, _) => self.element(
-                s,
-                "dashpots",
-                "fixed_direction",
-                &[&node, &ground],
-                &format!("{along_x}damping = 1.0\n"),
-            ),
-            (4, Some(n)) => self.element(s, "dashpots", "axial", &[&node, &n], "damping = 1.0\n"),
-            (4, None) => self.element(s, "dashpots", "axial", &[&node, &ground], "damping = 1.0\n"),
-            _ => {}
-        }
+        self.particle_dashpot(s, p, &node, &ground, &along_x);
         let _ = writeln!(
             s,
             "[[initial_velocities]]\nnode = \"{node}\"\nvelocity = {}\n",
@@ -304,6 +285,32 @@ impl Size {
                 "[[loads]]\nnode = \"{node}\"\nforce = {}\n",
                 self.vector(-10.0, 0.0)
             );
+        }
+    }
+
+    /// Particle `p`'s dashpot, on particles 0, 2 and 4 of every six: grounded on ux, of fixed
+    /// direction to its ground node, axial to the particle one row before it (or to its ground
+    /// node in the first row).
+    fn particle_dashpot(&self, s: &mut String, p: usize, node: &str, ground: &str, along_x: &str) {
+        let neighbour = (p >= self.bodies).then(|| format!("N{}", p - self.bodies));
+        match (p % 6, neighbour) {
+            (0, _) => self.element(
+                s,
+                "dashpots",
+                "grounded",
+                &[node],
+                "dof = \"ux\"\ndamping = 1.0\n",
+            ),
+            (2, _) => self.element(
+                s,
+                "dashpots",
+                "fixed_direction",
+                &[node, ground],
+                &format!("{along_x}damping = 1.0\n"),
+            ),
+            (4, Some(n)) => self.element(s, "dashpots", "axial", &[node, &n], "damping = 1.0\n"),
+            (4, None) => self.element(s, "dashpots", "axial", &[node, ground], "damping = 1.0\n"),
+            _ => {}
         }
     }
 }

@@ -17,6 +17,9 @@ use crate::scene::{Attachment, Connection, Dimension, Dof, Scene, StepKind, Surf
 use nalgebra::Vector2;
 use std::hint::black_box;
 
+/// A spring from a body point to the ground along x: (point relative to the pin, stiffness).
+pub type PointSpring = (Vector2<f64>, f64);
+
 /// A pinned body as the floor needs it: every point relative to the pin, at t = 0.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PinnedBody {
@@ -25,7 +28,7 @@ pub struct PinnedBody {
     /// Initial angular velocity (rad/s).
     pub angular: f64,
     /// Springs from body points to the ground along x: (point, stiffness).
-    pub body_springs: Vec<(Vector2<f64>, f64)>,
+    pub body_springs: Vec<PointSpring>,
     /// Loads on body points: (point, force).
     pub loads: Vec<(Vector2<f64>, Vector2<f64>)>,
     /// The particle: its position, mass, initial velocity along x and the stiffness of its
@@ -99,30 +102,8 @@ impl PinnedBody {
             let p = scene.nodes[n].position - origin;
             Vector2::new(p.x, p.y)
         };
-        let (mut body_springs, mut particle_stiffness) = (Vec::new(), 0.0);
-        for spring in &scene.springs {
-            let Connection::FixedDirection { nodes, direction } = spring.connection else {
-                return None;
-            };
-            if direction != nalgebra::Vector3::x() {
-                return None;
-            }
-            let (end, other) = match (ground(nodes[0]), ground(nodes[1])) {
-                (false, true) => (nodes[0], nodes[1]),
-                (true, false) => (nodes[1], nodes[0]),
-                _ => return None,
-            };
-            if on_body(other) {
-                return None;
-            }
-            if end == particle {
-                particle_stiffness += spring.coefficient;
-            } else if on_body(end) {
-                body_springs.push((relative(end), spring.coefficient));
-            } else {
-                return None;
-            }
-        }
+        let (body_springs, particle_stiffness) =
+            Self::springs(scene, particle, &relative, &ground, &on_body)?;
         let mut loads = Vec::new();
         for load in &scene.loads {
             if !on_body(load.node) {
@@ -158,6 +139,42 @@ impl PinnedBody {
             penalty: scene.penalty_stiffness(scene.settings.penalty),
             duration,
         })
+    }
+
+    /// The springs, all of fixed direction x from a held node: those on body points (with the
+    /// point relative to the pin) and the particle's summed stiffness.
+    fn springs(
+        scene: &Scene,
+        particle: usize,
+        relative: &dyn Fn(usize) -> Vector2<f64>,
+        ground: &dyn Fn(usize) -> bool,
+        on_body: &dyn Fn(usize) -> bool,
+    ) -> Option<(Vec<PointSpring>, f64)> {
+        let (mut body_springs, mut particle_stiffness) = (Vec::new(), 0.0);
+        for spring in &scene.springs {
+            let Connection::FixedDirection { nodes, direction } = spring.connection else {
+                return None;
+            };
+            if direction != nalgebra::Vector3::x() {
+                return None;
+            }
+            let (end, other) = match (ground(nodes[0]), ground(nodes[1])) {
+                (false, true) => (nodes[0], nodes[1]),
+                (true, false) => (nodes[1], nodes[0]),
+                _ => return None,
+            };
+            if on_body(other) {
+                return None;
+            }
+            if end == particle {
+                particle_stiffness += spring.coefficient;
+            } else if on_body(end) {
+                body_springs.push((relative(end), spring.coefficient));
+            } else {
+                return None;
+            }
+        }
+        Some((body_springs, particle_stiffness))
     }
 
     /// The state after `steps` increments of `h`, the state and the element lists in heap

@@ -10,6 +10,7 @@
 //! [`checkpoint`] (printing `crosscheck: paused at <phase>` on stderr) until a signal arrives,
 //! or for at most 60 s.
 
+use std::io::Write as _;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -26,7 +27,7 @@ pub const EXIT_CODE: u8 = 130;
 pub fn install() {
     let _ = ctrlc::set_handler(|| {
         if REQUESTED.swap(true, Ordering::SeqCst) {
-            eprintln!("interrupted again: stopping now");
+            let _ = writeln!(std::io::stderr(), "interrupted again: stopping now");
             std::process::exit(i32::from(EXIT_CODE));
         }
     });
@@ -53,7 +54,7 @@ pub fn checkpoint(phase: &str) -> Result<(), Interrupted> {
     if std::env::var(PAUSE_VARIABLE).is_ok_and(|p| p == phase)
         && !PAUSED.swap(true, Ordering::SeqCst)
     {
-        eprintln!("crosscheck: paused at {phase}");
+        let _ = writeln!(std::io::stderr(), "crosscheck: paused at {phase}");
         let start = Instant::now();
         while !requested() && start.elapsed() < Duration::from_secs(60) {
             std::thread::sleep(Duration::from_millis(5));

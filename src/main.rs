@@ -16,6 +16,22 @@ use crosscheck::scene::{ContactStart, DampingTreatment, Dimension, IncrementRule
 use crosscheck::{interrupt, pipeline};
 use std::io::Write;
 use std::path::{Path, PathBuf};
+
+/// The standard macros, shadowed in this file: standard error that cannot be written (a full
+/// disk, `/dev/full`) loses the message and never panics; the exit code still says what
+/// happened.
+macro_rules! eprintln {
+    ($($arg:tt)*) => {{
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
+
+/// As `eprintln!` above, without the newline.
+macro_rules! eprint {
+    ($($arg:tt)*) => {{
+        let _ = write!(std::io::stderr(), $($arg)*);
+    }};
+}
 use std::process::ExitCode;
 
 /// Verification harness for explicit dynamics: on problems whose exact answer is known, how

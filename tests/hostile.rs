@@ -316,6 +316,80 @@ fn closed_or_full_stdout_is_an_error_not_a_panic() {
     assert_eq!(names(root.path()), ["report"]);
 }
 
+#[test]
+fn a_full_standard_error_is_an_exit_code_not_a_panic() {
+    // Every message of these commands goes to standard error, which cannot take it: the exit
+    // code must still say what happened (2: bad input, 1: the output cannot be written), never
+    // 101 (a panic).
+    let root = tempfile::tempdir().unwrap();
+    let missing = root.path().join("missing.toml");
+    let blocked = root.path().join("file");
+    std::fs::write(&blocked, "not a directory").unwrap();
+    for (args, code) in [
+        (vec!["check".into(), missing.clone()], 2),
+        (vec!["run".into(), "-q".into(), missing.clone()], 2),
+        (
+            vec![
+                "run".into(),
+                "-q".into(),
+                "springs_grounded_a".into(),
+                "--out".into(),
+                blocked.join("report"),
+            ],
+            2,
+        ),
+    ] {
+        let status = bin()
+            .args(&args)
+            .stdout(Stdio::null())
+            .stderr(Stdio::from(std::fs::File::create("/dev/full").unwrap()))
+            .status()
+            .unwrap();
+        assert_eq!(status.code(), Some(code), "{args:?}");
+    }
+}
+
+#[test]
+fn a_scene_with_nothing_free_to_move_runs_on_every_engine() {
+    // One mass on a spring, held in every DOF for the whole step: every engine reports it at
+    // rest (no engine may panic on an empty set of free coordinates).
+    let root = tempfile::tempdir().unwrap();
+    let case = root.path().join("held.toml");
+    let text = std::fs::read_to_string(cases_dir().join("springs_grounded_a.toml"))
+        .unwrap()
+        .replace("id = \"springs_grounded_a\"", "id = \"held\"")
+        .replace(
+            "hold = [{ node = \"3\", dofs = [\"uy\"] }]\n\n# Tolerances",
+            "hold = [{ node = \"3\", dofs = [\"all\"] }]\n\n# Tolerances",
+        );
+    assert!(
+        text.contains("dofs = [\"all\"] }]\n\n# Tolerances"),
+        "the dynamic step is held"
+    );
+    std::fs::write(&case, text).unwrap();
+    let out = root.path().join("report");
+    let run = bin()
+        .args(["run", "-q"])
+        .arg(&case)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert_eq!(run.status.code(), Some(0), "{stdout}");
+    assert!(!stdout.contains("panicked"), "{stdout}");
+    for engine in crosscheck::engines::all() {
+        let csv = out.join("data/held").join(format!("{}.csv", engine.name()));
+        let text = std::fs::read_to_string(&csv).unwrap_or_else(|e| panic!("{csv:?}: {e}"));
+        let held = text.lines().skip(1).all(|row| {
+            row.split(',')
+                .nth(1)
+                .is_some_and(|u| u.parse::<f64>().unwrap() == 1.0)
+        });
+        assert!(held, "{}: u_end moved from 1", engine.name());
+    }
+}
+
 /// `crosscheck run ARGS --out OUT` is refused with exit 2, saying `expected` and that nothing
 /// was run, and the report at `out` is still `before`.
 fn refused<A: AsRef<std::ffi::OsStr> + std::fmt::Debug>(

@@ -227,7 +227,8 @@ impl OutputLock {
                 });
             }
             if !said {
-                eprintln!(
+                let _ = writeln!(
+                    std::io::stderr(),
                     "waiting: another crosscheck run{} is writing {}",
                     holder.map(|p| format!(" (pid {p})")).unwrap_or_default(),
                     target.display()

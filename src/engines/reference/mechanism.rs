@@ -652,6 +652,14 @@ impl Mechanism {
         w: &DVector<f64>,
         active: &[bool],
     ) -> Result<Evaluation, EngineError> {
+        if basis.ncols() == 0 {
+            // Nothing is free to move: no acceleration, and a held node's contact force is a
+            // reaction this model does not resolve (the closed pairs report none).
+            return Ok(Evaluation {
+                acceleration: DVector::zeros(0),
+                contact: vec![0.0; active.len()],
+            });
+        }
         let u = basis * w;
         let (mass, inertial) = self.inertia(at, &u);
         let force = self.applied(at, &u)? + inertial;

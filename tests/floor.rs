@@ -110,7 +110,7 @@ fn the_pinned_body_floor_gives_the_exact_solution_within_the_case_tolerance() {
     // from the engine only in the start of the contact (zero penetration, so the penalty mode
     // rings with an amplitude λ0/k_p, far below the compliance itself) and in keeping its
     // heading to a few ulps per increment instead of to round-off: the same 1e-3 holds
-    // (measured: 7.8e-6 in rz, 2.2e-6 in ux_node, on both cases).
+    // (measured: 7.7e-6 in rz, 1.0e-6 in ux_node, on both cases).
     for id in ["rigid2d_pin_lumped", "rigid2d_pin_surface"] {
         let scene = scene(id);
         let floor = PinnedBody::of(&scene).unwrap();

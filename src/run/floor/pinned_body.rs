@@ -6,12 +6,14 @@
 //! loads, then the update of the turn and of the particle.
 //!
 //! It is the same scheme as the explicit engine's (central differences, finite rotation, a
-//! unilateral penalty), with the least arithmetic that scheme needs: the orientation is kept
-//! as its cosine and sine and turned by the increment's angle from the first two terms of
-//! their series (the engine keeps them to round-off with a compensated sum), the contact
+//! unilateral penalty) with the same arithmetic for the motion: the particle's displacement
+//! summed with a compensated (Kahan) addition, the orientation kept as its versine and sine,
+//! turned by the increment's angle from the first two terms of their series, each summed with
+//! its carry and brought back to unit norm. It leaves out what is not the scheme: the contact
 //! starts from zero penetration (the engine starts it where the rigid model is), and nothing
-//! is checked or recorded. So it is a floor to time the engine against, not its answer:
-//! `tests/floor.rs` holds it to the case's exact solution at the case's tolerance.
+//! is checked or recorded (rows, energy, the work of impacts). So it is a floor to time the
+//! engine against, not its answer to round-off: `tests/floor.rs` holds it to the case's exact
+//! solution at the case's tolerance.
 
 use crate::scene::{Attachment, Connection, Dimension, Dof, Scene, StepKind, Surface};
 use nalgebra::Vector2;
@@ -182,11 +184,13 @@ impl PinnedBody {
     pub fn in_slices(&self, h: f64, steps: u64) -> PinnedState {
         let one = black_box(1usize);
         let (at, mass, speed, stiffness) = self.particle;
-        // State: the body's (cos θ, sin θ), θ, ω(n−½); the particle's u, v(n−½).
-        let mut heading = vec![(1.0, 0.0); one];
+        // State: the body's (cos θ − 1, sin θ) and their carries, θ, ω(n−½); the particle's u,
+        // its carry, v(n−½).
+        let mut heading = vec![Heading::default(); one];
         let mut angle = vec![0.0; one];
         let mut spin = vec![self.angular; one];
         let mut u = vec![0.0; one];
+        let mut u_carry = vec![0.0; one];
         let mut v = vec![speed; one];
         let mut moment = vec![0.0; one];
         let mut force = vec![0.0; one];
@@ -194,8 +198,8 @@ impl PinnedBody {
         let inverse_mass = vec![1.0 / mass; one];
         let particle_springs = vec![stiffness; one];
         let faces = vec![self.face; one];
-        let forces = |heading: (f64, f64), u: f64, moment: &mut f64, force: &mut f64| {
-            let (c, s) = heading;
+        let forces = |heading: Heading, u: f64, moment: &mut f64, force: &mut f64| {
+            let (c, s) = (1.0 + heading.versine, heading.sine);
             let turn = |p: &Vector2<f64>| Vector2::new(c * p.x - s * p.y, s * p.x + c * p.y);
             *moment = 0.0;
             *force = 0.0;
@@ -229,15 +233,46 @@ impl PinnedBody {
             spin[0] += h * moment[0] * inverse_inertia[0];
             v[0] += h * force[0] * inverse_mass[0];
             let x = h * spin[0];
-            let (ds, dc) = (x - x * x * x / 6.0, -0.5 * x * x);
-            let (c, s) = heading[0];
-            heading[0] = (c + c * dc - s * ds, s + s * dc + c * ds);
+            heading[0].turn(x);
             angle[0] += x;
-            u[0] += h * v[0];
+            compensated_add(&mut u[0], &mut u_carry[0], h * v[0]);
         }
         PinnedState {
             angle: angle[0],
             displacement: u[0],
         }
     }
+}
+
+/// An orientation in 2D as cos θ − 1 and sin θ (the versine keeps its relative precision near
+/// θ = 0), each with the carry of its compensated sum.
+#[derive(Debug, Clone, Copy, Default)]
+struct Heading {
+    versine: f64,
+    sine: f64,
+    carry: [f64; 2],
+}
+
+impl Heading {
+    /// Turn by the angle `x` (|x| small: the first two terms of the series of sin and cos − 1),
+    /// restoring unit norm by the first-order correction of the excess c² + s² − 1.
+    #[inline(always)]
+    fn turn(&mut self, x: f64) {
+        let (v, s) = (self.versine, self.sine);
+        let c = 1.0 + v;
+        let excess = (2.0 * v + s * s) + v * v;
+        let (ds, dc) = (x * (1.0 - x * x / 6.0), x * x * (-0.5 + x * x / 24.0));
+        let radial = dc - 0.5 * excess;
+        compensated_add(&mut self.versine, &mut self.carry[0], c * radial - s * ds);
+        compensated_add(&mut self.sine, &mut self.carry[1], s * radial + c * ds);
+    }
+}
+
+/// `x += dx` with the rounding error carried to the next addition (Kahan).
+#[inline(always)]
+fn compensated_add(x: &mut f64, carry: &mut f64, dx: f64) {
+    let y = dx - *carry;
+    let t = *x + y;
+    *carry = (t - *x) - y;
+    *x = t;
 }

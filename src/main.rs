@@ -74,6 +74,10 @@ enum Command {
         #[arg(long, short)]
         quiet: bool,
     },
+    /// Judge a history from another code (a CSV with a header and a time column) against a
+    /// case's exact solution, with the comparison and verdict an engine gets. Exit 0 within
+    /// the tolerance, 1 outside it, 2 on unusable input.
+    Judge(JudgeArgs),
     /// Validate case files without running them (the same validation every `run` does first).
     Check {
         /// Case files (default: every case in cases/).
@@ -200,6 +204,41 @@ struct RunArgs {
     repeat: u64,
 }
 
+#[derive(Debug, Args)]
+struct JudgeArgs {
+    /// Case id from cases/ or path to a .toml case file.
+    #[arg(value_name = "CASE")]
+    case: String,
+    /// Their history: CSV with a header row.
+    #[arg(value_name = "FILE.csv")]
+    file: PathBuf,
+    /// Map one of the case's columns to theirs (default: the same name); repeat for more.
+    #[arg(long = "column", value_name = "OURS=THEIRS")]
+    columns: Vec<String>,
+    /// Their time column, in seconds.
+    #[arg(long, value_name = "NAME", default_value = "t")]
+    time: String,
+    /// Multiply their column (named by ours) by FACTOR to convert it to the case's unit
+    /// (m, m/s, rad, N); repeat for more.
+    #[arg(long = "scale", value_name = "COLUMN=FACTOR")]
+    scales: Vec<String>,
+    /// The exact solution: `reference` (the full model) or `analytic` (the closed form of the
+    /// linearised one).
+    #[arg(long, value_enum, default_value = "reference")]
+    against: Against,
+    /// Largest error over each column's peak (default: the tightest the case declares).
+    #[arg(long, value_name = "EPS")]
+    tolerance: Option<f64>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum Against {
+    /// The converged solution of the full (finite-rotation) model.
+    Reference,
+    /// The closed form of the linearised (small-rotation) model.
+    Analytic,
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum ScalingStudy {
     /// The chain of N masses.
@@ -304,6 +343,7 @@ fn main() -> ExitCode {
         Some(Command::List) => list(&dir),
         Some(Command::Run(args)) => run_command(args, &dir),
         Some(Command::Check { files }) => check(files, &dir),
+        Some(Command::Judge(args)) => judge(args, &dir),
         Some(Command::Scaling {
             study,
             max_n,
@@ -543,6 +583,36 @@ fn case_files(dir: &Path) -> Result<Vec<PathBuf>, String> {
         Ok(f) if f.is_empty() => Err(format!("no case files (*.toml) in {}", dir.display())),
         Ok(f) => Ok(f),
         Err(e) => Err(format!("{}: cannot list cases: {e}", dir.display())),
+    }
+}
+
+fn judge(args: JudgeArgs, dir: &Path) -> ExitCode {
+    let request = pipeline::JudgeRequest {
+        case: args.case,
+        file: args.file,
+        columns: args.columns,
+        time: args.time,
+        scales: args.scales,
+        against: match args.against {
+            Against::Reference => comparison::FINITE_ROTATION_REFERENCE,
+            Against::Analytic => comparison::CLOSED_FORM,
+        },
+        tolerance: args.tolerance,
+    };
+    match pipeline::judge(&request, dir) {
+        Ok((text, pass)) => {
+            let mut out = Stdout::default();
+            out.print(&text);
+            out.finish(if pass {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::FAILURE
+            })
+        }
+        Err(message) => {
+            eprintln!("error: {message}");
+            ExitCode::from(2)
+        }
     }
 }
 

@@ -15,6 +15,7 @@ use crate::run::refinement::Depth;
 use crate::run::stability::Map;
 use crate::run::{self, Outcome, Plan, sweep};
 use crate::scene::Scene;
+use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
@@ -254,4 +255,96 @@ fn stop_if_interrupted() -> Result<(), Stopped> {
 /// Seconds since `started`.
 fn seconds_since(started: Instant) -> f64 {
     started.elapsed().as_secs_f64()
+}
+
+/// What `crosscheck judge` was given.
+#[derive(Debug, Clone)]
+pub struct JudgeRequest {
+    /// Case id or path.
+    pub case: String,
+    /// Their CSV.
+    pub file: std::path::PathBuf,
+    /// `OURS=THEIRS` column maps.
+    pub columns: Vec<String>,
+    /// Their time column.
+    pub time: String,
+    /// `COLUMN=FACTOR` conversions.
+    pub scales: Vec<String>,
+    /// The exact solution's engine: `reference` or `analytic`.
+    pub against: &'static str,
+    /// Largest error over the peak (`None`: the tightest the case declares).
+    pub tolerance: Option<f64>,
+}
+
+/// `OURS=THEIRS` pairs into a map; `what` names the option in an error.
+fn pairs(items: &[String], what: &str) -> Result<BTreeMap<String, String>, String> {
+    items
+        .iter()
+        .map(|item| match item.split_once('=') {
+            Some((a, b)) if !a.trim().is_empty() && !b.trim().is_empty() => {
+                Ok((a.trim().to_string(), b.trim().to_string()))
+            }
+            _ => Err(format!("--{what} {item}: expected NAME=VALUE")),
+        })
+        .collect()
+}
+
+/// The judgement's inputs from the request: the case, the mapping of their CSV, the tolerance.
+fn judge_inputs(
+    request: &JudgeRequest,
+    dir: &Path,
+) -> Result<(Scene, comparison::judge::Mapping, f64), String> {
+    let path = crate::case::resolve(&request.case, dir).map_err(|e| e.to_string())?;
+    let scene = crate::case::load_checked(&path, &run::check_scene).map_err(|e| e.render())?;
+    let mut scales = BTreeMap::new();
+    for (column, factor) in pairs(&request.scales, "scale")? {
+        let f: f64 = factor
+            .parse()
+            .ok()
+            .filter(|f: &f64| f.is_finite() && *f != 0.0)
+            .ok_or_else(|| format!("--scale {column}={factor}: not a finite, non-zero number"))?;
+        scales.insert(column, f);
+    }
+    let mapping = comparison::judge::Mapping {
+        time: Some(request.time.clone()),
+        columns: pairs(&request.columns, "column")?,
+        scales,
+    };
+    comparison::judge::check_options(&scene, &mapping).map_err(|e| e.to_string())?;
+    let tolerance = match request.tolerance {
+        Some(t) if t.is_finite() && t > 0.0 => t,
+        Some(t) => return Err(format!("--tolerance {t}: not a positive number")),
+        None => comparison::judge::tightest_tolerance(&scene)
+            .ok_or_else(|| format!("{} declares no tolerance: give --tolerance", scene.id))?,
+    };
+    Ok((scene, mapping, tolerance))
+}
+
+/// Judge their history against the case's exact solution: the markdown to print and whether
+/// it passed; `Err` when the input is unusable (the message says why and where).
+pub fn judge(request: &JudgeRequest, dir: &Path) -> Result<(String, bool), String> {
+    use comparison::judge;
+    let (scene, mapping, tolerance) = judge_inputs(request, dir)?;
+    let file = &request.file;
+    let text = std::fs::read_to_string(file)
+        .map_err(|e| format!("{}: cannot read: {e}", file.display()))?;
+    let external = judge::read(&scene, &text, file, &mapping).map_err(|e| e.to_string())?;
+    let engine = engines::named(request.against)
+        .ok_or_else(|| format!("no exact solution named {}", request.against))?;
+    let exact = engine
+        .run(&scene, &RunSettings::default())
+        .map_err(|e| format!("{} cannot solve {}: {e}", request.against, scene.id))?
+        .history;
+    let (candidate, resampling) =
+        judge::resample(&external, &exact, file).map_err(|e| e.to_string())?;
+    let comparison = comparison::compare(&scene, &exact, &candidate);
+    let text = report::judge::render(
+        &scene.id,
+        request.against,
+        &external,
+        &resampling,
+        &comparison,
+        tolerance,
+    );
+    Ok((text, comparison.worst_max.is_some_and(|w| w <= tolerance)))
 }

@@ -24,6 +24,7 @@ pub mod attribution;
 pub mod contact;
 pub mod discrepancy;
 pub mod equivalence;
+pub mod judge;
 pub mod on_request;
 pub mod stability;
 pub mod work_precision;

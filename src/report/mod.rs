@@ -23,6 +23,7 @@ pub mod element_cost;
 pub mod figures;
 pub mod first_screen;
 pub mod format;
+pub mod judge;
 pub mod markdown;
 pub mod on_request;
 pub mod palette;

@@ -78,6 +78,27 @@ enum Command {
     /// case's exact solution, with the comparison and verdict an engine gets. Exit 0 within
     /// the tolerance, 1 outside it, 2 on unusable input.
     Judge(JudgeArgs),
+    /// Compare two reports in two tiers: physics (each side's error against the exact
+    /// solution; a cell that passed and now fails is a regression) and machine (the histories
+    /// row by row; a column that moved by more than the threshold of its peak has drifted).
+    /// Exit 0 when neither fails, 1 when one does, 2 when they cannot be compared.
+    Compare {
+        /// The baseline report directory.
+        #[arg(value_name = "BASE")]
+        base: PathBuf,
+        /// The report to judge against it.
+        #[arg(value_name = "NEW")]
+        new: PathBuf,
+        /// Drift threshold: the largest difference over the column's peak.
+        #[arg(long, value_name = "X", default_value_t = report::regression::DRIFT)]
+        threshold: f64,
+        /// Fail only on the physics tier (drift is reported, not failed).
+        #[arg(long)]
+        physics_only: bool,
+        /// Also write JUnit XML here (a suite per tier, a test per column).
+        #[arg(long, value_name = "FILE")]
+        junit: Option<PathBuf>,
+    },
     /// Validate case files without running them (the same validation every `run` does first).
     Check {
         /// Case files (default: every case in cases/).
@@ -344,6 +365,19 @@ fn main() -> ExitCode {
         Some(Command::Run(args)) => run_command(args, &dir),
         Some(Command::Check { files }) => check(files, &dir),
         Some(Command::Judge(args)) => judge(args, &dir),
+        Some(Command::Compare {
+            base,
+            new,
+            threshold,
+            physics_only,
+            junit,
+        }) => outcome(pipeline::compare(
+            &base,
+            &new,
+            threshold,
+            physics_only,
+            junit.as_deref(),
+        )),
         Some(Command::Scaling {
             study,
             max_n,
@@ -485,7 +519,7 @@ fn chain_study(max_n: usize, target: &Path, quiet: bool, stdout: &mut Stdout) ->
             return ExitCode::FAILURE;
         }
     };
-    print_scaling(stdout, &study);
+    stdout.print(&written::table(&study));
     let figure = written::render(&study).map(|svg| (written::figure_path(target), svg));
     if let Err(e) = write_study(&written::csv_path(target), &written::csv(&study), figure) {
         eprintln!("error: {e}");
@@ -496,42 +530,6 @@ fn chain_study(max_n: usize, target: &Path, quiet: bool, stdout: &mut Stdout) ->
         written::csv_path(target).display()
     ));
     ExitCode::SUCCESS
-}
-
-/// The scaling study as a table: one row per point, then the points not run and the fitted
-/// exponents.
-fn print_scaling(stdout: &mut Stdout, study: &crosscheck::run::scaling::Study) {
-    use crosscheck::report::scaling as written;
-    stdout.print(&format!(
-        "{:<12} {:>9} {:>7} {:>14} {:>10} {:>10} {:>12} {:>10} {:>10}\n",
-        "engine", "n", "steps", "ns/increment", "ns/DOF", "limit", "peak RSS", "error", "predicted"
-    ));
-    for p in &study.points {
-        stdout.print(&format!(
-            "{:<12} {:>9} {:>7} {:>14.0} {:>10.2} {:>10.2} {:>9.1} MB {:>10.3e} {:>10.3e}\n",
-            p.engine,
-            p.n,
-            p.steps,
-            p.ns_per_step,
-            p.ns_per_dof_step,
-            p.limit_ns_per_dof_step,
-            p.peak_rss_bytes as f64 / 1e6,
-            p.error,
-            p.predicted_error
-        ));
-    }
-    for s in &study.skipped {
-        stdout.print(&format!(
-            "{} at N = {}: not run: {}\n",
-            s.engine, s.n, s.reason
-        ));
-    }
-    for (engine, slope) in written::exponents(study) {
-        stdout.print(&format!(
-            "{engine}: fitted exponent {slope:.3} over N >= {}\n",
-            written::FIT_FROM_N
-        ));
-    }
 }
 
 /// Standard output that may be closed (`| head`) or full: the first failure is kept and
@@ -599,14 +597,20 @@ fn judge(args: JudgeArgs, dir: &Path) -> ExitCode {
         },
         tolerance: args.tolerance,
     };
-    match pipeline::judge(&request, dir) {
-        Ok((text, pass)) => {
+    outcome(pipeline::judge(&request, dir).map(|(text, pass)| (text, !pass)))
+}
+
+/// Print a judgement's or a comparison's text: exit 0, or 1 when it `failed`; 2 with the
+/// message when its input was unusable.
+fn outcome(result: Result<(String, bool), String>) -> ExitCode {
+    match result {
+        Ok((text, failed)) => {
             let mut out = Stdout::default();
             out.print(&text);
-            out.finish(if pass {
-                ExitCode::SUCCESS
-            } else {
+            out.finish(if failed {
                 ExitCode::FAILURE
+            } else {
+                ExitCode::SUCCESS
             })
         }
         Err(message) => {

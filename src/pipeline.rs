@@ -348,3 +348,29 @@ pub fn judge(request: &JudgeRequest, dir: &Path) -> Result<(String, bool), Strin
     );
     Ok((text, comparison.worst_max.is_some_and(|w| w <= tolerance)))
 }
+
+/// Compare the reports `base` and `new` ([`report::regression`]): the markdown to print and
+/// whether a tier failed (the machine tier not counted when `physics_only`), the JUnit XML
+/// written to `junit` when given; `Err` when they cannot be compared.
+pub fn compare(
+    base: &Path,
+    new: &Path,
+    threshold: f64,
+    physics_only: bool,
+    junit: Option<&Path>,
+) -> Result<(String, bool), String> {
+    use report::regression;
+    let (a, b) = (
+        regression::read(base).map_err(|e| e.to_string())?,
+        regression::read(new).map_err(|e| e.to_string())?,
+    );
+    let changes = regression::compare(&a, &b).map_err(|e| e.to_string())?;
+    if let Some(path) = junit {
+        let xml = regression::junit(&changes, threshold, physics_only);
+        report::data::write_atomic(path, xml.as_bytes()).map_err(|e| e.to_string())?;
+    }
+    let failed = changes
+        .iter()
+        .any(|c| c.newly_failing() || (!physics_only && c.drift > threshold));
+    Ok((regression::markdown(base, new, &changes, threshold), failed))
+}

@@ -29,6 +29,7 @@ pub mod on_request;
 pub mod palette;
 pub mod provenance;
 pub mod rebound;
+pub mod regression;
 pub mod results;
 pub mod scaling;
 pub mod sketch;

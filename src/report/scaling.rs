@@ -54,6 +54,36 @@ pub fn csv(study: &Study) -> String {
     s
 }
 
+/// The study as a text table: one row per point, then the points not run and the fitted
+/// exponents.
+pub fn table(study: &Study) -> String {
+    let mut s = format!(
+        "{:<12} {:>9} {:>7} {:>14} {:>10} {:>10} {:>12} {:>10} {:>10}\n",
+        "engine", "n", "steps", "ns/increment", "ns/DOF", "limit", "peak RSS", "error", "predicted"
+    );
+    for p in &study.points {
+        s += &format!(
+            "{:<12} {:>9} {:>7} {:>14.0} {:>10.2} {:>10.2} {:>9.1} MB {:>10.3e} {:>10.3e}\n",
+            p.engine,
+            p.n,
+            p.steps,
+            p.ns_per_step,
+            p.ns_per_dof_step,
+            p.limit_ns_per_dof_step,
+            p.peak_rss_bytes as f64 / 1e6,
+            p.error,
+            p.predicted_error
+        );
+    }
+    for k in &study.skipped {
+        s += &format!("{} at N = {}: not run: {}\n", k.engine, k.n, k.reason);
+    }
+    for (engine, slope) in exponents(study) {
+        s += &format!("{engine}: fitted exponent {slope:.3} over N >= {FIT_FROM_N}\n");
+    }
+    s
+}
+
 /// Each engine's fitted exponent of ns per increment against N over N ≥ [`FIT_FROM_N`].
 pub fn exponents(study: &Study) -> Vec<(String, f64)> {
     let mut engines: Vec<&str> = study.points.iter().map(|p| p.engine.as_str()).collect();

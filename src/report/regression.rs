@@ -1,0 +1,381 @@
+//! Two reports compared, in two tiers as code_aster's TEST_RESU checks a value twice:
+//! **physics**, each side's error against the exact solution and its tolerance
+//! (`results.csv`; a cell that passed and now fails is a regression), and **machine**, the
+//! histories themselves (`data/<case>/<engine>.csv`) compared row by row (the largest
+//! difference over the column's peak; above a threshold it is drift, even where both pass).
+
+use crate::report::data::read_history;
+use crate::report::format::sci;
+use crate::report::summary::SCHEMA_VERSION;
+use std::collections::BTreeMap;
+use std::fmt::Write;
+use std::path::{Path, PathBuf};
+
+/// Default threshold of the machine tier: a history that moved by more than this fraction of
+/// its column's peak has drifted (a few hundred ulps of the peak is round-off from another
+/// order of operations; 1e-9 is far above it and far below any tolerance).
+pub const DRIFT: f64 = 1e-9;
+
+/// Why two reports cannot be compared.
+#[derive(Debug, thiserror::Error)]
+pub enum Unusable {
+    /// Not a report directory.
+    #[error("{0}: not a crosscheck report (no summary.json and results.csv)")]
+    NotAReport(PathBuf),
+    /// A schema version this build cannot read.
+    #[error("{path}: summary.json has schema version {found}; this build reads {SCHEMA_VERSION}")]
+    Schema {
+        /// The report.
+        path: PathBuf,
+        /// Its version.
+        found: u64,
+    },
+    /// A file that cannot be read.
+    #[error("{0}")]
+    Read(String),
+    /// Cells or columns present on one side only.
+    #[error("the reports do not hold the same {what}: {list}")]
+    Mismatch {
+        /// Cells, columns or rows.
+        what: String,
+        /// The first few that differ, each with the side that has it.
+        list: String,
+    },
+}
+
+/// One cell and column of `results.csv`: its error and verdict.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Verdict {
+    /// Error over the peak (absolute where `relative` is false).
+    pub error: f64,
+    /// Whether the error is relative to the peak.
+    pub relative: bool,
+    /// The tolerance, where the case declares one for the engine.
+    pub tolerance: Option<f64>,
+    /// Whether it is within it.
+    pub pass: Option<bool>,
+}
+
+/// (case, engine, column).
+pub type Key = (String, String, String);
+
+/// A report, read.
+#[derive(Debug, Clone)]
+pub struct Report {
+    /// Its directory.
+    pub dir: PathBuf,
+    /// `results.csv`, by cell and column.
+    pub verdicts: BTreeMap<Key, Verdict>,
+}
+
+/// One column's comparison.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Change {
+    /// Case, engine, column.
+    pub key: Key,
+    /// The physics tier, base and new (None where `results.csv` has no such row, e.g. an
+    /// energy column).
+    pub physics: Option<(Verdict, Verdict)>,
+    /// The machine tier: the largest difference between the two histories over the base
+    /// column's peak (absolute where the peak is 0).
+    pub drift: f64,
+}
+
+impl Change {
+    /// Passed in the base report and fails in the new one.
+    pub fn newly_failing(&self) -> bool {
+        matches!(&self.physics, Some((a, b)) if a.pass == Some(true) && b.pass == Some(false))
+    }
+}
+
+/// Read a report directory.
+pub fn read(dir: &Path) -> Result<Report, Unusable> {
+    let (summary, results) = (dir.join("summary.json"), dir.join("results.csv"));
+    if !summary.is_file() || !results.is_file() {
+        return Err(Unusable::NotAReport(dir.to_path_buf()));
+    }
+    let text = std::fs::read_to_string(&summary)
+        .map_err(|e| Unusable::Read(format!("{}: {e}", summary.display())))?;
+    let json: serde_json::Value = serde_json::from_str(&text)
+        .map_err(|e| Unusable::Read(format!("{}: {e}", summary.display())))?;
+    let found = json["schema_version"].as_u64().unwrap_or(0);
+    if found != u64::from(SCHEMA_VERSION) {
+        return Err(Unusable::Schema {
+            path: dir.to_path_buf(),
+            found,
+        });
+    }
+    Ok(Report {
+        dir: dir.to_path_buf(),
+        verdicts: read_results(&results)?,
+    })
+}
+
+fn read_results(path: &Path) -> Result<BTreeMap<Key, Verdict>, Unusable> {
+    let bad = |e: String| Unusable::Read(format!("{}: {e}", path.display()));
+    let mut reader = csv::Reader::from_path(path).map_err(|e| bad(e.to_string()))?;
+    let header = reader.headers().map_err(|e| bad(e.to_string()))?.clone();
+    let at = |name: &str| {
+        header
+            .iter()
+            .position(|h| h == name)
+            .ok_or_else(|| bad(format!("no column `{name}`")))
+    };
+    let [case, engine, column, error, relative, tolerance, pass] = [
+        at("case")?,
+        at("engine")?,
+        at("column")?,
+        at("error")?,
+        at("relative")?,
+        at("tolerance")?,
+        at("pass")?,
+    ];
+    let mut out = BTreeMap::new();
+    for record in reader.records() {
+        let r = record.map_err(|e| bad(e.to_string()))?;
+        let field = |k: usize| r.get(k).unwrap_or("");
+        let number = |k: usize| field(k).parse::<f64>().ok();
+        out.insert(
+            (
+                field(case).into(),
+                field(engine).into(),
+                field(column).into(),
+            ),
+            Verdict {
+                error: number(error).unwrap_or(f64::NAN),
+                relative: field(relative) == "true",
+                tolerance: number(tolerance),
+                pass: match field(pass) {
+                    "true" => Some(true),
+                    "false" => Some(false),
+                    _ => None,
+                },
+            },
+        );
+    }
+    Ok(out)
+}
+
+/// The first few keys on one side only, named with the side that has them.
+fn only_on_one_side<'a>(
+    base: impl Iterator<Item = &'a Key>,
+    new: impl Iterator<Item = &'a Key> + Clone,
+) -> Vec<String> {
+    let base: Vec<&Key> = base.collect();
+    let mut out: Vec<String> = base
+        .iter()
+        .filter(|k| !new.clone().any(|n| n == **k))
+        .map(|k| format!("{} / {} / {} (base only)", k.0, k.1, k.2))
+        .collect();
+    out.extend(
+        new.filter(|k| !base.contains(k))
+            .map(|k| format!("{} / {} / {} (new only)", k.0, k.1, k.2)),
+    );
+    out
+}
+
+/// The largest difference of each column between two histories of one cell, over the base
+/// column's peak; `Err` where their columns or rows differ.
+fn drift_of(base: &Path, new: &Path) -> Result<Vec<(String, f64)>, Unusable> {
+    let read = |p: &Path| read_history(p).map_err(|e| Unusable::Read(e.to_string()));
+    let (a, b) = (read(base)?, read(new)?);
+    if a.columns != b.columns || a.rows.len() != b.rows.len() {
+        return Err(Unusable::Mismatch {
+            what: "columns or rows".into(),
+            list: format!(
+                "{} has {} columns and {} rows, {} has {} and {}",
+                base.display(),
+                a.columns.len(),
+                a.rows.len(),
+                new.display(),
+                b.columns.len(),
+                b.rows.len()
+            ),
+        });
+    }
+    Ok(a.columns
+        .iter()
+        .enumerate()
+        .skip(1)
+        .map(|(j, name)| {
+            let peak = a.rows.iter().fold(0.0f64, |m, r| m.max(r[j].abs()));
+            let worst = a
+                .rows
+                .iter()
+                .zip(&b.rows)
+                .fold(0.0f64, |m, (x, y)| m.max((x[j] - y[j]).abs()));
+            (name.clone(), if peak > 0.0 { worst / peak } else { worst })
+        })
+        .collect())
+}
+
+/// Compare two reports: every column of every cell, both tiers.
+pub fn compare(base: &Report, new: &Report) -> Result<Vec<Change>, Unusable> {
+    let differ = only_on_one_side(base.verdicts.keys(), new.verdicts.keys());
+    if !differ.is_empty() {
+        return Err(Unusable::Mismatch {
+            what: "cells and columns".into(),
+            list: differ.into_iter().take(5).collect::<Vec<_>>().join("; "),
+        });
+    }
+    let cells: Vec<(&str, &str)> = {
+        let mut c: Vec<(&str, &str)> = base
+            .verdicts
+            .keys()
+            .map(|k| (k.0.as_str(), k.1.as_str()))
+            .collect();
+        c.dedup();
+        c
+    };
+    let mut changes = Vec::new();
+    for (case, engine) in cells {
+        let file = |r: &Report| r.dir.join("data").join(case).join(format!("{engine}.csv"));
+        let drifts = if file(base).is_file() || file(new).is_file() {
+            drift_of(&file(base), &file(new))?
+        } else {
+            // No history on either side (a run that failed in both): the verdicts alone.
+            base.verdicts
+                .keys()
+                .filter(|k| k.0 == case && k.1 == engine)
+                .map(|k| (k.2.clone(), 0.0))
+                .collect()
+        };
+        for (column, drift) in drifts {
+            let key = (case.to_string(), engine.to_string(), column);
+            let physics = base
+                .verdicts
+                .get(&key)
+                .zip(new.verdicts.get(&key))
+                .map(|(a, b)| (a.clone(), b.clone()));
+            changes.push(Change {
+                key,
+                physics,
+                drift,
+            });
+        }
+    }
+    Ok(changes)
+}
+
+/// The comparison as markdown: a verdict line, then the physics regressions and the drifted
+/// columns (largest first), each with both numbers.
+pub fn markdown(base: &Path, new: &Path, changes: &[Change], threshold: f64) -> String {
+    let failing: Vec<&Change> = changes.iter().filter(|c| c.newly_failing()).collect();
+    let mut drifted: Vec<&Change> = changes.iter().filter(|c| c.drift > threshold).collect();
+    drifted.sort_by(|a, b| b.drift.total_cmp(&a.drift));
+    let mut s = format!(
+        "# {} → {}\n\n{} columns compared: {} newly failing their tolerance (physics), {} drifted \
+         by more than {} of their peak (machine).\n",
+        base.display(),
+        new.display(),
+        changes.len(),
+        failing.len(),
+        drifted.len(),
+        sci(threshold)
+    );
+    let error = |v: &Verdict| {
+        format!(
+            "{}{}",
+            sci(v.error),
+            if v.relative { "" } else { " (absolute)" }
+        )
+    };
+    if !failing.is_empty() {
+        s += "\n## Newly failing\n\n| case | engine | column | base error | new error | tolerance |\n|---|---|---|---:|---:|---:|\n";
+        for c in &failing {
+            let (a, b) = c.physics.as_ref().expect("newly failing has both");
+            let _ = writeln!(
+                s,
+                "| {} | `{}` | {} | {} | {} | {} |",
+                c.key.0,
+                c.key.1,
+                c.key.2,
+                error(a),
+                error(b),
+                b.tolerance.map_or("–".into(), sci)
+            );
+        }
+    }
+    if !drifted.is_empty() {
+        s += "\n## Drifted\n\n| case | engine | column | drift / peak | base error | new error |\n|---|---|---|---:|---:|---:|\n";
+        for c in &drifted {
+            let (a, b) = c
+                .physics
+                .as_ref()
+                .map_or(("–".into(), "–".into()), |(a, b)| (error(a), error(b)));
+            let _ = writeln!(
+                s,
+                "| {} | `{}` | {} | {} | {a} | {b} |",
+                c.key.0,
+                c.key.1,
+                c.key.2,
+                sci(c.drift)
+            );
+        }
+    }
+    s
+}
+
+fn escape(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// The comparison as JUnit XML: a suite per tier, a test case per column (`case/engine` its
+/// class, the column its name), a failure where the tier fails (machine: unless
+/// `physics_only`).
+pub fn junit(changes: &[Change], threshold: f64, physics_only: bool) -> String {
+    let physics: Vec<&Change> = changes.iter().filter(|c| c.physics.is_some()).collect();
+    let mut s = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuites>\n");
+    let mut suite = |name: &str, cases: &[&Change], fails: &dyn Fn(&Change) -> Option<String>| {
+        let failures = cases.iter().filter(|c| fails(c).is_some()).count();
+        let _ = writeln!(
+            s,
+            "  <testsuite name=\"{name}\" tests=\"{}\" failures=\"{failures}\">",
+            cases.len()
+        );
+        for c in cases {
+            let class = escape(&format!("{}/{}", c.key.0, c.key.1));
+            let _ = write!(
+                s,
+                "    <testcase classname=\"{class}\" name=\"{}\"",
+                escape(&c.key.2)
+            );
+            match fails(c) {
+                Some(message) => {
+                    let _ = writeln!(
+                        s,
+                        ">\n      <failure message=\"{}\"/>\n    </testcase>",
+                        escape(&message)
+                    );
+                }
+                None => s.push_str("/>\n"),
+            }
+        }
+        s.push_str("  </testsuite>\n");
+    };
+    suite("physics", &physics, &|c: &Change| {
+        let (a, b) = c.physics.as_ref()?;
+        c.newly_failing().then(|| {
+            format!(
+                "newly failing: error {} (was {}), tolerance {}",
+                sci(b.error),
+                sci(a.error),
+                b.tolerance.map_or("–".into(), sci)
+            )
+        })
+    });
+    let all: Vec<&Change> = changes.iter().collect();
+    suite("machine", &all, &|c: &Change| {
+        (!physics_only && c.drift > threshold).then(|| {
+            format!(
+                "drifted by {} of the peak (threshold {})",
+                sci(c.drift),
+                sci(threshold)
+            )
+        })
+    });
+    s + "</testsuites>\n"
+}

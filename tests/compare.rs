@@ -1,0 +1,134 @@
+//! `crosscheck compare BASE NEW`: two runs of the same build compare clean; a history
+//! perturbed by 10 % is named as drift; a newly failing cell is a physics regression; JUnit XML
+//! parses; reports that cannot be compared are refused with exit 2 and the reason.
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_crosscheck"));
+    c.current_dir(env!("CARGO_MANIFEST_DIR"));
+    c
+}
+
+fn report(out: &Path, cases: &[&str]) {
+    let status = bin()
+        .args(["run", "-q"])
+        .args(cases)
+        .arg("--out")
+        .arg(out)
+        .status()
+        .unwrap();
+    assert!(status.success());
+}
+
+fn compare(base: &Path, new: &Path, extra: &[&str]) -> Output {
+    bin()
+        .arg("compare")
+        .arg(base)
+        .arg(new)
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
+/// Rewrite column `column` of `file` (a CSV) through `f`.
+fn edit_column(file: &Path, column: &str, f: impl Fn(&str) -> String) {
+    let text = std::fs::read_to_string(file).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap();
+    let k = header.split(',').position(|c| c == column).unwrap();
+    let mut out = vec![header.to_string()];
+    for line in lines {
+        let mut cells: Vec<String> = line.split(',').map(str::to_string).collect();
+        cells[k] = f(&cells[k]);
+        out.push(cells.join(","));
+    }
+    std::fs::write(file, out.join("\n") + "\n").unwrap();
+}
+
+#[test]
+fn two_runs_compare_clean_and_a_perturbed_history_is_named() {
+    let root = tempfile::tempdir().unwrap();
+    let (a, b) = (root.path().join("a"), root.path().join("b"));
+    let cases = ["springs_grounded_a", "rigid2d_pin_lumped"];
+    report(&a, &cases);
+    report(&b, &cases);
+    // The same build, the same inputs: byte-identical histories, no drift at all.
+    let out = compare(&a, &b, &[]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    assert!(
+        stdout.contains("0 newly failing") && stdout.contains("0 drifted"),
+        "{stdout}"
+    );
+
+    // rapier_f64's ux_node on one case 10 % larger: drift 1e-1 of the peak, named.
+    edit_column(
+        &b.join("data/rigid2d_pin_lumped/rapier_f64.csv"),
+        "ux_node",
+        |x| format!("{:e}", 1.1 * x.parse::<f64>().unwrap()),
+    );
+    let junit = root.path().join("junit.xml");
+    let out = compare(&a, &b, &["--junit", junit.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}");
+    assert!(
+        stdout.contains("| rigid2d_pin_lumped | `rapier_f64` | ux_node | 1.00e-1 |"),
+        "{stdout}"
+    );
+    let xml = std::fs::read_to_string(&junit).unwrap();
+    let doc = roxmltree::Document::parse(&xml).expect("JUnit XML parses");
+    let failures: Vec<_> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("failure"))
+        .map(|n| {
+            let case = n.parent().unwrap();
+            format!(
+                "{} {}",
+                case.attribute("classname").unwrap(),
+                case.attribute("name").unwrap()
+            )
+        })
+        .collect();
+    assert_eq!(failures, ["rigid2d_pin_lumped/rapier_f64 ux_node"]);
+    // Drift alone does not fail --physics-only.
+    assert_eq!(compare(&a, &b, &["--physics-only"]).status.code(), Some(0));
+
+    // A cell that passed and now fails is a physics regression, with both numbers.
+    edit_column(&b.join("results.csv"), "pass", |x| {
+        if x == "true" {
+            "false".into()
+        } else {
+            x.into()
+        }
+    });
+    let out = compare(&a, &b, &["--physics-only"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}");
+    assert!(stdout.contains("## Newly failing"), "{stdout}");
+}
+
+#[test]
+fn reports_that_cannot_be_compared_are_refused() {
+    let root = tempfile::tempdir().unwrap();
+    let (a, b) = (root.path().join("a"), root.path().join("b"));
+    report(&a, &["springs_grounded_a", "springs_grounded_b"]);
+    report(&b, &["springs_grounded_a"]);
+    let refused = |base: &Path, new: &Path, expected: &str| {
+        let out = compare(base, new, &[]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{stderr}");
+        assert!(
+            stderr.contains(expected),
+            "expected `{expected}` in {stderr}"
+        );
+    };
+    refused(&a, &b, "springs_grounded_b / explicit / u_end (base only)");
+    refused(&a, root.path(), "not a crosscheck report");
+    let summary = b.join("summary.json");
+    let text = std::fs::read_to_string(&summary).unwrap();
+    let newer = text.replacen("\"schema_version\": 1", "\"schema_version\": 99", 1);
+    assert_ne!(text, newer, "summary.json names its schema version");
+    std::fs::write(&summary, newer).unwrap();
+    refused(&b, &b, "schema version 99");
+}

@@ -36,9 +36,6 @@ pub const MAX_DASHPOTS: usize = 8;
 /// A dashpot's moving end: (dashpot, particle, signed line, P M⁻¹ of that line).
 pub type End<S> = (usize, usize, <S as Space>::V, <S as Space>::V);
 
-/// [`ParticleDashpots::steady`]: the dashpots, their moving ends and the step's inverse.
-pub type SteadySystem<'a, S> = (&'a [ParticleDashpot<S>], &'a [End<S>], &'a [f64]);
-
 /// The dashpots of a scene that the direct solve applies to, with the solve's scratch space.
 #[derive(Debug, Clone)]
 pub struct ParticleDashpots<S: Space> {
@@ -111,14 +108,6 @@ impl<S: Space> ParticleDashpots<S> {
             }
         }
         self.steady = Some(inverse);
-    }
-
-    /// Where no dashpot's line turns and [`ParticleDashpots::prepare`] formed the step's
-    /// system: the dashpots, their moving ends (dashpot, particle, signed line, `P M⁻¹` of
-    /// that line) and `(I + (h/2)·K)⁻¹` (row-major, k × k).
-    pub fn steady(&self) -> Option<SteadySystem<'_, S>> {
-        let inverse = self.steady.as_deref()?;
-        Some((&self.list, &self.ends, inverse))
     }
 
     /// Each dashpot's moving ends into `self.ends` and its |l|² into `self.span_squares`, at `cfg`.

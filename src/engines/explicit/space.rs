@@ -72,16 +72,6 @@ pub fn compensated_add<T: Lin>(x: &mut T, carry: &mut T, dx: T) {
     *x = t;
 }
 
-/// [`compensated_add`] of the increment `rate`·`h`, the product fused into Kahan's first
-/// difference (`rate`·`h` − `carry`, rounded once).
-#[inline(always)]
-pub fn compensated_add_fused<T: Lin>(x: &mut T, carry: &mut T, rate: T, h: f64) {
-    let y = rate.fused(h, -*carry);
-    let t = *x + y;
-    *carry = (t - *x) - y;
-    *x = t;
-}
-
 /// Mass properties of a body about its reference node: the mass, the centre of mass in world
 /// axes, and the inertia in the body's axes with the orientation that turns those into the
 /// world's. The inertia is not turned into world axes up front (R I Rᵀ, about 100 flops in 3D):
@@ -552,36 +542,6 @@ impl Heading {
     #[inline]
     pub fn cos(&self) -> f64 {
         1.0 + self.versine
-    }
-
-    /// [`Space::advance_compensated`] of this heading by the angle `x`, with fused
-    /// multiply-adds where `x` is small (below [`TWO_TERMS`] in x²): the same series in
-    /// Estrin's form, δv = ((c·C₀ − s·S₀·x) + c·C₁·y)·y + (rest_v − s·x), each product and
-    /// sum one rounding (and likewise for s), so that from x to the new heading the chain is
-    /// four operations (x·x, two fused steps, the compensated sum) instead of six. To
-    /// round-off the same; where x² is at or above [`TWO_TERMS`], the unfused update itself.
-    #[inline(always)]
-    pub fn advanced_fused(&self, carry: &mut [f64; 2], x: f64) -> Heading {
-        let (v, s) = (self.versine, self.sine);
-        let c = 1.0 + v;
-        let y = x * x;
-        if y >= TWO_TERMS {
-            return Planar::advance_compensated(self, carry, &x);
-        }
-        let excess = ((2.0 * v + s * s) + v * v) - 2.0 * (c * carry[0] + s * carry[1]);
-        let rest_v = (-0.5 * excess).mul_add(c, -carry[0]);
-        let rest_s = (-0.5 * excess).mul_add(s, -carry[1]);
-        let inner_v = (c * COS[1]).mul_add(y, (-(s * SINC[0])).mul_add(x, c * COS[0]));
-        let inner_s = (s * COS[1]).mul_add(y, (c * SINC[0]).mul_add(x, s * COS[0]));
-        let delta_v = inner_v.mul_add(y, (-s).mul_add(x, rest_v));
-        let delta_s = inner_s.mul_add(y, c.mul_add(x, rest_s));
-        let (v1, s1) = (v + delta_v, s + delta_s);
-        carry[0] = (v1 - v) - delta_v;
-        carry[1] = (s1 - s) - delta_s;
-        Heading {
-            versine: v1,
-            sine: s1,
-        }
     }
 
     /// θ in (−π, π].

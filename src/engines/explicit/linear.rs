@@ -49,6 +49,18 @@ pub struct StableIncrement {
     pub omega_structure: f64,
 }
 
+impl Mode {
+    /// The largest increment at which this mode alone is stable under `treatment`.
+    pub fn limit(&self, treatment: DampingTreatment) -> f64 {
+        match treatment {
+            DampingTreatment::Centred => 2.0 / self.omega,
+            DampingTreatment::Lagged => {
+                (2.0 / self.omega) * ((1.0 + self.zeta * self.zeta).sqrt() - self.zeta)
+            }
+        }
+    }
+}
+
 const PERTURBATION: f64 = 1e-6;
 
 impl<S: Space, const FINITE: bool> Model<S, FINITE> {
@@ -202,7 +214,7 @@ impl StableIncrement {
         let lagged = modes
             .iter()
             .filter(|m| m.omega > 0.0)
-            .map(|m| (2.0 / m.omega) * ((1.0 + m.zeta * m.zeta).sqrt() - m.zeta))
+            .map(|m| m.limit(DampingTreatment::Lagged))
             .fold(f64::INFINITY, f64::min);
         Some(StableIncrement {
             omega_max: top.omega,

@@ -85,26 +85,9 @@ impl<S: Space> Rates<S> {
     }
     /// `self + s · other`.
     pub fn plus(&self, s: f64, other: &Self) -> Self {
-        Self {
-            p: self
-                .p
-                .iter()
-                .zip(&other.p)
-                .map(|(a, b)| *a + *b * s)
-                .collect(),
-            b: self
-                .b
-                .iter()
-                .zip(&other.b)
-                .map(|(a, b)| *a + *b * s)
-                .collect(),
-            w: self
-                .w
-                .iter()
-                .zip(&other.w)
-                .map(|(a, b)| *a + *b * s)
-                .collect(),
-        }
+        let mut out = self.clone();
+        out.set_plus(self, s, other);
+        out
     }
     /// In place: `self = a + s · b`.
     pub fn set_plus(&mut self, a: &Self, s: f64, b: &Self) {
@@ -178,6 +161,16 @@ impl<S: Space> Forces<S> {
             contact: vec![0.0; contacts],
             gap: vec![0.0; contacts],
         }
+    }
+    /// Copy another force set into this one (same shape).
+    pub fn copy_from(&mut self, other: &Self) {
+        self.p.copy_from_slice(&other.p);
+        self.b.copy_from_slice(&other.b);
+        self.m.copy_from_slice(&other.m);
+        self.contact.copy_from_slice(&other.contact);
+        self.gap.copy_from_slice(&other.gap);
+        self.elastic = other.elastic;
+        self.dissipation = other.dissipation;
     }
     /// Reset to zero, keeping the allocation.
     pub fn clear(&mut self) {
@@ -854,17 +847,6 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         }
     }
 
-    /// The size of the terms a plane contact's gap sums under small rotation (the gap at
-    /// t = 0, the node's motion relative to the body's reference node, the turn of its arm):
-    /// the gap's rounding is a few ulps of it. Only for a plane contact under small rotation
-    /// (it reads the rotation vector, not the orientation).
-    pub fn gap_size(&self, cfg: &Config<S>, k: usize) -> f64 {
-        let c = &self.contacts[k];
-        let relative = cfg.u[c.particle] - cfg.bu[c.body];
-        let turn = S::cross(&cfg.bth[c.body], &c.arm0);
-        c.gap0.abs() + relative.dot(&relative).sqrt() + turn.dot(&turn).sqrt()
-    }
-
     /// A contact node's position relative to its solid's centre, in the body frame (small
     /// rotation: Rᵀ ≈ 1 − [θ]×).
     #[inline]
@@ -969,18 +951,5 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     pub(super) fn face_to_node(&self, cfg: &Config<S>, k: usize) -> S::V {
         let c = &self.contacts[k];
         c.face_to_node(&cfg.br[c.body], cfg.u[c.particle] - cfg.bu[c.body])
-    }
-}
-
-impl<S: Space> Forces<S> {
-    /// Copy another force set into this one (same shape).
-    pub fn copy_from(&mut self, other: &Self) {
-        self.p.copy_from_slice(&other.p);
-        self.b.copy_from_slice(&other.b);
-        self.m.copy_from_slice(&other.m);
-        self.contact.copy_from_slice(&other.contact);
-        self.gap.copy_from_slice(&other.gap);
-        self.elastic = other.elastic;
-        self.dissipation = other.dissipation;
     }
 }

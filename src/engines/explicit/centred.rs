@@ -158,10 +158,9 @@ impl<S: Space> ParticleDashpots<S> {
         }
     }
 
-    /// The accelerations `acc` at the centred velocity, and that velocity into `v_n` where one
-    /// is given (an increment that only advances needs neither it nor its pass over memory),
-    /// from the position forces and the half-step velocity `v_half`; returns the dashpots'
-    /// dissipation power. Only for a step without centripetal or gyroscopic terms (the bodies'
+    /// The accelerations `acc` at the centred velocity, and that velocity into `v_n`, from the
+    /// position forces and the half-step velocity `v_half`; returns the dashpots' dissipation
+    /// power. Only for a step without centripetal or gyroscopic terms (the bodies'
     /// accelerations do not read the velocity), and at the increment and constraints of the
     /// last [`ParticleDashpots::prepare`].
     #[allow(clippy::too_many_arguments)]
@@ -174,14 +173,12 @@ impl<S: Space> ParticleDashpots<S> {
         h: f64,
         held: &Constraints<S>,
         acc: &mut Rates<S>,
-        mut v_n: Option<&mut Rates<S>>,
+        v_n: &mut Rates<S>,
         counters: &mut Counters,
     ) -> f64 {
         counters.damping_evaluations += 1;
         model.accelerations(cfg, forces, v_half, held, acc, counters);
-        if let Some(v_n) = v_n.as_deref_mut() {
-            v_n.set_plus(v_half, 0.5 * h, acc);
-        }
+        v_n.set_plus(v_half, 0.5 * h, acc);
         let k = self.list.len();
         // The centred velocity before the dashpots act, as `Rates::set_plus` forms it.
         let centred = |p: usize| v_half.p[p] + acc.p[p] * (0.5 * h);
@@ -211,9 +208,7 @@ impl<S: Space> ParticleDashpots<S> {
             let sigma = rhs * (1.0 / diagonal);
             for (p, g) in ends.into_iter().flatten() {
                 acc.p[p] -= g * (dashpot.c * sigma);
-                if let Some(v_n) = v_n.as_deref_mut() {
-                    v_n.p[p] = v_half.p[p] + acc.p[p] * (0.5 * h);
-                }
+                v_n.p[p] = v_half.p[p] + acc.p[p] * (0.5 * h);
             }
             return dashpot.c * span_square * sigma * sigma;
         }
@@ -227,9 +222,7 @@ impl<S: Space> ParticleDashpots<S> {
             let sigma = inverse[0] * rhs;
             for &(_, p, _, g) in &self.ends {
                 acc.p[p] -= g * (dashpot.c * sigma);
-                if let Some(v_n) = v_n.as_deref_mut() {
-                    v_n.p[p] = v_half.p[p] + acc.p[p] * (0.5 * h);
-                }
+                v_n.p[p] = v_half.p[p] + acc.p[p] * (0.5 * h);
             }
             return dashpot.c * self.span_squares[0] * sigma * sigma;
         }
@@ -265,9 +258,7 @@ impl<S: Space> ParticleDashpots<S> {
         }
         for &(j, p, _, g) in &self.ends {
             acc.p[p] -= g * (self.list[j].c * sigma[j]);
-            if let Some(v_n) = v_n.as_deref_mut() {
-                v_n.p[p] = v_half.p[p] + acc.p[p] * (0.5 * h);
-            }
+            v_n.p[p] = v_half.p[p] + acc.p[p] * (0.5 * h);
         }
         power
     }

@@ -6,7 +6,7 @@
 //! that mode carries practically all of the motion: the velocities' projection on the modes
 //! (mass-weighted, φᵀM q̇) names it.
 
-use super::model::{Config, Constraints, Counters, Model, Rates, Target};
+use super::model::{Config, Constraints, ContactMode, Counters, Model, Rates, Target};
 use super::space::Space;
 use crate::scene::{DampingTreatment, Scene};
 use nalgebra::{DVector, Vector3};
@@ -83,7 +83,7 @@ pub fn growing_mode<S: Space, const FINITE: bool>(
     treatment: DampingTreatment,
 ) -> Option<GrowingMode> {
     // The diagnosis's own force evaluations are not the run's work: counted apart.
-    let lin = model.linearise(cfg, held, true, &mut Counters::default());
+    let lin = model.linearise(cfg, held, ContactMode::Bilateral, &mut Counters::default());
     let qdot = DVector::from_iterator(
         lin.dofs.len(),
         lin.dofs.iter().map(|d| model.rate_along(rates, d)),
@@ -181,7 +181,7 @@ impl<S: Space> PastLimit<S> {
         h: f64,
         treatment: DampingTreatment,
     ) -> Option<Self> {
-        let lin = model.linearise(cfg, held, true, &mut Counters::default());
+        let lin = model.linearise(cfg, held, ContactMode::Bilateral, &mut Counters::default());
         let weights: Vec<DVector<f64>> = lin
             .shapes()
             .into_iter()

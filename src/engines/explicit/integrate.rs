@@ -83,24 +83,29 @@ pub fn stable_increment<S: Space, const FINITE: bool>(
         if !matches!(step.kind, StepKind::Dynamic { .. }) {
             continue;
         }
-        let held = model.constraints(scene, step);
-        if model.free_dofs(&held).len() > DENSE_LIMIT
-            && let Some((lambda, gamma)) = model.frequency_bound(cfg, &held)
-        {
-            if let Some(s) = StableIncrement::from_bound(lambda, gamma, treatment)
-                && best.is_none_or(|b| s.increment < b.increment)
-            {
-                best = Some(s);
-            }
-            continue;
-        }
-        let closed = model.linearise(cfg, &held, true, counters).modes();
-        let open = if model.contact_count() > 0 {
-            model.linearise(cfg, &held, false, counters).modes()
+        let held = model.constraints(step);
+        let dense = model.free_dofs(&held).len() <= DENSE_LIMIT;
+        let bound = if dense {
+            None
         } else {
-            closed.clone()
+            model.frequency_bound(cfg, &held)
         };
-        if let Some(s) = StableIncrement::from_modes(&closed, &open, treatment)
+        let stable = if let Some((lambda, gamma)) = bound {
+            StableIncrement::from_bound(lambda, gamma, treatment)
+        } else {
+            let closed = model
+                .linearise(cfg, &held, ContactMode::Bilateral, counters)
+                .modes();
+            let open = if !model.contacts.is_empty() {
+                model
+                    .linearise(cfg, &held, ContactMode::Off, counters)
+                    .modes()
+            } else {
+                closed.clone()
+            };
+            StableIncrement::from_modes(&closed, &open, treatment)
+        };
+        if let Some(s) = stable
             && best.is_none_or(|b| s.increment < b.increment)
         {
             best = Some(s);
@@ -196,7 +201,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
     }
     let mut run = TimeLoop::new(&model, scene, settings);
     for (si, step) in scene.steps.iter().enumerate() {
-        let held = model.constraints(scene, step);
+        let held = model.constraints(step);
         match step.kind {
             StepKind::Dynamic { duration } => run.dynamic_step(si, duration, held)?,
             _ => static_step(&model, &mut run.cfg, &held, &mut run.counters)?,
@@ -304,7 +309,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
             dissipated: 0.0,
             last_power: 0.0,
             past_limit: None,
-            pressed: vec![None; model.contact_count()],
+            pressed: vec![None; model.contacts.len()],
             impacts: Vec::new(),
             impact_work: None,
             solid_before: Vec::new(),
@@ -364,7 +369,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         // The consistent start carries the rigid model's persistent contact forces, which
         // treat every pair as closed: only when every pair starts closed. A scene with a
         // pair open at t = 0 starts as it is.
-        if model.contact_count() > 0
+        if !model.contacts.is_empty()
             && model.closed_only()
             && self.settings.contact_start == ContactStart::Consistent
         {
@@ -415,14 +420,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
     /// The plan of dynamic step `si` of `duration` under `held`.
     fn plan(&self, si: usize, duration: f64, held: Constraints<S>) -> StepPlan<S> {
         let (model, h) = (self.model, self.h);
-        let velocity = VelocityRule::of(
-            model,
-            &self.cfg,
-            &held,
-            h,
-            self.settings.damping,
-            DENSE_LIMIT,
-        );
+        let velocity = VelocityRule::of(model, &self.cfg, &held, h, self.settings.damping);
         // Rows fall on increments unless a stability study asked for an increment that does
         // not divide the output interval; then every increment is a row for the sampler, and
         // the last dynamic step runs past its end to the first increment after it.
@@ -456,21 +454,11 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         let (model, h) = (self.model, self.h);
         let row = n.is_multiple_of(plan.stride);
         // Only an increment that writes a row reads the elastic energy.
+        let (cfg, mode, counters) = (&self.cfg, ContactMode::Unilateral, &mut self.counters);
         if row {
-            model.forces(
-                &self.cfg,
-                ContactMode::Unilateral,
-                &mut self.forces,
-                &mut self.counters,
-            );
+            model.forces(cfg, mode, &mut self.forces, counters);
         } else {
-            let forces = &mut self.forces;
-            model.forces_with::<false>(
-                &self.cfg,
-                ContactMode::Unilateral,
-                forces,
-                &mut self.counters,
-            );
+            model.forces_with::<false>(cfg, mode, &mut self.forces, counters);
         }
         note_impacts(
             &mut self.pressed,
@@ -478,7 +466,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
             (n, h),
             &mut self.impacts,
         );
-        if model.contact_count() > 0 {
+        if !model.contacts.is_empty() {
             let forces = &mut self.forces;
             let work = self
                 .impact_work

@@ -98,22 +98,18 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         (&k + k.transpose()) * 0.5
     }
 
-    /// Linearise about `cfg` under `held`, with contacts closed (bilateral) or off.
+    /// Linearise about `cfg` under `held`, with contacts closed (`ContactMode::Bilateral`) or
+    /// off (`ContactMode::Off`).
     pub fn linearise(
         &self,
         cfg: &Config<S>,
         held: &Constraints<S>,
-        contacts: bool,
+        mode: ContactMode,
         counters: &mut Counters,
     ) -> Linearised<S> {
         let dofs = self.free_dofs(held);
         let n = dofs.len();
         let mass = DMatrix::from_fn(n, n, |i, j| self.mass_entry(cfg, &dofs[i], &dofs[j]));
-        let mode = if contacts {
-            ContactMode::Bilateral
-        } else {
-            ContactMode::Off
-        };
         let stiffness = self.stiffness(cfg, &dofs, mode, counters);
         let mut damping = DMatrix::zeros(n, n);
         if self.has_dashpots() {

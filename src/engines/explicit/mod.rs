@@ -233,7 +233,7 @@ fn stable<S: space::Space, const FINITE: bool>(
         .iter()
         .position(|st| matches!(st.kind, crate::scene::StepKind::Dynamic { .. }))?;
     for step in &scene.steps[..first_dynamic] {
-        let held = m.constraints(scene, step);
+        let held = m.constraints(step);
         linear::static_step(&m, &mut cfg, &held, &mut counters).ok()?;
     }
     integrate::stable_increment(&m, scene, &cfg, first_dynamic, s.damping, &mut counters)

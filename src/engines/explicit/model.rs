@@ -743,11 +743,6 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             || self.has_contact_dashpots()
     }
 
-    /// Number of contact pairs.
-    pub fn contact_count(&self) -> usize {
-        self.contacts.len()
-    }
-
     /// The configuration at t = 0.
     pub fn initial_config(&self) -> Config<S> {
         Config {

@@ -2,7 +2,7 @@
 //! compiles to 2D arithmetic only (no 3D rotation, no 6×6 solve).
 
 use crate::scene::Solid;
-use nalgebra::{Matrix3, UnitQuaternion, Vector2, Vector3};
+use nalgebra::{Matrix3, SVector, UnitQuaternion, Vector2, Vector3};
 use std::fmt::Debug;
 use std::marker::PhantomData;
 use std::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
@@ -210,15 +210,27 @@ pub enum SharedSolid<S: Space> {
     Spatial(parry3d_f64::shape::SharedShape, PhantomData<S>),
 }
 
-/// The signed distance (negative inside) from a projection's distance and side.
-fn signed(distance: f64, inside: bool) -> f64 {
-    if inside { -distance } else { distance }
-}
-
-/// Whether a signed distance is inside (the normal then points from the query to the
-/// boundary, and is turned outward).
-fn projection_inside(gap: f64) -> bool {
-    gap < 0.0
+/// The signed gap at `local` and the outward unit normal there, from `at`, parry's point
+/// projection as (signed distance, vector from the nearest boundary point to `local`): that
+/// vector, turned outward where `local` is inside, or on the boundary itself (where it vanishes)
+/// the signed distance's gradient by central differences over 1e-7 of the solid's `size`.
+fn gap_and_normal<const D: usize>(
+    local: &SVector<f64, D>,
+    size: impl Fn() -> f64,
+    at: impl Fn(&SVector<f64, D>) -> (f64, SVector<f64, D>),
+) -> (f64, SVector<f64, D>) {
+    let (gap, delta) = at(local);
+    let norm = delta.norm();
+    if norm > 0.0 {
+        let n = delta / norm;
+        return (gap, if gap < 0.0 { -n } else { n });
+    }
+    let e = 1e-7 * size();
+    let n = SVector::<f64, D>::from_fn(|i, _| {
+        let step = SVector::<f64, D>::from_fn(|j, _| if i == j { e } else { 0.0 });
+        at(&(local + step)).0 - at(&(local - step)).0
+    });
+    (gap, n / n.norm())
 }
 
 /// Below this angle (rad) the increment's rotation takes its sine and cosine from their
@@ -349,27 +361,19 @@ impl Space for Planar {
         let SharedSolid::Planar(shape, _) = solid else {
             unreachable!("a 2D model holds 2D shapes")
         };
-        let at = |p: &Vector2<f64>| {
+        let size = || shape.compute_local_aabb().half_extents().length();
+        gap_and_normal(local, size, |p| {
             let q = parry2d_f64::math::Vector::new(p.x, p.y);
             let projection = shape.project_local_point(q, false);
             let d = q - projection.point;
-            (
-                signed(d.length(), projection.is_inside),
-                Vector2::new(d.x, d.y),
-            )
-        };
-        let (gap, delta) = at(local);
-        let norm = delta.norm();
-        if norm > 0.0 {
-            let n = delta / norm;
-            return (gap, if projection_inside(gap) { -n } else { n });
-        }
-        let e = 1e-7 * shape.compute_local_aabb().half_extents().length();
-        let n = Vector2::new(
-            at(&(local + Vector2::x() * e)).0 - at(&(local - Vector2::x() * e)).0,
-            at(&(local + Vector2::y() * e)).0 - at(&(local - Vector2::y() * e)).0,
-        );
-        (gap, n / n.norm())
+            let distance = d.length();
+            let gap = if projection.is_inside {
+                -distance
+            } else {
+                distance
+            };
+            (gap, Vector2::new(d.x, d.y))
+        })
     }
     fn crosses(solid: &SharedSolid<Self>, from: &Self::V, to: &Self::V) -> bool {
         let SharedSolid::Planar(shape, _) = solid else {
@@ -658,27 +662,19 @@ impl Space for Spatial {
         let SharedSolid::Spatial(shape, _) = solid else {
             unreachable!("a 3D model holds 3D shapes")
         };
-        let at = |p: &Vector3<f64>| {
+        let size = || shape.compute_local_aabb().half_extents().length();
+        gap_and_normal(local, size, |p| {
             let q = parry3d_f64::math::Vector::new(p.x, p.y, p.z);
             let projection = shape.project_local_point(q, false);
             let d = q - projection.point;
-            (
-                signed(d.length(), projection.is_inside),
-                Vector3::new(d.x, d.y, d.z),
-            )
-        };
-        let (gap, delta) = at(local);
-        let norm = delta.norm();
-        if norm > 0.0 {
-            let n = delta / norm;
-            return (gap, if projection_inside(gap) { -n } else { n });
-        }
-        let e = 1e-7 * shape.compute_local_aabb().half_extents().length();
-        let n = Vector3::from_fn(|i, _| {
-            let step = Vector3::from_fn(|j, _| if i == j { e } else { 0.0 });
-            at(&(local + step)).0 - at(&(local - step)).0
-        });
-        (gap, n / n.norm())
+            let distance = d.length();
+            let gap = if projection.is_inside {
+                -distance
+            } else {
+                distance
+            };
+            (gap, Vector3::new(d.x, d.y, d.z))
+        })
     }
     fn crosses(solid: &SharedSolid<Self>, from: &Self::V, to: &Self::V) -> bool {
         let SharedSolid::Spatial(shape, _) = solid else {

@@ -16,7 +16,7 @@ fn consistent_forces<S: Space, const FINITE: bool>(
     tau: f64,
     counters: &mut Counters,
 ) -> Option<(DVector<f64>, Rates<S>, DMatrix<f64>)> {
-    let n = model.contact_count();
+    let n = model.contacts.len();
     let response = |given: &[f64], counters: &mut Counters| -> (DVector<f64>, Rates<S>) {
         let mut f = model.zero_forces();
         model.forces(cfg, ContactMode::Given(given), &mut f, counters);
@@ -94,7 +94,7 @@ pub(super) fn consistent_start<S: Space, const FINITE: bool>(
         .lu()
         .solve(&curvature)
         .unwrap_or_else(|| DVector::zeros(f0.len()));
-    for k in 0..model.contact_count() {
+    for k in 0..model.contacts.len() {
         if f0[k] > 0.0 {
             model.set_penetration(cfg, k, (f0[k] - correction[k]) / model.penalty);
             // The leapfrog's smooth solution through (q₀, v₀) moves at q̇(0) = v₀ − (h²/6)·q⃛

@@ -10,6 +10,7 @@
 //! explicit form).
 
 use super::centred::ParticleDashpots;
+use super::integrate::DENSE_LIMIT;
 use super::model::{Config, Constraints, Counters, Forces, Model, Rates, Target};
 use super::space::Space;
 use crate::engines::EngineError;
@@ -75,7 +76,6 @@ impl<S: Space> VelocityRule<S> {
         held: &Constraints<S>,
         h: f64,
         treatment: DampingTreatment,
-        dense_limit: usize,
     ) -> Self {
         let velocity_terms = held.any_velocity_terms();
         if !model.has_dashpots() && !velocity_terms {
@@ -93,7 +93,7 @@ impl<S: Space> VelocityRule<S> {
         }
         let dofs = model.free_dofs(held);
         VelocityRule::Iterated {
-            affine: model.has_dashpots() && !velocity_terms && dofs.len() <= dense_limit,
+            affine: model.has_dashpots() && !velocity_terms && dofs.len() <= DENSE_LIMIT,
             solved: false,
             dofs,
         }
@@ -140,7 +140,7 @@ impl<S: Space> VelocityRule<S> {
                 h,
                 held,
                 acc,
-                Some(&mut work.v_n),
+                &mut work.v_n,
                 counters,
             )),
             VelocityRule::Iterated {

@@ -26,9 +26,10 @@
 //! masses move only along it.)
 
 use super::model::{
-    Config, Constraints, Counters, DashpotLine, Forces, Model, ParticleDashpot, Rates, fill_zero,
+    Config, Constraints, Counters, DashpotLine, Model, ParticleDashpot, Rates, fill_zero,
 };
 use super::space::{Lin, Space};
+use super::velocity::AtIncrement;
 
 /// Above this many dashpots the iteration is used (the elimination is O(k³) per increment).
 pub const MAX_DASHPOTS: usize = 8;
@@ -159,23 +160,19 @@ impl<S: Space> ParticleDashpots<S> {
     }
 
     /// The accelerations `acc` at the centred velocity, and that velocity into `v_n`, from the
-    /// position forces and the half-step velocity `v_half`; returns the dashpots' dissipation
+    /// position forces and the half-step velocity of `at`; returns the dashpots' dissipation
     /// power. Only for a step without centripetal or gyroscopic terms (the bodies'
     /// accelerations do not read the velocity), and at the increment and constraints of the
     /// last [`ParticleDashpots::prepare`].
-    #[allow(clippy::too_many_arguments)]
-    pub fn solve<const FINITE: bool>(
+    pub(super) fn solve<const FINITE: bool>(
         &mut self,
-        model: &Model<S, FINITE>,
-        cfg: &Config<S>,
-        forces: &Forces<S>,
-        v_half: &Rates<S>,
-        h: f64,
-        held: &Constraints<S>,
+        at: &AtIncrement<S, FINITE>,
         acc: &mut Rates<S>,
         v_n: &mut Rates<S>,
         counters: &mut Counters,
     ) -> f64 {
+        let (model, cfg, forces) = (at.model, at.cfg, at.forces);
+        let (v_half, h, held) = (at.v_half, at.h, at.held);
         counters.damping_evaluations += 1;
         model.accelerations(cfg, forces, v_half, held, acc, counters);
         v_n.set_plus(v_half, 0.5 * h, acc);

@@ -9,7 +9,7 @@
 use super::model::{Config, Constraints, ContactMode, Counters, Model, Rates, Target};
 use super::space::Space;
 use crate::scene::{DampingTreatment, Scene};
-use nalgebra::{DVector, Vector3};
+use nalgebra::DVector;
 
 /// The mode an unstable run's motion is in.
 #[derive(Debug, Clone, PartialEq)]
@@ -147,12 +147,11 @@ fn label<S: Space, const FINITE: bool>(
             prefix,
             ["x", "y", "z"][k]
         ),
-        None => format!("{name}.{prefix}{}", compact(&direction)),
+        None => {
+            let (x, y, z) = (direction.x, direction.y, direction.z);
+            format!("{name}.{prefix}({x:.2},{y:.2},{z:.2})")
+        }
     }
-}
-
-fn compact(d: &Vector3<f64>) -> String {
-    format!("({:.2},{:.2},{:.2})", d[0], d[1], d[2])
 }
 
 /// The modes an increment puts past their stability limit, watched while a run goes on: by

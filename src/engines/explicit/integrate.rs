@@ -12,7 +12,7 @@ use super::model::{Config, Constraints, ContactMode, Counters, Forces, Model, Ra
 use super::rows::{RowSampler, note_impacts};
 use super::space::{Lin, Space};
 use super::start::consistent_start;
-use super::velocity::{Velocities, VelocityRule};
+use super::velocity::{AtIncrement, Velocities, VelocityRule};
 use crate::contract::ENERGY_COLUMNS;
 use crate::engines::{EngineError, History};
 use crate::scene::{
@@ -480,17 +480,18 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         let power = if restart {
             self.restart(plan)
         } else {
-            plan.velocity.accelerations(
+            let at = AtIncrement {
                 model,
-                &self.cfg,
-                &self.forces,
-                (&self.v_half, &self.acc_prev),
+                cfg: &self.cfg,
+                forces: &self.forces,
+                v_half: &self.v_half,
+                acc_prev: &self.acc_prev,
                 h,
-                &plan.held,
-                &mut self.velocities,
-                &mut self.acc,
-                &mut self.counters,
-            )?
+                held: &plan.held,
+            };
+            let (work, acc) = (&mut self.velocities, &mut self.acc);
+            plan.velocity
+                .accelerations(&at, work, acc, &mut self.counters)?
         };
         if n > 0 {
             self.dissipated += 0.5 * h * (self.last_power + power);

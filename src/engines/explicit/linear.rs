@@ -184,19 +184,35 @@ impl StableIncrement {
             return None;
         }
         let omega = lambda.sqrt();
-        let undamped = 2.0 / omega;
         let lagged = 2.0 / ((lambda + 0.25 * gamma * gamma).sqrt() + 0.5 * gamma);
-        Some(StableIncrement {
+        Some(Self::of(
+            (omega, 0.5 * gamma / omega),
+            lagged,
+            omega,
+            treatment,
+        ))
+    }
+
+    /// The limits of the highest mode `(ω, ζ)`, with the lagged limit `lagged` and the
+    /// structure's highest frequency `omega_structure`.
+    fn of(
+        (omega, zeta): (f64, f64),
+        lagged: f64,
+        omega_structure: f64,
+        treatment: DampingTreatment,
+    ) -> Self {
+        let undamped = 2.0 / omega;
+        StableIncrement {
             omega_max: omega,
-            zeta: 0.5 * gamma / omega,
+            zeta,
             undamped,
             lagged,
             increment: match treatment {
                 DampingTreatment::Centred => undamped,
                 DampingTreatment::Lagged => lagged,
             },
-            omega_structure: omega,
-        })
+            omega_structure,
+        }
     }
 
     /// From the modes with contact closed and the modes of the structure alone.
@@ -206,23 +222,18 @@ impl StableIncrement {
         treatment: DampingTreatment,
     ) -> Option<Self> {
         let top = modes.iter().find(|m| m.omega > 0.0)?;
-        let undamped = 2.0 / top.omega;
         let lagged = modes
             .iter()
             .filter(|m| m.omega > 0.0)
             .map(|m| m.limit(DampingTreatment::Lagged))
             .fold(f64::INFINITY, f64::min);
-        Some(StableIncrement {
-            omega_max: top.omega,
-            zeta: top.zeta,
-            undamped,
+        let omega_structure = structure.first().map_or(top.omega, |m| m.omega);
+        Some(Self::of(
+            (top.omega, top.zeta),
             lagged,
-            increment: match treatment {
-                DampingTreatment::Centred => undamped,
-                DampingTreatment::Lagged => lagged,
-            },
-            omega_structure: structure.first().map_or(top.omega, |m| m.omega),
-        })
+            omega_structure,
+            treatment,
+        ))
     }
 }
 

@@ -300,13 +300,6 @@ impl<S: Space> Contact<S> {
     pub(super) fn face_to_node(&self, r: &S::R, relative: S::V) -> S::V {
         (self.arm0 - self.face) + relative - S::turned(r, &self.face)
     }
-
-    /// From the body's reference node to the node (finite rotation), with `relative` as in
-    /// [`Contact::plane_gap`].
-    #[inline(always)]
-    pub(super) fn arm(&self, relative: S::V) -> S::V {
-        self.arm0 + relative
-    }
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -870,7 +863,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     pub(super) fn contact_arm(&self, cfg: &Config<S>, k: usize) -> S::V {
         let c = &self.contacts[k];
         if FINITE {
-            c.arm(cfg.u[c.particle] - cfg.bu[c.body])
+            c.arm0 + (cfg.u[c.particle] - cfg.bu[c.body])
         } else {
             c.arm0
         }

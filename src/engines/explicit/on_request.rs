@@ -70,26 +70,19 @@ pub fn run(
         pilot_increments.set(pilot_increments.get() + run.steps);
         Ok(run)
     };
+    let default_rule = IncrementRule::Stable {
+        safety: DEFAULT_SAFETY,
+    };
     // At 4k the increment h/2 is within 0.9 of the stable one when h was within 0.9 of the
     // stable one at k; where it is not (a structural mode limits), 0.9 of the stable one.
     let stiffer = |h: f64, k: f64| match pilot(IncrementRule::Given(h), Some(k)) {
-        Err(EngineError::UnstableIncrement { .. }) => pilot(
-            IncrementRule::Stable {
-                safety: DEFAULT_SAFETY,
-            },
-            Some(k),
-        ),
+        Err(EngineError::UnstableIncrement { .. }) => pilot(default_rule, Some(k)),
         other => other,
     };
     let change = |a: &Integration, b: &Integration| {
         4.0 / 3.0 * contract::relative_change(scene.family, &a.history, &b.history)
     };
-    let coarse = pilot(
-        IncrementRule::Stable {
-            safety: DEFAULT_SAFETY,
-        },
-        k1,
-    )?;
+    let coarse = pilot(default_rule, k1)?;
     let h1 = coarse.increment;
     let fine = pilot(IncrementRule::Forced(h1 / 2.0), k1)?;
     let stable_at = |k: Option<f64>| {

@@ -68,7 +68,9 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 self.push_along(cfg, k, n, f, out);
             }
         }
-        self.apply_loads(cfg, out);
+        for l in &self.loads {
+            self.apply(cfg, &l.point, l.force, out);
+        }
         out.elastic = elastic;
     }
 
@@ -118,14 +120,6 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// One over the mass pair `k`'s normal force moves (the body's turning left out).
     pub fn contact_inverse_mass(&self, k: usize) -> f64 {
         self.contacts[k].inverse_mass
-    }
-
-    /// Add the loads to `out`.
-    #[inline(always)]
-    pub(super) fn apply_loads(&self, cfg: &Config<S>, out: &mut Forces<S>) {
-        for l in &self.loads {
-            self.apply(cfg, &l.point, l.force, out);
-        }
     }
 
     /// Add dashpot forces at velocities `vel` to `out`, and their dissipation power.

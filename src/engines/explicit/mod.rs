@@ -17,7 +17,7 @@ pub mod start;
 pub mod velocity;
 
 use super::{Engine, EngineError, RunInfo, RunOutput, RunSettings};
-use crate::scene::{Dimension, IncrementRule, Scene, SceneSettings};
+use crate::scene::{ContactState, Dimension, Dof, IncrementRule, Scene, SceneSettings, StepKind};
 use integrate::{Integration, integrate};
 use space::{Planar, Spatial};
 use std::collections::BTreeMap;
@@ -61,24 +61,24 @@ impl ExplicitEngine {
 /// that stays (its error is the model's, measured against the closed form).
 fn small_rotation_applies(scene: &Scene) -> Result<(), EngineError> {
     let rotations: &[usize] = match scene.dimension {
-        crate::scene::Dimension::Two => &[2],
-        crate::scene::Dimension::Three => &[0, 1, 2],
+        Dimension::Two => &[2],
+        Dimension::Three => &[0, 1, 2],
     };
     for pair in &scene.contacts {
-        if pair.initially != crate::scene::ContactState::Open {
+        if pair.initially != ContactState::Open {
             continue;
         }
         let reference = scene.bodies[pair.body].reference;
         let turns = scene
             .steps
             .iter()
-            .filter(|s| matches!(s.kind, crate::scene::StepKind::Dynamic { .. }))
+            .filter(|s| matches!(s.kind, StepKind::Dynamic { .. }))
             .any(|s| {
                 rotations.iter().any(|&axis| {
                     // Held where it is; a prescribed turn moves the arm as much as a free one.
                     !s.conditions.iter().any(|c| {
                         c.node == reference
-                            && c.dof == crate::scene::Dof::Rotation(axis)
+                            && c.dof == Dof::Rotation(axis)
                             && c.value.is_none_or(|v| v == 0.0)
                     })
                 })
@@ -231,7 +231,7 @@ fn stable<S: space::Space, const FINITE: bool>(
     let first_dynamic = scene
         .steps
         .iter()
-        .position(|st| matches!(st.kind, crate::scene::StepKind::Dynamic { .. }))?;
+        .position(|st| matches!(st.kind, StepKind::Dynamic { .. }))?;
     for step in &scene.steps[..first_dynamic] {
         let held = m.constraints(step);
         linear::static_step(&m, &mut cfg, &held, &mut counters).ok()?;

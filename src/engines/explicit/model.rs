@@ -9,7 +9,7 @@ use super::body_solve::{BodyOperator, BodySolve};
 use super::space::SharedSolid;
 use super::space::{BodyInertia, Lin, Space};
 use crate::scene::{
-    Attachment, Connection, ContactPair, ContactState, Dof, Scene, StepKind, Surface,
+    Attachment, Connection, ContactPair, ContactState, Dof, Element, Scene, StepKind, Surface,
     surface_distance,
 };
 use std::marker::PhantomData;
@@ -613,7 +613,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             });
         }
         let x0 = |node: usize| S::v(&scene.nodes[node].position);
-        let grounded = |list: &[crate::scene::Element]| -> Vec<Grounded<S>> {
+        let grounded = |list: &[Element]| -> Vec<Grounded<S>> {
             list.iter()
                 .filter_map(|e| match e.connection {
                     Connection::Grounded { node, dof } => {
@@ -640,7 +640,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 })
                 .collect()
         };
-        let two_point = |list: &[crate::scene::Element]| -> Vec<TwoPoint<S>> {
+        let two_point = |list: &[Element]| -> Vec<TwoPoint<S>> {
             list.iter()
                 .filter_map(|e| {
                     let (nodes, direction, axial) = match &e.connection {

@@ -83,8 +83,7 @@ pub(super) fn consistent_start<S: Space, const FINITE: bool>(
     else {
         return;
     };
-    let jerk = acc_ahead.plus(-1.0, &acc_behind).plus(0.0, &zero);
-    let jerk = zero.plus(0.5 / tau, &jerk);
+    let jerk = zero.plus(0.5 / tau, &acc_ahead.plus(-1.0, &acc_behind));
     let (Some((ahead, _, _)), Some((behind, _, _))) = (at(tau, &jerk), at(-tau, &jerk)) else {
         return;
     };

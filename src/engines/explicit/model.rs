@@ -283,25 +283,6 @@ pub(super) struct Contact<S: Space> {
     pub(super) gap0: f64,
 }
 
-impl<S: Space> Contact<S> {
-    /// A plane pair's signed gap (negative: penetration) and outward normal under finite
-    /// rotation, at its body's orientation `r`, with `relative` the node's displacement less
-    /// the body's reference node's.
-    #[inline(always)]
-    pub(super) fn plane_gap(&self, r: &S::R, relative: S::V) -> (f64, S::V) {
-        let n = S::rotate(r, &self.normal);
-        (n.dot(&self.face_to_node(r, relative)), n)
-    }
-
-    /// From the face point to the node (finite rotation), summed from small parts (the offset
-    /// at t = 0, the displacements, the face point's turn) so that a penalty stiffness does
-    /// not multiply the cancellation of body-sized positions.
-    #[inline(always)]
-    pub(super) fn face_to_node(&self, r: &S::R, relative: S::V) -> S::V {
-        (self.arm0 - self.face) + relative - S::turned(r, &self.face)
-    }
-}
-
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Load<S: Space> {
     pub(super) point: Point<S>,
@@ -821,15 +802,15 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     #[inline(always)]
     pub fn gap(&self, cfg: &Config<S>, k: usize) -> (f64, S::V) {
         let c = &self.contacts[k];
-        let relative = cfg.u[c.particle] - cfg.bu[c.body];
         if let Some((centre, shape)) = &c.solid {
             let (d, n) = S::solid_gap(shape, &self.local(cfg, k, centre));
             return (d, self.to_world(cfg, c.body, &n));
         }
         if FINITE {
-            c.plane_gap(&cfg.br[c.body], relative)
+            let n = S::rotate(&cfg.br[c.body], &c.normal);
+            (n.dot(&self.face_to_node(cfg, k)), n)
         } else {
-            let th = &cfg.bth[c.body];
+            let (th, relative) = (&cfg.bth[c.body], cfg.u[c.particle] - cfg.bu[c.body]);
             let d = c.gap0 + c.normal.dot(&relative) - c.normal.dot(&S::cross(th, &c.arm0));
             (d, c.normal)
         }
@@ -934,10 +915,13 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         None
     }
 
-    /// Pair `k`'s [`Contact::face_to_node`] at configuration `cfg` (finite rotation).
+    /// From plane pair `k`'s face point to its node at `cfg` (finite rotation), summed from
+    /// small parts (the offset at t = 0, the displacements, the face point's turn) so that a
+    /// penalty stiffness does not multiply the cancellation of body-sized positions.
     #[inline(always)]
     pub(super) fn face_to_node(&self, cfg: &Config<S>, k: usize) -> S::V {
         let c = &self.contacts[k];
-        c.face_to_node(&cfg.br[c.body], cfg.u[c.particle] - cfg.bu[c.body])
+        let relative = cfg.u[c.particle] - cfg.bu[c.body];
+        (c.arm0 - c.face) + relative - S::turned(&cfg.br[c.body], &c.face)
     }
 }

@@ -158,34 +158,23 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         s: f64,
     ) -> (Config<S>, Rates<S>) {
         let (s2, s3) = (0.5 * s * s, s * s * s / 6.0);
-        let turn = |b: usize| vel.w[b] * s + acc.w[b] * s2 + jerk.w[b] * s3;
-        let cfg = Config {
-            u: (0..cfg.u.len())
-                .map(|i| cfg.u[i] + vel.p[i] * s + acc.p[i] * s2 + jerk.p[i] * s3)
-                .collect(),
-            bu: (0..cfg.bu.len())
-                .map(|b| cfg.bu[b] + vel.b[b] * s + acc.b[b] * s2 + jerk.b[b] * s3)
-                .collect(),
-            br: (0..cfg.br.len())
-                .map(|b| {
-                    if FINITE {
-                        S::advance(&cfg.br[b], &turn(b))
-                    } else {
-                        cfg.br[b]
-                    }
-                })
-                .collect(),
-            br_carry: vec![S::Carry::default(); cfg.br.len()],
-            bth: (0..cfg.bth.len()).map(|b| cfg.bth[b] + turn(b)).collect(),
-            inertia: cfg.inertia.clone(),
-        };
-        let mut cfg = cfg;
-        if FINITE {
-            for b in 0..cfg.br.len() {
-                cfg.inertia[b] = self.oriented(b, &cfg.br[b]);
+        let mut out = cfg.clone();
+        for (i, u) in out.u.iter_mut().enumerate() {
+            *u = cfg.u[i] + vel.p[i] * s + acc.p[i] * s2 + jerk.p[i] * s3;
+        }
+        for (b, u) in out.bu.iter_mut().enumerate() {
+            *u = cfg.bu[b] + vel.b[b] * s + acc.b[b] * s2 + jerk.b[b] * s3;
+        }
+        for b in 0..self.bodies.len() {
+            let turn = vel.w[b] * s + acc.w[b] * s2 + jerk.w[b] * s3;
+            out.bth[b] = cfg.bth[b] + turn;
+            out.br_carry[b] = Default::default();
+            if FINITE {
+                out.br[b] = S::advance(&cfg.br[b], &turn);
+                out.inertia[b] = self.oriented(b, &out.br[b]);
             }
         }
-        (cfg, vel.plus(s, acc).plus(s2, jerk))
+        (out, vel.plus(s, acc).plus(s2, jerk))
     }
 
     /// Time derivative of a contact pair's gap.

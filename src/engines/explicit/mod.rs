@@ -113,9 +113,10 @@ impl Engine for ExplicitEngine {
         // Accuracy on request: pilot runs choose the increment and the penalty stiffness.
         let mut measures = BTreeMap::new();
         let mut pilot_increments = None;
-        let mut penalty = (!scene.contacts.is_empty())
-            .then(|| scene.penalty_stiffness(merged(scene, settings).penalty));
-        let run = match merged(scene, settings).increment {
+        let merged = merged(scene, settings);
+        let mut penalty =
+            (!scene.contacts.is_empty()).then(|| scene.penalty_stiffness(merged.penalty));
+        let run = match merged.increment {
             IncrementRule::Tolerance(eps) => {
                 let (run, choice) = on_request::run(self, scene, settings, eps)?;
                 measures.insert("requested_tolerance".to_string(), eps);
@@ -143,12 +144,8 @@ impl Engine for ExplicitEngine {
         }
         if !scene.contacts.is_empty() {
             measures.insert("impacts".to_string(), run.impacts.len() as f64);
-            for (i, t) in run
-                .impacts
-                .iter()
-                .take(crate::contract::IMPACTS_REPORTED)
-                .enumerate()
-            {
+            let reported = run.impacts.iter().take(crate::contract::IMPACTS_REPORTED);
+            for (i, t) in reported.enumerate() {
                 measures.insert(format!("impact_{}_time", i + 1), *t);
             }
         }

@@ -6,7 +6,6 @@
 //! small-rotation idealisation (`explicit_small`); it is resolved at compile time.
 
 use super::body_solve::{BodyOperator, BodySolve};
-use super::space::SharedSolid;
 use super::space::{BodyInertia, Lin, Space};
 use crate::scene::{
     Attachment, Connection, ContactPair, ContactState, Dof, Element, Scene, StepKind, Surface,
@@ -265,7 +264,7 @@ pub(super) struct Contact<S: Space> {
     pub(super) body: usize,
     /// A solid's centre relative to the reference node (body frame) and its parry shape; `None`
     /// for a plane.
-    pub(super) solid: Option<(S::V, SharedSolid<S>)>,
+    pub(super) solid: Option<(S::V, S::Shape)>,
     /// Contact dashpot (sized for the pair's restitution; 0 when elastic).
     pub(super) damping: f64,
     /// One over the mass the normal force moves ([`contact_mass`]).

@@ -4,7 +4,7 @@
 
 use super::body_solve::project;
 use super::model::*;
-use super::space::{BodyInertia, Lin, SharedSolid, Space, compensated_add};
+use super::space::{BodyInertia, Lin, Space, compensated_add};
 
 impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// Mass properties of a body at orientation `r` (finite rotation): the centre in world
@@ -221,10 +221,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         let c = &self.contacts[k];
         let (i, b) = (c.particle, c.body);
         if let Some((_, shape)) = &c.solid {
-            let depth = match shape {
-                SharedSolid::Planar(s, _) => s.compute_local_aabb().half_extents().min_element(),
-                SharedSolid::Spatial(s, _) => s.compute_local_aabb().half_extents().min_element(),
-            };
+            let depth = S::thinnest(shape);
             // The node's motion relative to the body point it touches: a body carrying the
             // pair fast through space does not shrink τ.
             let arm = self.contact_arm(cfg, k);

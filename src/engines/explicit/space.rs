@@ -4,7 +4,6 @@
 use crate::scene::Solid;
 use nalgebra::{Matrix3, SVector, UnitQuaternion, Vector2, Vector3};
 use std::fmt::Debug;
-use std::marker::PhantomData;
 use std::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
 
 /// A linear quantity: translations (`Vector2`/`Vector3`) and angular quantities (`f64`/`Vector3`).
@@ -190,24 +189,19 @@ pub trait Space: Copy + Debug + Send + Sync + 'static {
     fn free_rotations(held: &[Self::W]) -> Vec<Self::W>;
     /// Rotate a world vector into the body frame (the inverse of [`Space::rotate`]).
     fn unrotate(r: &Self::R, x: &Self::V) -> Self::V;
+    /// A parry shape of this space, shared (cheap to clone, `Send + Sync`).
+    type Shape: Clone + Debug + Send + Sync;
     /// A solid as parry builds it in this space (centred at its own origin).
-    fn solid(solid: &Solid) -> SharedSolid<Self>;
+    fn solid(solid: &Solid) -> Self::Shape;
+    /// The smallest half extent of a solid's bounding box.
+    fn thinnest(solid: &Self::Shape) -> f64;
     /// Signed distance (negative inside) from `local` (relative to the solid's centre, in its
     /// axes) to the solid's boundary, and the outward unit normal there: parry's point
     /// projection.
-    fn solid_gap(solid: &SharedSolid<Self>, local: &Self::V) -> (f64, Self::V);
+    fn solid_gap(shape: &Self::Shape, local: &Self::V) -> (f64, Self::V);
     /// Whether the segment from `from` to `to` (local, as in [`Space::solid_gap`]) passes
     /// through the solid: parry's ray cast.
-    fn crosses(solid: &SharedSolid<Self>, from: &Self::V, to: &Self::V) -> bool;
-}
-
-/// A parry shape of one space, shared (cheap to clone, `Send + Sync`).
-#[derive(Clone, Debug)]
-pub enum SharedSolid<S: Space> {
-    /// 2D (`parry2d-f64`).
-    Planar(parry2d_f64::shape::SharedShape, PhantomData<S>),
-    /// 3D (`parry3d-f64`).
-    Spatial(parry3d_f64::shape::SharedShape, PhantomData<S>),
+    fn crosses(shape: &Self::Shape, from: &Self::V, to: &Self::V) -> bool;
 }
 
 /// The signed gap at `local` and the outward unit normal there, from `at`, parry's point
@@ -334,33 +328,30 @@ impl Space for Planar {
         let (c, s) = (r.cos(), r.sine);
         Vector2::new(c * x.x + s * x.y, c * x.y - s * x.x)
     }
-    fn solid(solid: &Solid) -> SharedSolid<Self> {
+    fn solid(solid: &Solid) -> Self::Shape {
         use parry2d_f64::shape::SharedShape;
-        SharedSolid::Planar(
-            match *solid {
-                Solid::Ball { radius } => SharedShape::ball(radius),
-                Solid::Cuboid { half_extents: h } => SharedShape::cuboid(h.x, h.y),
-                Solid::Capsule {
-                    half_height,
-                    radius,
-                } => SharedShape::capsule_y(half_height, radius),
-                Solid::Convex { ref polytope } => {
-                    let corners: Vec<_> = polytope
-                        .corners
-                        .iter()
-                        .map(|c| parry2d_f64::math::Vector::new(c.x, c.y))
-                        .collect();
-                    SharedShape::convex_hull(&corners)
-                        .expect("validated: the corners span a convex polygon")
-                }
-            },
-            PhantomData,
-        )
+        match *solid {
+            Solid::Ball { radius } => SharedShape::ball(radius),
+            Solid::Cuboid { half_extents: h } => SharedShape::cuboid(h.x, h.y),
+            Solid::Capsule {
+                half_height,
+                radius,
+            } => SharedShape::capsule_y(half_height, radius),
+            Solid::Convex { ref polytope } => {
+                let corners: Vec<_> = polytope
+                    .corners
+                    .iter()
+                    .map(|c| parry2d_f64::math::Vector::new(c.x, c.y))
+                    .collect();
+                SharedShape::convex_hull(&corners)
+                    .expect("validated: the corners span a convex polygon")
+            }
+        }
     }
-    fn solid_gap(solid: &SharedSolid<Self>, local: &Self::V) -> (f64, Self::V) {
-        let SharedSolid::Planar(shape, _) = solid else {
-            unreachable!("a 2D model holds 2D shapes")
-        };
+    fn thinnest(shape: &Self::Shape) -> f64 {
+        shape.compute_local_aabb().half_extents().min_element()
+    }
+    fn solid_gap(shape: &Self::Shape, local: &Self::V) -> (f64, Self::V) {
         let size = || shape.compute_local_aabb().half_extents().length();
         gap_and_normal(local, size, |p| {
             let q = parry2d_f64::math::Vector::new(p.x, p.y);
@@ -375,10 +366,7 @@ impl Space for Planar {
             (gap, Vector2::new(d.x, d.y))
         })
     }
-    fn crosses(solid: &SharedSolid<Self>, from: &Self::V, to: &Self::V) -> bool {
-        let SharedSolid::Planar(shape, _) = solid else {
-            unreachable!("a 2D model holds 2D shapes")
-        };
+    fn crosses(shape: &Self::Shape, from: &Self::V, to: &Self::V) -> bool {
         let v = |p: &Vector2<f64>| parry2d_f64::math::Vector::new(p.x, p.y);
         let ray = parry2d_f64::query::Ray::new(v(from), v(to) - v(from));
         shape.intersects_local_ray(&ray, 1.0)
@@ -386,6 +374,7 @@ impl Space for Planar {
     type V = Vector2<f64>;
     type W = f64;
     type R = Heading;
+    type Shape = parry2d_f64::shape::SharedShape;
     type Carry = [f64; 2];
     type Inertia = f64;
     const DIM: usize = 2;
@@ -635,33 +624,30 @@ impl Space for Spatial {
     fn unrotate(r: &Self::R, x: &Self::V) -> Self::V {
         x + r.turn.tr_mul(x)
     }
-    fn solid(solid: &Solid) -> SharedSolid<Self> {
+    fn solid(solid: &Solid) -> Self::Shape {
         use parry3d_f64::shape::SharedShape;
-        SharedSolid::Spatial(
-            match *solid {
-                Solid::Ball { radius } => SharedShape::ball(radius),
-                Solid::Cuboid { half_extents: h } => SharedShape::cuboid(h.x, h.y, h.z),
-                Solid::Capsule {
-                    half_height,
-                    radius,
-                } => SharedShape::capsule_y(half_height, radius),
-                Solid::Convex { ref polytope } => {
-                    let corners: Vec<_> = polytope
-                        .corners
-                        .iter()
-                        .map(|c| parry3d_f64::math::Vector::new(c.x, c.y, c.z))
-                        .collect();
-                    SharedShape::convex_hull(&corners)
-                        .expect("validated: the corners span a convex polyhedron")
-                }
-            },
-            PhantomData,
-        )
+        match *solid {
+            Solid::Ball { radius } => SharedShape::ball(radius),
+            Solid::Cuboid { half_extents: h } => SharedShape::cuboid(h.x, h.y, h.z),
+            Solid::Capsule {
+                half_height,
+                radius,
+            } => SharedShape::capsule_y(half_height, radius),
+            Solid::Convex { ref polytope } => {
+                let corners: Vec<_> = polytope
+                    .corners
+                    .iter()
+                    .map(|c| parry3d_f64::math::Vector::new(c.x, c.y, c.z))
+                    .collect();
+                SharedShape::convex_hull(&corners)
+                    .expect("validated: the corners span a convex polyhedron")
+            }
+        }
     }
-    fn solid_gap(solid: &SharedSolid<Self>, local: &Self::V) -> (f64, Self::V) {
-        let SharedSolid::Spatial(shape, _) = solid else {
-            unreachable!("a 3D model holds 3D shapes")
-        };
+    fn thinnest(shape: &Self::Shape) -> f64 {
+        shape.compute_local_aabb().half_extents().min_element()
+    }
+    fn solid_gap(shape: &Self::Shape, local: &Self::V) -> (f64, Self::V) {
         let size = || shape.compute_local_aabb().half_extents().length();
         gap_and_normal(local, size, |p| {
             let q = parry3d_f64::math::Vector::new(p.x, p.y, p.z);
@@ -676,10 +662,7 @@ impl Space for Spatial {
             (gap, Vector3::new(d.x, d.y, d.z))
         })
     }
-    fn crosses(solid: &SharedSolid<Self>, from: &Self::V, to: &Self::V) -> bool {
-        let SharedSolid::Spatial(shape, _) = solid else {
-            unreachable!("a 3D model holds 3D shapes")
-        };
+    fn crosses(shape: &Self::Shape, from: &Self::V, to: &Self::V) -> bool {
         let v = |p: &Vector3<f64>| parry3d_f64::math::Vector::new(p.x, p.y, p.z);
         let ray = parry3d_f64::query::Ray::new(v(from), v(to) - v(from));
         shape.intersects_local_ray(&ray, 1.0)
@@ -687,6 +670,7 @@ impl Space for Spatial {
     type V = Vector3<f64>;
     type W = Vector3<f64>;
     type R = Orientation;
+    type Shape = parry3d_f64::shape::SharedShape;
     type Carry = [f64; 4];
     type Inertia = Matrix3<f64>;
     const DIM: usize = 3;

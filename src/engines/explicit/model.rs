@@ -11,7 +11,6 @@ use crate::scene::{
     Attachment, Connection, ContactPair, ContactState, Dof, Element, Scene, StepKind, Surface,
     surface_distance,
 };
-use std::marker::PhantomData;
 
 /// Where an element end or a load acts.
 #[derive(Debug, Clone, Copy)]
@@ -295,10 +294,6 @@ pub struct Particle<S: Space> {
     pub node: usize,
     /// Mass.
     pub mass: f64,
-    /// 1 / mass.
-    pub inverse_mass: f64,
-    /// Position at t = 0.
-    pub x0: S::V,
     /// Frame axes (DOF directions).
     pub axes: Vec<S::V>,
 }
@@ -306,8 +301,6 @@ pub struct Particle<S: Space> {
 /// A body's constant data.
 #[derive(Debug, Clone)]
 pub struct Body<S: Space> {
-    /// Scene body index.
-    pub index: usize,
     /// Reference node.
     pub node: usize,
     /// Reference position at t = 0.
@@ -475,7 +468,6 @@ pub struct Model<S: Space, const FINITE: bool> {
     pub penalty: f64,
     /// Node → point.
     pub points: Vec<Point<S>>,
-    _space: PhantomData<S>,
 }
 
 /// The contact dashpot of a pair: c = 2ζ√(k_p m), with ζ the damping ratio whose linear
@@ -533,10 +525,9 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 .map(|i| S::w(&frame.column(i).into_owned()))
                 .collect()
         };
-        for (bi, b) in scene.bodies.iter().enumerate() {
+        for b in &scene.bodies {
             let node = &scene.nodes[b.reference];
             bodies.push(Body {
-                index: bi,
                 node: b.reference,
                 x0: S::v(&node.position),
                 inertia: BodyInertia {
@@ -576,8 +567,6 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                     particles.push(Particle {
                         node: i,
                         mass: n.mass,
-                        inverse_mass: 1.0 / n.mass,
-                        x0: x,
                         axes: axes(&n.frame),
                     });
                     Point::Particle(particles.len() - 1)
@@ -694,7 +683,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         let grounded_dashpots = grounded(&scene.dashpots);
         let dashpots = two_point(&scene.dashpots);
         Model {
-            inverse_masses: particles.iter().map(|p| p.inverse_mass).collect(),
+            inverse_masses: particles.iter().map(|p| 1.0 / p.mass).collect(),
             particles,
             bodies,
             grounded_springs,
@@ -705,7 +694,6 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             loads,
             penalty,
             points,
-            _space: PhantomData,
         }
     }
 

@@ -37,8 +37,6 @@ pub const MAX_INCREMENTS: f64 = 1e8;
 /// What the pilots measured and what was chosen.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Choice {
-    /// The increment to run with (before shortening to divide the output interval).
-    pub increment: f64,
     /// The penalty stiffness (scenes with contact).
     pub penalty: Option<f64>,
     /// The error the model predicts for the choice (max over peak).
@@ -106,7 +104,6 @@ pub fn run(
         check_increments(scene, h, eps)?;
         let run = engine.integrate(scene, &with(IncrementRule::Given(h), None))?;
         let choice = Choice {
-            increment: run.increment,
             penalty: None,
             predicted: a * run.increment * run.increment,
             pilot_increments: pilot_increments.get(),
@@ -145,7 +142,6 @@ pub fn run(
             || attempt == ATTEMPTS;
         if settled {
             let choice = Choice {
-                increment: hc,
                 penalty: Some(k),
                 predicted: estimate,
                 pilot_increments: pilot_increments.get(),

@@ -25,8 +25,6 @@ pub trait Lin:
     fn zero() -> Self;
     /// Inner product.
     fn dot(&self, other: &Self) -> f64;
-    /// `self`·`k` + `add`, each component in one fused multiply-add (rounded once).
-    fn fused(self, k: f64, add: Self) -> Self;
 }
 
 impl Lin for f64 {
@@ -35,10 +33,6 @@ impl Lin for f64 {
     }
     fn dot(&self, other: &Self) -> f64 {
         self * other
-    }
-    #[inline(always)]
-    fn fused(self, k: f64, add: Self) -> Self {
-        self.mul_add(k, add)
     }
 }
 
@@ -50,10 +44,6 @@ macro_rules! lin_vector {
             }
             fn dot(&self, other: &Self) -> f64 {
                 nalgebra::Matrix::dot(self, other)
-            }
-            #[inline(always)]
-            fn fused(self, k: f64, add: Self) -> Self {
-                self.zip_map(&add, |a, b| a.mul_add(k, b))
             }
         }
     };

@@ -115,31 +115,21 @@ impl<S: Space> BodyOperator<S> {
 }
 
 impl<S: Space> BodySolve<'_, S> {
-    /// [`BodySolve::solve`] for a body with one free rotation axis g: the reference node's
-    /// acceleration and the angular acceleration's component along g (α = s·g), which a
-    /// caller that needs only s then reads without forming α and projecting it back.
-    #[inline(always)]
-    pub fn solve_on_axis(&self, force: &S::V, moment: &S::W) -> (S::V, f64) {
-        debug_assert_eq!(self.free_rotations.len(), 1, "one free rotation axis");
-        // As in `BodyOperator::of`, written out (the reciprocal pivot is NaN where the
-        // factorisation failed).
-        let (g, inverse) = (&self.free_rotations[0], self.operator.factor[0][0]);
-        if self.held_translations.len() == S::DIM {
-            return (S::V::zero(), g.dot(moment) * inverse);
-        }
-        let s = (g.dot(moment) - force.dot(&self.operator.drag[0])) * inverse;
-        let a = project(self.held_translations, *force) * (1.0 / self.body.mass);
-        (a - self.operator.drag[0] * s, s)
-    }
-
     /// The accelerations `(a, α)` of the reference node under `force` and `moment`.
     #[inline(always)]
     pub fn solve(&self, force: &S::V, moment: &S::W) -> (S::V, S::W) {
         let n = self.free_rotations.len();
         let pinned = self.held_translations.len() == S::DIM;
         if n == 1 {
-            let (a, s) = self.solve_on_axis(force, moment);
-            return (a, self.free_rotations[0] * s);
+            // One free axis g (α = s·g), as in `BodyOperator::of`, written out (the reciprocal
+            // pivot is NaN where the factorisation failed).
+            let (g, inverse) = (&self.free_rotations[0], self.operator.factor[0][0]);
+            if pinned {
+                return (S::V::zero(), *g * (g.dot(moment) * inverse));
+            }
+            let s = (g.dot(moment) - force.dot(&self.operator.drag[0])) * inverse;
+            let a = project(self.held_translations, *force) * (1.0 / self.body.mass);
+            return (a - self.operator.drag[0] * s, *g * s);
         }
         let mut r = [0.0; 3];
         for ((r, g), w) in r

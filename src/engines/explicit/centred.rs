@@ -26,18 +26,16 @@
 //! masses move only along it.)
 
 use super::model::{
-    Config, Constraints, Counters, DashpotLine, Forces, Model, ParticleDashpot, Rates, fill_zero,
+    Config, Constraints, Counters, DashpotLine, Model, ParticleDashpot, Rates, fill_zero,
 };
 use super::space::{Lin, Space};
+use super::velocity::AtIncrement;
 
 /// Above this many dashpots the iteration is used (the elimination is O(k³) per increment).
 pub const MAX_DASHPOTS: usize = 8;
 
 /// A dashpot's moving end: (dashpot, particle, signed line, P M⁻¹ of that line).
 pub type End<S> = (usize, usize, <S as Space>::V, <S as Space>::V);
-
-/// [`ParticleDashpots::steady`]: the dashpots, their moving ends and the step's inverse.
-pub type SteadySystem<'a, S> = (&'a [ParticleDashpot<S>], &'a [End<S>], &'a [f64]);
 
 /// The dashpots of a scene that the direct solve applies to, with the solve's scratch space.
 #[derive(Debug, Clone)]
@@ -113,14 +111,6 @@ impl<S: Space> ParticleDashpots<S> {
         self.steady = Some(inverse);
     }
 
-    /// Where no dashpot's line turns and [`ParticleDashpots::prepare`] formed the step's
-    /// system: the dashpots, their moving ends (dashpot, particle, signed line, `P M⁻¹` of
-    /// that line) and `(I + (h/2)·K)⁻¹` (row-major, k × k).
-    pub fn steady(&self) -> Option<SteadySystem<'_, S>> {
-        let inverse = self.steady.as_deref()?;
-        Some((&self.list, &self.ends, inverse))
-    }
-
     /// Each dashpot's moving ends into `self.ends` and its |l|² into `self.span_squares`, at `cfg`.
     #[inline(always)]
     fn fill_ends<const FINITE: bool>(
@@ -169,30 +159,23 @@ impl<S: Space> ParticleDashpots<S> {
         }
     }
 
-    /// The accelerations `acc` at the centred velocity, and that velocity into `v_n` where one
-    /// is given (an increment that only advances needs neither it nor its pass over memory),
-    /// from the position forces and the half-step velocity `v_half`; returns the dashpots'
-    /// dissipation power. Only for a step without centripetal or gyroscopic terms (the bodies'
+    /// The accelerations `acc` at the centred velocity, and that velocity into `v_n`, from the
+    /// position forces and the half-step velocity of `at`; returns the dashpots' dissipation
+    /// power. Only for a step without centripetal or gyroscopic terms (the bodies'
     /// accelerations do not read the velocity), and at the increment and constraints of the
     /// last [`ParticleDashpots::prepare`].
-    #[allow(clippy::too_many_arguments)]
-    pub fn solve<const FINITE: bool>(
+    pub(super) fn solve<const FINITE: bool>(
         &mut self,
-        model: &Model<S, FINITE>,
-        cfg: &Config<S>,
-        forces: &Forces<S>,
-        v_half: &Rates<S>,
-        h: f64,
-        held: &Constraints<S>,
+        at: &AtIncrement<S, FINITE>,
         acc: &mut Rates<S>,
-        mut v_n: Option<&mut Rates<S>>,
+        v_n: &mut Rates<S>,
         counters: &mut Counters,
     ) -> f64 {
+        let (model, cfg, forces) = (at.model, at.cfg, at.forces);
+        let (v_half, h, held) = (at.v_half, at.h, at.held);
         counters.damping_evaluations += 1;
         model.accelerations(cfg, forces, v_half, held, acc, counters);
-        if let Some(v_n) = v_n.as_deref_mut() {
-            v_n.set_plus(v_half, 0.5 * h, acc);
-        }
+        v_n.set_plus(v_half, 0.5 * h, acc);
         let k = self.list.len();
         // The centred velocity before the dashpots act, as `Rates::set_plus` forms it.
         let centred = |p: usize| v_half.p[p] + acc.p[p] * (0.5 * h);
@@ -222,9 +205,7 @@ impl<S: Space> ParticleDashpots<S> {
             let sigma = rhs * (1.0 / diagonal);
             for (p, g) in ends.into_iter().flatten() {
                 acc.p[p] -= g * (dashpot.c * sigma);
-                if let Some(v_n) = v_n.as_deref_mut() {
-                    v_n.p[p] = v_half.p[p] + acc.p[p] * (0.5 * h);
-                }
+                v_n.p[p] = v_half.p[p] + acc.p[p] * (0.5 * h);
             }
             return dashpot.c * span_square * sigma * sigma;
         }
@@ -238,9 +219,7 @@ impl<S: Space> ParticleDashpots<S> {
             let sigma = inverse[0] * rhs;
             for &(_, p, _, g) in &self.ends {
                 acc.p[p] -= g * (dashpot.c * sigma);
-                if let Some(v_n) = v_n.as_deref_mut() {
-                    v_n.p[p] = v_half.p[p] + acc.p[p] * (0.5 * h);
-                }
+                v_n.p[p] = v_half.p[p] + acc.p[p] * (0.5 * h);
             }
             return dashpot.c * self.span_squares[0] * sigma * sigma;
         }
@@ -276,9 +255,7 @@ impl<S: Space> ParticleDashpots<S> {
         }
         for &(j, p, _, g) in &self.ends {
             acc.p[p] -= g * (self.list[j].c * sigma[j]);
-            if let Some(v_n) = v_n.as_deref_mut() {
-                v_n.p[p] = v_half.p[p] + acc.p[p] * (0.5 * h);
-            }
+            v_n.p[p] = v_half.p[p] + acc.p[p] * (0.5 * h);
         }
         power
     }

@@ -4,11 +4,11 @@
 use super::body_solve::BodyOperator;
 use super::model::*;
 use super::space::{Lin, Space};
-use crate::scene::{BoundaryCondition, Dof, Scene, Step};
+use crate::scene::{BoundaryCondition, Dof, Step};
 
 impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// Compile a step's boundary conditions.
-    pub fn constraints(&self, scene: &Scene, step: &Step) -> Constraints<S> {
+    pub fn constraints(&self, step: &Step) -> Constraints<S> {
         let np = self.particles.len();
         let nb = self.bodies.len();
         let mut c = Constraints {
@@ -47,7 +47,6 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 c.prescribed.push((target, v));
             }
         }
-        let _ = scene;
         // The distinct held sets, each with its projection (the last one found is tried first:
         // neighbours usually share theirs; a set not among the first 64 is added again rather
         // than searched for, so a scene of many frames compiles in linear time).
@@ -176,17 +175,8 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         if !self.bodies.is_empty() || !self.contacts.is_empty() {
             return None;
         }
-        let free: Vec<Vec<S::V>> = self
-            .particles
-            .iter()
-            .zip(&held.particle_held)
-            .map(|(p, h)| {
-                p.axes
-                    .iter()
-                    .copied()
-                    .filter(|a| h.iter().all(|d| d.dot(a).abs() < 0.5))
-                    .collect()
-            })
+        let free: Vec<Vec<S::V>> = (self.particles.iter().zip(&held.particle_held))
+            .map(|(p, h)| free_axes(&p.axes, h))
             .collect();
         let mut stiffness = vec![0.0; self.particles.len() * S::DIM];
         let mut damping = vec![0.0; self.particles.len() * S::DIM];
@@ -209,26 +199,15 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 }
             }
         };
-        for s in &self.grounded_springs {
-            if let Some(d) = s.direction {
-                add(
-                    &mut stiffness,
-                    [&s.point, &Point::Ground(S::V::zero())],
-                    &d,
-                    s.c,
-                    0.0,
-                );
-            }
-        }
-        for s in &self.grounded_dashpots {
-            if let Some(d) = s.direction {
-                add(
-                    &mut damping,
-                    [&s.point, &Point::Ground(S::V::zero())],
-                    &d,
-                    s.c,
-                    0.0,
-                );
+        let ground = Point::Ground(S::V::zero());
+        for (rows, grounded) in [
+            (&mut stiffness, &self.grounded_springs),
+            (&mut damping, &self.grounded_dashpots),
+        ] {
+            for s in grounded {
+                if let Some(d) = s.direction {
+                    add(rows, [&s.point, &ground], &d, s.c, 0.0);
+                }
             }
         }
         let direction = |s: &TwoPoint<S>| {
@@ -265,27 +244,23 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// Free generalised DOFs under a step's constraints.
     pub fn free_dofs(&self, held: &Constraints<S>) -> Vec<Target<S>> {
         let mut out = Vec::new();
-        let free = |axes: &[S::V], held: &[S::V]| -> Vec<S::V> {
-            axes.iter()
-                .copied()
-                .filter(|a| held.iter().all(|h| h.dot(a).abs() < 0.5))
-                .collect()
-        };
         for (i, p) in self.particles.iter().enumerate() {
-            for d in free(&p.axes, &held.particle_held[i]) {
-                out.push(Target::Particle(i, d));
-            }
+            let free = free_axes(&p.axes, &held.particle_held[i]);
+            out.extend(free.into_iter().map(|d| Target::Particle(i, d)));
         }
         for (b, body) in self.bodies.iter().enumerate() {
-            for d in free(&body.axes, &held.body_held_t[b]) {
-                out.push(Target::Translation(b, d));
-            }
-            for g in &body.rot_axes {
-                if held.body_held_r[b].iter().all(|h| h.dot(g).abs() < 0.5) {
-                    out.push(Target::Rotation(b, *g));
-                }
-            }
+            let free = free_axes(&body.axes, &held.body_held_t[b]);
+            out.extend(free.into_iter().map(|d| Target::Translation(b, d)));
+            let free = free_axes(&body.rot_axes, &held.body_held_r[b]);
+            out.extend(free.into_iter().map(|g| Target::Rotation(b, g)));
         }
         out
     }
+}
+
+/// The axes of a node's frame that the held directions leave free (no held direction within
+/// 60° of them).
+fn free_axes<V: Lin>(axes: &[V], held: &[V]) -> Vec<V> {
+    let free = |a: &&V| held.iter().all(|h| h.dot(a).abs() < 0.5);
+    axes.iter().filter(free).copied().collect()
 }

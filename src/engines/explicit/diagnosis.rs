@@ -6,11 +6,10 @@
 //! that mode carries practically all of the motion: the velocities' projection on the modes
 //! (mass-weighted, φᵀM q̇) names it.
 
-use super::linear::Mode;
-use super::model::{Config, Constraints, Counters, Model, Rates, Target};
+use super::model::{Config, Constraints, ContactMode, Counters, Model, Rates, Target};
 use super::space::Space;
 use crate::scene::{DampingTreatment, Scene};
-use nalgebra::{DVector, Vector3};
+use nalgebra::DVector;
 
 /// The mode an unstable run's motion is in.
 #[derive(Debug, Clone, PartialEq)]
@@ -44,9 +43,7 @@ impl GrowingMode {
             100.0 * self.share
         )
     }
-}
 
-impl GrowingMode {
     /// One line for a run stopped below this mode's limit after a penalty impact at `at`: no
     /// mode grows there; the energy came in at the impact. A contact mode of ω·h resolves an
     /// impact in about π/(ω·h) increments; a node inside for one increment at depth d ≤ h·v
@@ -86,7 +83,7 @@ pub fn growing_mode<S: Space, const FINITE: bool>(
     treatment: DampingTreatment,
 ) -> Option<GrowingMode> {
     // The diagnosis's own force evaluations are not the run's work: counted apart.
-    let lin = model.linearise(cfg, held, true, &mut Counters::default());
+    let lin = model.linearise(cfg, held, ContactMode::Bilateral, &mut Counters::default());
     let qdot = DVector::from_iterator(
         lin.dofs.len(),
         lin.dofs.iter().map(|d| model.rate_along(rates, d)),
@@ -101,7 +98,7 @@ pub fn growing_mode<S: Space, const FINITE: bool>(
     if !(total.is_finite() && total > 0.0) {
         return None;
     }
-    let past = |i: &usize| shapes[*i].0.omega > 0.0 && h > limit(&shapes[*i].0, treatment);
+    let past = |i: &usize| shapes[*i].0.omega > 0.0 && h > shapes[*i].0.limit(treatment);
     let candidates: Vec<usize> = if (0..shapes.len()).any(|i| past(&i)) {
         (0..shapes.len()).filter(past).collect()
     } else {
@@ -124,7 +121,7 @@ pub fn growing_mode<S: Space, const FINITE: bool>(
     dofs.truncate(4);
     Some(GrowingMode {
         omega: mode.omega,
-        limit: limit(mode, treatment),
+        limit: mode.limit(treatment),
         share: energy / total,
         dofs,
     })
@@ -150,12 +147,11 @@ fn label<S: Space, const FINITE: bool>(
             prefix,
             ["x", "y", "z"][k]
         ),
-        None => format!("{name}.{prefix}{}", compact(&direction)),
+        None => {
+            let (x, y, z) = (direction.x, direction.y, direction.z);
+            format!("{name}.{prefix}({x:.2},{y:.2},{z:.2})")
+        }
     }
-}
-
-fn compact(d: &Vector3<f64>) -> String {
-    format!("({:.2},{:.2},{:.2})", d[0], d[1], d[2])
 }
 
 /// The modes an increment puts past their stability limit, watched while a run goes on: by
@@ -184,11 +180,11 @@ impl<S: Space> PastLimit<S> {
         h: f64,
         treatment: DampingTreatment,
     ) -> Option<Self> {
-        let lin = model.linearise(cfg, held, true, &mut Counters::default());
+        let lin = model.linearise(cfg, held, ContactMode::Bilateral, &mut Counters::default());
         let weights: Vec<DVector<f64>> = lin
             .shapes()
             .into_iter()
-            .filter(|(m, _)| m.omega > 0.0 && h > limit(m, treatment) * (1.0 + 1e-12))
+            .filter(|(m, _)| m.omega > 0.0 && h > m.limit(treatment) * (1.0 + 1e-12))
             .map(|(_, phi)| &lin.mass * phi)
             .collect();
         (!weights.is_empty()).then_some(PastLimit {
@@ -218,13 +214,5 @@ impl<S: Space> PastLimit<S> {
             .sum();
         let base = self.initial.get_or_insert(energy).max(floor);
         (energy > PAST_LIMIT_GROWTH * base).then_some(energy / base)
-    }
-}
-
-/// The largest increment at which mode `m` alone is stable under `treatment`.
-fn limit(m: &Mode, treatment: DampingTreatment) -> f64 {
-    match treatment {
-        DampingTreatment::Centred => 2.0 / m.omega,
-        DampingTreatment::Lagged => (2.0 / m.omega) * ((1.0 + m.zeta * m.zeta).sqrt() - m.zeta),
     }
 }

@@ -65,12 +65,12 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 }
                 out.contact[k] = f;
                 out.gap[k] = d;
-                out.p[c.particle] += n * f;
-                out.b[c.body] -= n * f;
-                out.m[c.body] -= S::moment(&self.contact_arm(cfg, k), &n) * f;
+                self.push_along(cfg, k, n, f, out);
             }
         }
-        self.apply_loads(cfg, out);
+        for l in &self.loads {
+            self.apply(cfg, &l.point, l.force, out);
+        }
         out.elastic = elastic;
     }
 
@@ -104,8 +104,14 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// Add a normal force `f` (positive: pushing the node out of its surface) on pair `k` to
     /// `out`, as the penalty acts.
     pub fn push_along_normal(&self, cfg: &Config<S>, k: usize, f: f64, out: &mut Forces<S>) {
-        let c = &self.contacts[k];
         let (_, n) = self.gap(cfg, k);
+        self.push_along(cfg, k, n, f, out);
+    }
+
+    /// Add a force `f` along `n` on pair `k`'s node, and its reaction on the body, to `out`.
+    #[inline(always)]
+    fn push_along(&self, cfg: &Config<S>, k: usize, n: S::V, f: f64, out: &mut Forces<S>) {
+        let c = &self.contacts[k];
         out.p[c.particle] += n * f;
         out.b[c.body] -= n * f;
         out.m[c.body] -= S::moment(&self.contact_arm(cfg, k), &n) * f;
@@ -114,14 +120,6 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// One over the mass pair `k`'s normal force moves (the body's turning left out).
     pub fn contact_inverse_mass(&self, k: usize) -> f64 {
         self.contacts[k].inverse_mass
-    }
-
-    /// Add the loads to `out`.
-    #[inline(always)]
-    pub(super) fn apply_loads(&self, cfg: &Config<S>, out: &mut Forces<S>) {
-        for l in &self.loads {
-            self.apply(cfg, &l.point, l.force, out);
-        }
     }
 
     /// Add dashpot forces at velocities `vel` to `out`, and their dissipation power.
@@ -156,12 +154,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// not normalised.
     #[inline(always)]
     pub fn dashpot_span(&self, cfg: &Config<S>, k: usize) -> S::V {
-        self.span(cfg, &self.dashpots[k])
-    }
-
-    /// The vector from end a to end b of two-point element `s` at `cfg`.
-    #[inline(always)]
-    pub(super) fn span(&self, cfg: &Config<S>, s: &TwoPoint<S>) -> S::V {
+        let s = &self.dashpots[k];
         s.span0 + (self.displacement(cfg, &s.b) - self.displacement(cfg, &s.a))
     }
 
@@ -258,9 +251,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             power += c.damping * rate * rate;
             let f = -c.damping * rate;
             out.contact[k] += f;
-            out.p[c.particle] += n * f;
-            out.b[c.body] -= n * f;
-            out.m[c.body] -= S::moment(&self.contact_arm(cfg, k), &n) * f;
+            self.push_along(cfg, k, n, f, out);
         }
         out.dissipation = power;
     }

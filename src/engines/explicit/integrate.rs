@@ -8,15 +8,18 @@
 use super::diagnosis::{PAST_LIMIT_GROWTH, PastLimit, growing_mode};
 use super::impacts::ImpactWork;
 use super::linear::{StableIncrement, static_step};
-use super::model::{Config, Constraints, ContactMode, Counters, Forces, Model, Rates};
+use super::model::{
+    Config, Constraints, ContactMode, Counters, Forces, Model, Point, Rates, SolidPosition,
+};
 use super::rows::{RowSampler, note_impacts};
 use super::space::{Lin, Space};
 use super::start::consistent_start;
-use super::velocity::{Velocities, VelocityRule};
+use super::velocity::{AtIncrement, Velocities, VelocityRule};
 use crate::contract::ENERGY_COLUMNS;
 use crate::engines::{EngineError, History};
 use crate::scene::{
-    ContactStart, DampingTreatment, IncrementRule, Probe, Scene, SceneSettings, StepKind,
+    ContactStart, DEFAULT_SAFETY, DampingTreatment, IncrementRule, Probe, Scene, SceneSettings,
+    StepKind, Surface,
 };
 
 /// The outcome of an explicit run.
@@ -83,24 +86,29 @@ pub fn stable_increment<S: Space, const FINITE: bool>(
         if !matches!(step.kind, StepKind::Dynamic { .. }) {
             continue;
         }
-        let held = model.constraints(scene, step);
-        if model.free_dofs(&held).len() > DENSE_LIMIT
-            && let Some((lambda, gamma)) = model.frequency_bound(cfg, &held)
-        {
-            if let Some(s) = StableIncrement::from_bound(lambda, gamma, treatment)
-                && best.is_none_or(|b| s.increment < b.increment)
-            {
-                best = Some(s);
-            }
-            continue;
-        }
-        let closed = model.linearise(cfg, &held, true, counters).modes();
-        let open = if model.contact_count() > 0 {
-            model.linearise(cfg, &held, false, counters).modes()
+        let held = model.constraints(step);
+        let dense = model.free_dofs(&held).len() <= DENSE_LIMIT;
+        let bound = if dense {
+            None
         } else {
-            closed.clone()
+            model.frequency_bound(cfg, &held)
         };
-        if let Some(s) = StableIncrement::from_modes(&closed, &open, treatment)
+        let stable = if let Some((lambda, gamma)) = bound {
+            StableIncrement::from_bound(lambda, gamma, treatment)
+        } else {
+            let closed = model
+                .linearise(cfg, &held, ContactMode::Bilateral, counters)
+                .modes();
+            let open = if !model.contacts.is_empty() {
+                model
+                    .linearise(cfg, &held, ContactMode::Off, counters)
+                    .modes()
+            } else {
+                closed.clone()
+            };
+            StableIncrement::from_modes(&closed, &open, treatment)
+        };
+        if let Some(s) = stable
             && best.is_none_or(|b| s.increment < b.increment)
         {
             best = Some(s);
@@ -141,7 +149,7 @@ pub(crate) fn choose_increment(
             };
         }
         IncrementRule::Accuracy(eps) => {
-            let cap = crate::scene::DEFAULT_SAFETY * limit;
+            let cap = DEFAULT_SAFETY * limit;
             match stable {
                 Some(s) if s.omega_structure > 0.0 => (24.0 * eps
                     / (s.omega_structure.powi(3) * duration))
@@ -153,7 +161,7 @@ pub(crate) fn choose_increment(
         IncrementRule::Stable { safety } => (safety * limit).min(interval),
         // Resolved by the engine's pilot runs (`on_request`) before it integrates; as an
         // estimate without them, the default fraction of the stable increment.
-        IncrementRule::Tolerance(_) => (crate::scene::DEFAULT_SAFETY * limit).min(interval),
+        IncrementRule::Tolerance(_) => (DEFAULT_SAFETY * limit).min(interval),
     };
     let per_interval = (interval / h - 1e-9).ceil().max(1.0);
     Ok(interval / per_interval)
@@ -166,7 +174,7 @@ pub(crate) fn choose_increment(
 fn through_solid(scene: &Scene, k: usize, speed: f64, h: f64, t: f64) -> EngineError {
     let pair = &scene.contacts[k];
     let node = &scene.nodes[pair.node];
-    let crate::scene::Surface::Solid { solid, .. } = &pair.surface else {
+    let Surface::Solid { solid, .. } = &pair.surface else {
         unreachable!("only solids are watched")
     };
     let (shape, depth) = (solid.name(), solid.half_thickness());
@@ -196,7 +204,7 @@ pub fn integrate<S: Space, const FINITE: bool>(
     }
     let mut run = TimeLoop::new(&model, scene, settings);
     for (si, step) in scene.steps.iter().enumerate() {
-        let held = model.constraints(scene, step);
+        let held = model.constraints(step);
         match step.kind {
             StepKind::Dynamic { duration } => run.dynamic_step(si, duration, held)?,
             _ => static_step(&model, &mut run.cfg, &held, &mut run.counters)?,
@@ -253,8 +261,8 @@ struct TimeLoop<'a, S: Space, const FINITE: bool> {
     impact_work: Option<ImpactWork>,
     /// Where each solid's contact node was at the last increment (watched for a node going
     /// through its solid).
-    solid_before: Vec<Option<super::model::SolidPosition<S>>>,
-    solid_now: Vec<Option<super::model::SolidPosition<S>>>,
+    solid_before: Vec<Option<SolidPosition<S>>>,
+    solid_now: Vec<Option<SolidPosition<S>>>,
     columns: Vec<String>,
     rows: Vec<Vec<f64>>,
     sampler: RowSampler,
@@ -304,7 +312,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
             dissipated: 0.0,
             last_power: 0.0,
             past_limit: None,
-            pressed: vec![None; model.contact_count()],
+            pressed: vec![None; model.contacts.len()],
             impacts: Vec::new(),
             impact_work: None,
             solid_before: Vec::new(),
@@ -327,28 +335,21 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         let (model, scene) = (self.model, self.scene);
         for iv in &scene.initial_velocities {
             match model.points[iv.node] {
-                super::model::Point::Particle(i) => self.velocities.v_n.p[i] = S::v(&iv.velocity),
-                super::model::Point::Body { body, .. } => {
+                Point::Particle(i) => self.velocities.v_n.p[i] = S::v(&iv.velocity),
+                Point::Body { body, .. } => {
                     self.velocities.v_n.b[body] = S::v(&iv.velocity);
                     self.velocities.v_n.w[body] = S::w(&iv.angular);
                 }
-                super::model::Point::Ground(_) => {}
+                Point::Ground(_) => {}
             }
         }
         let treatment = self.settings.damping;
         self.stable = stable_increment(model, scene, &self.cfg, si, treatment, &mut self.counters);
-        let (duration, interval) = (scene.duration(), self.interval());
-        self.h = choose_increment(
-            self.settings.increment,
-            self.stable.as_ref(),
-            duration,
-            interval,
-        )?;
+        let (rule, duration, interval) =
+            (self.settings.increment, scene.duration(), self.interval());
+        self.h = choose_increment(rule, self.stable.as_ref(), duration, interval)?;
         self.sampler = RowSampler::new(&scene.output_times(), interval, self.h);
-        let dynamic_after = scene.steps[si + 1..]
-            .iter()
-            .any(|s| matches!(s.kind, StepKind::Dynamic { .. }));
-        if !self.sampler.on_steps && dynamic_after {
+        if !self.sampler.on_steps && self.dynamic_after(si) {
             return Err(EngineError::Unsupported(format!(
                 "increment {:e} does not divide the output interval {interval:e}, and the scene has more than one dynamic step: a stability study's increment must divide every step but the last",
                 self.h
@@ -364,7 +365,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         // The consistent start carries the rigid model's persistent contact forces, which
         // treat every pair as closed: only when every pair starts closed. A scene with a
         // pair open at t = 0 starts as it is.
-        if model.contact_count() > 0
+        if !model.contacts.is_empty()
             && model.closed_only()
             && self.settings.contact_start == ContactStart::Consistent
         {
@@ -415,39 +416,32 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
     /// The plan of dynamic step `si` of `duration` under `held`.
     fn plan(&self, si: usize, duration: f64, held: Constraints<S>) -> StepPlan<S> {
         let (model, h) = (self.model, self.h);
-        let velocity = VelocityRule::of(
-            model,
-            &self.cfg,
-            &held,
-            h,
-            self.settings.damping,
-            DENSE_LIMIT,
-        );
+        let velocity = VelocityRule::of(model, &self.cfg, &held, h, self.settings.damping);
         // Rows fall on increments unless a stability study asked for an increment that does
         // not divide the output interval; then every increment is a row for the sampler, and
         // the last dynamic step runs past its end to the first increment after it.
-        let on_steps = self.sampler.on_steps;
-        let stride = if on_steps {
-            (self.interval() / h).round() as u64
+        let (stride, count) = if self.sampler.on_steps {
+            let rounded = |x: f64| x.round() as u64;
+            (rounded(self.interval() / h), rounded(duration / h))
         } else {
-            1
+            (1, (duration / h - 1e-9).ceil() as u64)
         };
-        let count = if on_steps {
-            (duration / h).round() as u64
-        } else {
-            (duration / h - 1e-9).ceil() as u64
-        };
-        let last = self.scene.steps[si + 1..]
-            .iter()
-            .all(|s| !matches!(s.kind, StepKind::Dynamic { .. }));
         StepPlan {
             held,
             velocity,
             stride,
             first: self.n,
             count,
-            last,
+            last: !self.dynamic_after(si),
         }
+    }
+
+    /// Whether a dynamic step follows step `si`.
+    fn dynamic_after(&self, si: usize) -> bool {
+        let steps = &self.scene.steps[si + 1..];
+        steps
+            .iter()
+            .any(|s| matches!(s.kind, StepKind::Dynamic { .. }))
     }
 
     /// Increment n: the forces at x(n), the accelerations, a row where one falls, then
@@ -456,21 +450,11 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         let (model, h) = (self.model, self.h);
         let row = n.is_multiple_of(plan.stride);
         // Only an increment that writes a row reads the elastic energy.
+        let (cfg, mode, counters) = (&self.cfg, ContactMode::Unilateral, &mut self.counters);
         if row {
-            model.forces(
-                &self.cfg,
-                ContactMode::Unilateral,
-                &mut self.forces,
-                &mut self.counters,
-            );
+            model.forces(cfg, mode, &mut self.forces, counters);
         } else {
-            let forces = &mut self.forces;
-            model.forces_with::<false>(
-                &self.cfg,
-                ContactMode::Unilateral,
-                forces,
-                &mut self.counters,
-            );
+            model.forces_with::<false>(cfg, mode, &mut self.forces, counters);
         }
         note_impacts(
             &mut self.pressed,
@@ -478,7 +462,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
             (n, h),
             &mut self.impacts,
         );
-        if model.contact_count() > 0 {
+        if !model.contacts.is_empty() {
             let forces = &mut self.forces;
             let work = self
                 .impact_work
@@ -492,17 +476,18 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         let power = if restart {
             self.restart(plan)
         } else {
-            plan.velocity.accelerations(
+            let at = AtIncrement {
                 model,
-                &self.cfg,
-                &self.forces,
-                (&self.v_half, &self.acc_prev),
+                cfg: &self.cfg,
+                forces: &self.forces,
+                v_half: &self.v_half,
+                acc_prev: &self.acc_prev,
                 h,
-                &plan.held,
-                &mut self.velocities,
-                &mut self.acc,
-                &mut self.counters,
-            )?
+                held: &plan.held,
+            };
+            let (work, acc) = (&mut self.velocities, &mut self.acc);
+            plan.velocity
+                .accelerations(&at, work, acc, &mut self.counters)?
         };
         if n > 0 {
             self.dissipated += 0.5 * h * (self.last_power + power);

@@ -49,6 +49,18 @@ pub struct StableIncrement {
     pub omega_structure: f64,
 }
 
+impl Mode {
+    /// The largest increment at which this mode alone is stable under `treatment`.
+    pub fn limit(&self, treatment: DampingTreatment) -> f64 {
+        match treatment {
+            DampingTreatment::Centred => 2.0 / self.omega,
+            DampingTreatment::Lagged => {
+                (2.0 / self.omega) * ((1.0 + self.zeta * self.zeta).sqrt() - self.zeta)
+            }
+        }
+    }
+}
+
 const PERTURBATION: f64 = 1e-6;
 
 impl<S: Space, const FINITE: bool> Model<S, FINITE> {
@@ -86,22 +98,18 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         (&k + k.transpose()) * 0.5
     }
 
-    /// Linearise about `cfg` under `held`, with contacts closed (bilateral) or off.
+    /// Linearise about `cfg` under `held`, with contacts closed (`ContactMode::Bilateral`) or
+    /// off (`ContactMode::Off`).
     pub fn linearise(
         &self,
         cfg: &Config<S>,
         held: &Constraints<S>,
-        contacts: bool,
+        mode: ContactMode,
         counters: &mut Counters,
     ) -> Linearised<S> {
         let dofs = self.free_dofs(held);
         let n = dofs.len();
         let mass = DMatrix::from_fn(n, n, |i, j| self.mass_entry(cfg, &dofs[i], &dofs[j]));
-        let mode = if contacts {
-            ContactMode::Bilateral
-        } else {
-            ContactMode::Off
-        };
         let stiffness = self.stiffness(cfg, &dofs, mode, counters);
         let mut damping = DMatrix::zeros(n, n);
         if self.has_dashpots() {
@@ -176,19 +184,35 @@ impl StableIncrement {
             return None;
         }
         let omega = lambda.sqrt();
-        let undamped = 2.0 / omega;
         let lagged = 2.0 / ((lambda + 0.25 * gamma * gamma).sqrt() + 0.5 * gamma);
-        Some(StableIncrement {
+        Some(Self::of(
+            (omega, 0.5 * gamma / omega),
+            lagged,
+            omega,
+            treatment,
+        ))
+    }
+
+    /// The limits of the highest mode `(ω, ζ)`, with the lagged limit `lagged` and the
+    /// structure's highest frequency `omega_structure`.
+    fn of(
+        (omega, zeta): (f64, f64),
+        lagged: f64,
+        omega_structure: f64,
+        treatment: DampingTreatment,
+    ) -> Self {
+        let undamped = 2.0 / omega;
+        StableIncrement {
             omega_max: omega,
-            zeta: 0.5 * gamma / omega,
+            zeta,
             undamped,
             lagged,
             increment: match treatment {
                 DampingTreatment::Centred => undamped,
                 DampingTreatment::Lagged => lagged,
             },
-            omega_structure: omega,
-        })
+            omega_structure,
+        }
     }
 
     /// From the modes with contact closed and the modes of the structure alone.
@@ -198,23 +222,18 @@ impl StableIncrement {
         treatment: DampingTreatment,
     ) -> Option<Self> {
         let top = modes.iter().find(|m| m.omega > 0.0)?;
-        let undamped = 2.0 / top.omega;
         let lagged = modes
             .iter()
             .filter(|m| m.omega > 0.0)
-            .map(|m| (2.0 / m.omega) * ((1.0 + m.zeta * m.zeta).sqrt() - m.zeta))
+            .map(|m| m.limit(DampingTreatment::Lagged))
             .fold(f64::INFINITY, f64::min);
-        Some(StableIncrement {
-            omega_max: top.omega,
-            zeta: top.zeta,
-            undamped,
+        let omega_structure = structure.first().map_or(top.omega, |m| m.omega);
+        Some(Self::of(
+            (top.omega, top.zeta),
             lagged,
-            increment: match treatment {
-                DampingTreatment::Centred => undamped,
-                DampingTreatment::Lagged => lagged,
-            },
-            omega_structure: structure.first().map_or(top.omega, |m| m.omega),
-        })
+            omega_structure,
+            treatment,
+        ))
     }
 }
 

@@ -17,7 +17,7 @@ pub mod start;
 pub mod velocity;
 
 use super::{Engine, EngineError, RunInfo, RunOutput, RunSettings};
-use crate::scene::{Dimension, IncrementRule, Scene, SceneSettings};
+use crate::scene::{ContactState, Dimension, Dof, IncrementRule, Scene, SceneSettings, StepKind};
 use integrate::{Integration, integrate};
 use space::{Planar, Spatial};
 use std::collections::BTreeMap;
@@ -61,24 +61,24 @@ impl ExplicitEngine {
 /// that stays (its error is the model's, measured against the closed form).
 fn small_rotation_applies(scene: &Scene) -> Result<(), EngineError> {
     let rotations: &[usize] = match scene.dimension {
-        crate::scene::Dimension::Two => &[2],
-        crate::scene::Dimension::Three => &[0, 1, 2],
+        Dimension::Two => &[2],
+        Dimension::Three => &[0, 1, 2],
     };
     for pair in &scene.contacts {
-        if pair.initially != crate::scene::ContactState::Open {
+        if pair.initially != ContactState::Open {
             continue;
         }
         let reference = scene.bodies[pair.body].reference;
         let turns = scene
             .steps
             .iter()
-            .filter(|s| matches!(s.kind, crate::scene::StepKind::Dynamic { .. }))
+            .filter(|s| matches!(s.kind, StepKind::Dynamic { .. }))
             .any(|s| {
                 rotations.iter().any(|&axis| {
                     // Held where it is; a prescribed turn moves the arm as much as a free one.
                     !s.conditions.iter().any(|c| {
                         c.node == reference
-                            && c.dof == crate::scene::Dof::Rotation(axis)
+                            && c.dof == Dof::Rotation(axis)
                             && c.value.is_none_or(|v| v == 0.0)
                     })
                 })
@@ -113,9 +113,10 @@ impl Engine for ExplicitEngine {
         // Accuracy on request: pilot runs choose the increment and the penalty stiffness.
         let mut measures = BTreeMap::new();
         let mut pilot_increments = None;
-        let mut penalty = (!scene.contacts.is_empty())
-            .then(|| scene.penalty_stiffness(merged(scene, settings).penalty));
-        let run = match merged(scene, settings).increment {
+        let merged = merged(scene, settings);
+        let mut penalty =
+            (!scene.contacts.is_empty()).then(|| scene.penalty_stiffness(merged.penalty));
+        let run = match merged.increment {
             IncrementRule::Tolerance(eps) => {
                 let (run, choice) = on_request::run(self, scene, settings, eps)?;
                 measures.insert("requested_tolerance".to_string(), eps);
@@ -143,12 +144,8 @@ impl Engine for ExplicitEngine {
         }
         if !scene.contacts.is_empty() {
             measures.insert("impacts".to_string(), run.impacts.len() as f64);
-            for (i, t) in run
-                .impacts
-                .iter()
-                .take(crate::contract::IMPACTS_REPORTED)
-                .enumerate()
-            {
+            let reported = run.impacts.iter().take(crate::contract::IMPACTS_REPORTED);
+            for (i, t) in reported.enumerate() {
                 measures.insert(format!("impact_{}_time", i + 1), *t);
             }
         }
@@ -231,9 +228,9 @@ fn stable<S: space::Space, const FINITE: bool>(
     let first_dynamic = scene
         .steps
         .iter()
-        .position(|st| matches!(st.kind, crate::scene::StepKind::Dynamic { .. }))?;
+        .position(|st| matches!(st.kind, StepKind::Dynamic { .. }))?;
     for step in &scene.steps[..first_dynamic] {
-        let held = m.constraints(scene, step);
+        let held = m.constraints(step);
         linear::static_step(&m, &mut cfg, &held, &mut counters).ok()?;
     }
     integrate::stable_increment(&m, scene, &cfg, first_dynamic, s.damping, &mut counters)

@@ -6,13 +6,11 @@
 //! small-rotation idealisation (`explicit_small`); it is resolved at compile time.
 
 use super::body_solve::{BodyOperator, BodySolve};
-use super::space::SharedSolid;
 use super::space::{BodyInertia, Lin, Space};
 use crate::scene::{
-    Attachment, Connection, ContactPair, ContactState, Dof, Scene, StepKind, Surface,
+    Attachment, Connection, ContactPair, ContactState, Dof, Element, Scene, StepKind, Surface,
     surface_distance,
 };
-use std::marker::PhantomData;
 
 /// Where an element end or a load acts.
 #[derive(Debug, Clone, Copy)]
@@ -85,26 +83,9 @@ impl<S: Space> Rates<S> {
     }
     /// `self + s · other`.
     pub fn plus(&self, s: f64, other: &Self) -> Self {
-        Self {
-            p: self
-                .p
-                .iter()
-                .zip(&other.p)
-                .map(|(a, b)| *a + *b * s)
-                .collect(),
-            b: self
-                .b
-                .iter()
-                .zip(&other.b)
-                .map(|(a, b)| *a + *b * s)
-                .collect(),
-            w: self
-                .w
-                .iter()
-                .zip(&other.w)
-                .map(|(a, b)| *a + *b * s)
-                .collect(),
-        }
+        let mut out = self.clone();
+        out.set_plus(self, s, other);
+        out
     }
     /// In place: `self = a + s · b`.
     pub fn set_plus(&mut self, a: &Self, s: f64, b: &Self) {
@@ -178,6 +159,16 @@ impl<S: Space> Forces<S> {
             contact: vec![0.0; contacts],
             gap: vec![0.0; contacts],
         }
+    }
+    /// Copy another force set into this one (same shape).
+    pub fn copy_from(&mut self, other: &Self) {
+        self.p.copy_from_slice(&other.p);
+        self.b.copy_from_slice(&other.b);
+        self.m.copy_from_slice(&other.m);
+        self.contact.copy_from_slice(&other.contact);
+        self.gap.copy_from_slice(&other.gap);
+        self.elastic = other.elastic;
+        self.dissipation = other.dissipation;
     }
     /// Reset to zero, keeping the allocation.
     pub fn clear(&mut self) {
@@ -272,7 +263,7 @@ pub(super) struct Contact<S: Space> {
     pub(super) body: usize,
     /// A solid's centre relative to the reference node (body frame) and its parry shape; `None`
     /// for a plane.
-    pub(super) solid: Option<(S::V, SharedSolid<S>)>,
+    pub(super) solid: Option<(S::V, S::Shape)>,
     /// Contact dashpot (sized for the pair's restitution; 0 when elastic).
     pub(super) damping: f64,
     /// One over the mass the normal force moves ([`contact_mass`]).
@@ -290,32 +281,6 @@ pub(super) struct Contact<S: Space> {
     pub(super) gap0: f64,
 }
 
-impl<S: Space> Contact<S> {
-    /// A plane pair's signed gap (negative: penetration) and outward normal under finite
-    /// rotation, at its body's orientation `r`, with `relative` the node's displacement less
-    /// the body's reference node's.
-    #[inline(always)]
-    pub(super) fn plane_gap(&self, r: &S::R, relative: S::V) -> (f64, S::V) {
-        let n = S::rotate(r, &self.normal);
-        (n.dot(&self.face_to_node(r, relative)), n)
-    }
-
-    /// From the face point to the node (finite rotation), summed from small parts (the offset
-    /// at t = 0, the displacements, the face point's turn) so that a penalty stiffness does
-    /// not multiply the cancellation of body-sized positions.
-    #[inline(always)]
-    pub(super) fn face_to_node(&self, r: &S::R, relative: S::V) -> S::V {
-        (self.arm0 - self.face) + relative - S::turned(r, &self.face)
-    }
-
-    /// From the body's reference node to the node (finite rotation), with `relative` as in
-    /// [`Contact::plane_gap`].
-    #[inline(always)]
-    pub(super) fn arm(&self, relative: S::V) -> S::V {
-        self.arm0 + relative
-    }
-}
-
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Load<S: Space> {
     pub(super) point: Point<S>,
@@ -329,10 +294,6 @@ pub struct Particle<S: Space> {
     pub node: usize,
     /// Mass.
     pub mass: f64,
-    /// 1 / mass.
-    pub inverse_mass: f64,
-    /// Position at t = 0.
-    pub x0: S::V,
     /// Frame axes (DOF directions).
     pub axes: Vec<S::V>,
 }
@@ -340,8 +301,6 @@ pub struct Particle<S: Space> {
 /// A body's constant data.
 #[derive(Debug, Clone)]
 pub struct Body<S: Space> {
-    /// Scene body index.
-    pub index: usize,
     /// Reference node.
     pub node: usize,
     /// Reference position at t = 0.
@@ -509,7 +468,6 @@ pub struct Model<S: Space, const FINITE: bool> {
     pub penalty: f64,
     /// Node → point.
     pub points: Vec<Point<S>>,
-    _space: PhantomData<S>,
 }
 
 /// The contact dashpot of a pair: c = 2ζ√(k_p m), with ζ the damping ratio whose linear
@@ -567,10 +525,9 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 .map(|i| S::w(&frame.column(i).into_owned()))
                 .collect()
         };
-        for (bi, b) in scene.bodies.iter().enumerate() {
+        for b in &scene.bodies {
             let node = &scene.nodes[b.reference];
             bodies.push(Body {
-                index: bi,
                 node: b.reference,
                 x0: S::v(&node.position),
                 inertia: BodyInertia {
@@ -610,8 +567,6 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                     particles.push(Particle {
                         node: i,
                         mass: n.mass,
-                        inverse_mass: 1.0 / n.mass,
-                        x0: x,
                         axes: axes(&n.frame),
                     });
                     Point::Particle(particles.len() - 1)
@@ -627,7 +582,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             });
         }
         let x0 = |node: usize| S::v(&scene.nodes[node].position);
-        let grounded = |list: &[crate::scene::Element]| -> Vec<Grounded<S>> {
+        let grounded = |list: &[Element]| -> Vec<Grounded<S>> {
             list.iter()
                 .filter_map(|e| match e.connection {
                     Connection::Grounded { node, dof } => {
@@ -654,7 +609,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 })
                 .collect()
         };
-        let two_point = |list: &[crate::scene::Element]| -> Vec<TwoPoint<S>> {
+        let two_point = |list: &[Element]| -> Vec<TwoPoint<S>> {
             list.iter()
                 .filter_map(|e| {
                     let (nodes, direction, axial) = match &e.connection {
@@ -728,7 +683,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         let grounded_dashpots = grounded(&scene.dashpots);
         let dashpots = two_point(&scene.dashpots);
         Model {
-            inverse_masses: particles.iter().map(|p| p.inverse_mass).collect(),
+            inverse_masses: particles.iter().map(|p| 1.0 / p.mass).collect(),
             particles,
             bodies,
             grounded_springs,
@@ -739,7 +694,6 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             loads,
             penalty,
             points,
-            _space: PhantomData,
         }
     }
 
@@ -748,11 +702,6 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         !self.grounded_dashpots.is_empty()
             || !self.dashpots.is_empty()
             || self.has_contact_dashpots()
-    }
-
-    /// Number of contact pairs.
-    pub fn contact_count(&self) -> usize {
-        self.contacts.len()
     }
 
     /// The configuration at t = 0.
@@ -840,29 +789,18 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     #[inline(always)]
     pub fn gap(&self, cfg: &Config<S>, k: usize) -> (f64, S::V) {
         let c = &self.contacts[k];
-        let relative = cfg.u[c.particle] - cfg.bu[c.body];
         if let Some((centre, shape)) = &c.solid {
             let (d, n) = S::solid_gap(shape, &self.local(cfg, k, centre));
             return (d, self.to_world(cfg, c.body, &n));
         }
         if FINITE {
-            c.plane_gap(&cfg.br[c.body], relative)
+            let n = S::rotate(&cfg.br[c.body], &c.normal);
+            (n.dot(&self.face_to_node(cfg, k)), n)
         } else {
-            let th = &cfg.bth[c.body];
+            let (th, relative) = (&cfg.bth[c.body], cfg.u[c.particle] - cfg.bu[c.body]);
             let d = c.gap0 + c.normal.dot(&relative) - c.normal.dot(&S::cross(th, &c.arm0));
             (d, c.normal)
         }
-    }
-
-    /// The size of the terms a plane contact's gap sums under small rotation (the gap at
-    /// t = 0, the node's motion relative to the body's reference node, the turn of its arm):
-    /// the gap's rounding is a few ulps of it. Only for a plane contact under small rotation
-    /// (it reads the rotation vector, not the orientation).
-    pub fn gap_size(&self, cfg: &Config<S>, k: usize) -> f64 {
-        let c = &self.contacts[k];
-        let relative = cfg.u[c.particle] - cfg.bu[c.body];
-        let turn = S::cross(&cfg.bth[c.body], &c.arm0);
-        c.gap0.abs() + relative.dot(&relative).sqrt() + turn.dot(&turn).sqrt()
     }
 
     /// A contact node's position relative to its solid's centre, in the body frame (small
@@ -893,7 +831,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     pub(super) fn contact_arm(&self, cfg: &Config<S>, k: usize) -> S::V {
         let c = &self.contacts[k];
         if FINITE {
-            c.arm(cfg.u[c.particle] - cfg.bu[c.body])
+            c.arm0 + (cfg.u[c.particle] - cfg.bu[c.body])
         } else {
             c.arm0
         }
@@ -964,23 +902,13 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         None
     }
 
-    /// Pair `k`'s [`Contact::face_to_node`] at configuration `cfg` (finite rotation).
+    /// From plane pair `k`'s face point to its node at `cfg` (finite rotation), summed from
+    /// small parts (the offset at t = 0, the displacements, the face point's turn) so that a
+    /// penalty stiffness does not multiply the cancellation of body-sized positions.
     #[inline(always)]
     pub(super) fn face_to_node(&self, cfg: &Config<S>, k: usize) -> S::V {
         let c = &self.contacts[k];
-        c.face_to_node(&cfg.br[c.body], cfg.u[c.particle] - cfg.bu[c.body])
-    }
-}
-
-impl<S: Space> Forces<S> {
-    /// Copy another force set into this one (same shape).
-    pub fn copy_from(&mut self, other: &Self) {
-        self.p.copy_from_slice(&other.p);
-        self.b.copy_from_slice(&other.b);
-        self.m.copy_from_slice(&other.m);
-        self.contact.copy_from_slice(&other.contact);
-        self.gap.copy_from_slice(&other.gap);
-        self.elastic = other.elastic;
-        self.dissipation = other.dissipation;
+        let relative = cfg.u[c.particle] - cfg.bu[c.body];
+        (c.arm0 - c.face) + relative - S::turned(&cfg.br[c.body], &c.face)
     }
 }

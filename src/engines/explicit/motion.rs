@@ -2,17 +2,11 @@
 //! constraints, the update of velocities and positions, the kinetic energy; and the kinematics
 //! the consistent contact start sets (a pair's penetration and gap rate).
 
+use super::body_solve::project;
 use super::model::*;
-use super::space::{BodyInertia, Lin, SharedSolid, Space, compensated_add};
+use super::space::{BodyInertia, Lin, Space, compensated_add};
 
 impl<S: Space, const FINITE: bool> Model<S, FINITE> {
-    /// Mass properties of a body at `cfg` (centre in world axes, inertia in the body's axes
-    /// with the orientation).
-    #[inline]
-    pub fn body_inertia<'c>(&self, cfg: &'c Config<S>, b: usize) -> &'c BodyInertia<S> {
-        &cfg.inertia[b]
-    }
-
     /// Mass properties of a body at orientation `r` (finite rotation): the centre in world
     /// axes, the inertia with its orientation.
     pub(super) fn oriented(&self, b: usize, r: &S::R) -> BodyInertia<S> {
@@ -31,7 +25,8 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     }
 
     /// Accelerations from forces, with body angular velocities `omega` for the centripetal and
-    /// gyroscopic terms (finite rotation only), honouring the step's held DOFs.
+    /// gyroscopic terms (finite rotation only), honouring the step's held DOFs. No particle
+    /// force reads the velocity.
     pub fn accelerations(
         &self,
         cfg: &Config<S>,
@@ -41,17 +36,6 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         out: &mut Rates<S>,
         counters: &mut Counters,
     ) {
-        self.accelerate_particles(forces, held, out);
-        self.accelerate_bodies(cfg, forces, vel, held, out, counters);
-    }
-
-    /// The particles' part of [`Model::accelerations`] (no particle force reads the velocity).
-    pub(super) fn accelerate_particles(
-        &self,
-        forces: &Forces<S>,
-        held: &Constraints<S>,
-        out: &mut Rates<S>,
-    ) {
         for ((a, f), (inverse_mass, motion)) in out
             .p
             .iter_mut()
@@ -60,20 +44,8 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         {
             *a = held.motions[*motion as usize].project(*f * *inverse_mass);
         }
-    }
-
-    /// The bodies' part of [`Model::accelerations`].
-    pub(super) fn accelerate_bodies(
-        &self,
-        cfg: &Config<S>,
-        forces: &Forces<S>,
-        vel: &Rates<S>,
-        held: &Constraints<S>,
-        out: &mut Rates<S>,
-        counters: &mut Counters,
-    ) {
         for b in 0..self.bodies.len() {
-            let inertia = self.body_inertia(cfg, b);
+            let inertia = &cfg.inertia[b];
             let mut f = forces.b[b];
             let mut m = forces.m[b];
             if FINITE && held.velocity_terms[b] {
@@ -108,7 +80,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
 
     /// The body mass matrix applied to `(v, ω)`: `(m v + m ω×c, m c×v + I ω)`.
     pub fn body_momentum(&self, cfg: &Config<S>, b: usize, v: &S::V, w: &S::W) -> (S::V, S::W) {
-        let i = self.body_inertia(cfg, b);
+        let i = &cfg.inertia[b];
         (
             (*v + S::cross(w, &i.centre)) * i.mass,
             S::moment(&i.centre, v) * i.mass + i.apply(w),
@@ -132,19 +104,6 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         for ((x, c), v) in cfg.u.iter_mut().zip(carry.p.iter_mut()).zip(&vel.p) {
             compensated_add(x, c, *v * h);
         }
-        self.advance_bodies(cfg, carry, h, vel, held, counters);
-    }
-
-    /// The bodies' part of [`Model::advance`].
-    pub(super) fn advance_bodies(
-        &self,
-        cfg: &mut Config<S>,
-        carry: &mut Rates<S>,
-        h: f64,
-        vel: &Rates<S>,
-        held: &Constraints<S>,
-        counters: &mut Counters,
-    ) {
         for ((x, c), v) in cfg.bu.iter_mut().zip(carry.b.iter_mut()).zip(&vel.b) {
             compensated_add(x, c, *v * h);
         }
@@ -168,19 +127,11 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// Remove velocity components along held directions.
     pub fn enforce(&self, vel: &mut Rates<S>, held: &Constraints<S>) {
         for (v, h) in vel.p.iter_mut().zip(&held.particle_held) {
-            for d in h {
-                *v -= *d * d.dot(v);
-            }
+            *v = project(h, *v);
         }
         for b in 0..self.bodies.len() {
-            for d in &held.body_held_t[b] {
-                let along = d.dot(&vel.b[b]);
-                vel.b[b] -= *d * along;
-            }
-            for g in &held.body_held_r[b] {
-                let along = g.dot(&vel.w[b]);
-                vel.w[b] -= *g * along;
-            }
+            vel.b[b] = project(&held.body_held_t[b], vel.b[b]);
+            vel.w[b] = project(&held.body_held_r[b], vel.w[b]);
         }
     }
 
@@ -207,34 +158,23 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         s: f64,
     ) -> (Config<S>, Rates<S>) {
         let (s2, s3) = (0.5 * s * s, s * s * s / 6.0);
-        let turn = |b: usize| vel.w[b] * s + acc.w[b] * s2 + jerk.w[b] * s3;
-        let cfg = Config {
-            u: (0..cfg.u.len())
-                .map(|i| cfg.u[i] + vel.p[i] * s + acc.p[i] * s2 + jerk.p[i] * s3)
-                .collect(),
-            bu: (0..cfg.bu.len())
-                .map(|b| cfg.bu[b] + vel.b[b] * s + acc.b[b] * s2 + jerk.b[b] * s3)
-                .collect(),
-            br: (0..cfg.br.len())
-                .map(|b| {
-                    if FINITE {
-                        S::advance(&cfg.br[b], &turn(b))
-                    } else {
-                        cfg.br[b]
-                    }
-                })
-                .collect(),
-            br_carry: vec![S::Carry::default(); cfg.br.len()],
-            bth: (0..cfg.bth.len()).map(|b| cfg.bth[b] + turn(b)).collect(),
-            inertia: cfg.inertia.clone(),
-        };
-        let mut cfg = cfg;
-        if FINITE {
-            for b in 0..cfg.br.len() {
-                cfg.inertia[b] = self.oriented(b, &cfg.br[b]);
+        let mut out = cfg.clone();
+        for (i, u) in out.u.iter_mut().enumerate() {
+            *u = cfg.u[i] + vel.p[i] * s + acc.p[i] * s2 + jerk.p[i] * s3;
+        }
+        for (b, u) in out.bu.iter_mut().enumerate() {
+            *u = cfg.bu[b] + vel.b[b] * s + acc.b[b] * s2 + jerk.b[b] * s3;
+        }
+        for b in 0..self.bodies.len() {
+            let turn = vel.w[b] * s + acc.w[b] * s2 + jerk.w[b] * s3;
+            out.bth[b] = cfg.bth[b] + turn;
+            out.br_carry[b] = Default::default();
+            if FINITE {
+                out.br[b] = S::advance(&cfg.br[b], &turn);
+                out.inertia[b] = self.oriented(b, &out.br[b]);
             }
         }
-        (cfg, vel.plus(s, acc).plus(s2, jerk))
+        (out, vel.plus(s, acc).plus(s2, jerk))
     }
 
     /// Time derivative of a contact pair's gap.
@@ -281,10 +221,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         let c = &self.contacts[k];
         let (i, b) = (c.particle, c.body);
         if let Some((_, shape)) = &c.solid {
-            let depth = match shape {
-                SharedSolid::Planar(s, _) => s.compute_local_aabb().half_extents().min_element(),
-                SharedSolid::Spatial(s, _) => s.compute_local_aabb().half_extents().min_element(),
-            };
+            let depth = S::thinnest(shape);
             // The node's motion relative to the body point it touches: a body carrying the
             // pair fast through space does not shrink τ.
             let arm = self.contact_arm(cfg, k);

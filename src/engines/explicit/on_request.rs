@@ -37,8 +37,6 @@ pub const MAX_INCREMENTS: f64 = 1e8;
 /// What the pilots measured and what was chosen.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Choice {
-    /// The increment to run with (before shortening to divide the output interval).
-    pub increment: f64,
     /// The penalty stiffness (scenes with contact).
     pub penalty: Option<f64>,
     /// The error the model predicts for the choice (max over peak).
@@ -70,26 +68,19 @@ pub fn run(
         pilot_increments.set(pilot_increments.get() + run.steps);
         Ok(run)
     };
+    let default_rule = IncrementRule::Stable {
+        safety: DEFAULT_SAFETY,
+    };
     // At 4k the increment h/2 is within 0.9 of the stable one when h was within 0.9 of the
     // stable one at k; where it is not (a structural mode limits), 0.9 of the stable one.
     let stiffer = |h: f64, k: f64| match pilot(IncrementRule::Given(h), Some(k)) {
-        Err(EngineError::UnstableIncrement { .. }) => pilot(
-            IncrementRule::Stable {
-                safety: DEFAULT_SAFETY,
-            },
-            Some(k),
-        ),
+        Err(EngineError::UnstableIncrement { .. }) => pilot(default_rule, Some(k)),
         other => other,
     };
     let change = |a: &Integration, b: &Integration| {
         4.0 / 3.0 * contract::relative_change(scene.family, &a.history, &b.history)
     };
-    let coarse = pilot(
-        IncrementRule::Stable {
-            safety: DEFAULT_SAFETY,
-        },
-        k1,
-    )?;
+    let coarse = pilot(default_rule, k1)?;
     let h1 = coarse.increment;
     let fine = pilot(IncrementRule::Forced(h1 / 2.0), k1)?;
     let stable_at = |k: Option<f64>| {
@@ -113,7 +104,6 @@ pub fn run(
         check_increments(scene, h, eps)?;
         let run = engine.integrate(scene, &with(IncrementRule::Given(h), None))?;
         let choice = Choice {
-            increment: run.increment,
             penalty: None,
             predicted: a * run.increment * run.increment,
             pilot_increments: pilot_increments.get(),
@@ -152,7 +142,6 @@ pub fn run(
             || attempt == ATTEMPTS;
         if settled {
             let choice = Choice {
-                increment: hc,
                 penalty: Some(k),
                 predicted: estimate,
                 pilot_increments: pilot_increments.get(),

@@ -2,9 +2,8 @@
 //! compiles to 2D arithmetic only (no 3D rotation, no 6×6 solve).
 
 use crate::scene::Solid;
-use nalgebra::{Matrix3, UnitQuaternion, Vector2, Vector3};
+use nalgebra::{Matrix3, SVector, UnitQuaternion, Vector2, Vector3};
 use std::fmt::Debug;
-use std::marker::PhantomData;
 use std::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
 
 /// A linear quantity: translations (`Vector2`/`Vector3`) and angular quantities (`f64`/`Vector3`).
@@ -26,8 +25,6 @@ pub trait Lin:
     fn zero() -> Self;
     /// Inner product.
     fn dot(&self, other: &Self) -> f64;
-    /// `self`·`k` + `add`, each component in one fused multiply-add (rounded once).
-    fn fused(self, k: f64, add: Self) -> Self;
 }
 
 impl Lin for f64 {
@@ -36,10 +33,6 @@ impl Lin for f64 {
     }
     fn dot(&self, other: &Self) -> f64 {
         self * other
-    }
-    #[inline(always)]
-    fn fused(self, k: f64, add: Self) -> Self {
-        self.mul_add(k, add)
     }
 }
 
@@ -52,10 +45,6 @@ macro_rules! lin_vector {
             fn dot(&self, other: &Self) -> f64 {
                 nalgebra::Matrix::dot(self, other)
             }
-            #[inline(always)]
-            fn fused(self, k: f64, add: Self) -> Self {
-                self.zip_map(&add, |a, b| a.mul_add(k, b))
-            }
         }
     };
 }
@@ -67,16 +56,6 @@ lin_vector!(Vector3<f64>);
 #[inline]
 pub fn compensated_add<T: Lin>(x: &mut T, carry: &mut T, dx: T) {
     let y = dx - *carry;
-    let t = *x + y;
-    *carry = (t - *x) - y;
-    *x = t;
-}
-
-/// [`compensated_add`] of the increment `rate`·`h`, the product fused into Kahan's first
-/// difference (`rate`·`h` − `carry`, rounded once).
-#[inline(always)]
-pub fn compensated_add_fused<T: Lin>(x: &mut T, carry: &mut T, rate: T, h: f64) {
-    let y = rate.fused(h, -*carry);
     let t = *x + y;
     *carry = (t - *x) - y;
     *x = t;
@@ -200,35 +179,42 @@ pub trait Space: Copy + Debug + Send + Sync + 'static {
     fn free_rotations(held: &[Self::W]) -> Vec<Self::W>;
     /// Rotate a world vector into the body frame (the inverse of [`Space::rotate`]).
     fn unrotate(r: &Self::R, x: &Self::V) -> Self::V;
+    /// A parry shape of this space, shared (cheap to clone, `Send + Sync`).
+    type Shape: Clone + Debug + Send + Sync;
     /// A solid as parry builds it in this space (centred at its own origin).
-    fn solid(solid: &Solid) -> SharedSolid<Self>;
+    fn solid(solid: &Solid) -> Self::Shape;
+    /// The smallest half extent of a solid's bounding box.
+    fn thinnest(solid: &Self::Shape) -> f64;
     /// Signed distance (negative inside) from `local` (relative to the solid's centre, in its
     /// axes) to the solid's boundary, and the outward unit normal there: parry's point
     /// projection.
-    fn solid_gap(solid: &SharedSolid<Self>, local: &Self::V) -> (f64, Self::V);
+    fn solid_gap(shape: &Self::Shape, local: &Self::V) -> (f64, Self::V);
     /// Whether the segment from `from` to `to` (local, as in [`Space::solid_gap`]) passes
     /// through the solid: parry's ray cast.
-    fn crosses(solid: &SharedSolid<Self>, from: &Self::V, to: &Self::V) -> bool;
+    fn crosses(shape: &Self::Shape, from: &Self::V, to: &Self::V) -> bool;
 }
 
-/// A parry shape of one space, shared (cheap to clone, `Send + Sync`).
-#[derive(Clone, Debug)]
-pub enum SharedSolid<S: Space> {
-    /// 2D (`parry2d-f64`).
-    Planar(parry2d_f64::shape::SharedShape, PhantomData<S>),
-    /// 3D (`parry3d-f64`).
-    Spatial(parry3d_f64::shape::SharedShape, PhantomData<S>),
-}
-
-/// The signed distance (negative inside) from a projection's distance and side.
-fn signed(distance: f64, inside: bool) -> f64 {
-    if inside { -distance } else { distance }
-}
-
-/// Whether a signed distance is inside (the normal then points from the query to the
-/// boundary, and is turned outward).
-fn projection_inside(gap: f64) -> bool {
-    gap < 0.0
+/// The signed gap at `local` and the outward unit normal there, from `at`, parry's point
+/// projection as (signed distance, vector from the nearest boundary point to `local`): that
+/// vector, turned outward where `local` is inside, or on the boundary itself (where it vanishes)
+/// the signed distance's gradient by central differences over 1e-7 of the solid's `size`.
+fn gap_and_normal<const D: usize>(
+    local: &SVector<f64, D>,
+    size: impl Fn() -> f64,
+    at: impl Fn(&SVector<f64, D>) -> (f64, SVector<f64, D>),
+) -> (f64, SVector<f64, D>) {
+    let (gap, delta) = at(local);
+    let norm = delta.norm();
+    if norm > 0.0 {
+        let n = delta / norm;
+        return (gap, if gap < 0.0 { -n } else { n });
+    }
+    let e = 1e-7 * size();
+    let n = SVector::<f64, D>::from_fn(|i, _| {
+        let step = SVector::<f64, D>::from_fn(|j, _| if i == j { e } else { 0.0 });
+        at(&(local + step)).0 - at(&(local - step)).0
+    });
+    (gap, n / n.norm())
 }
 
 /// Below this angle (rad) the increment's rotation takes its sine and cosine from their
@@ -332,59 +318,45 @@ impl Space for Planar {
         let (c, s) = (r.cos(), r.sine);
         Vector2::new(c * x.x + s * x.y, c * x.y - s * x.x)
     }
-    fn solid(solid: &Solid) -> SharedSolid<Self> {
+    fn solid(solid: &Solid) -> Self::Shape {
         use parry2d_f64::shape::SharedShape;
-        SharedSolid::Planar(
-            match *solid {
-                Solid::Ball { radius } => SharedShape::ball(radius),
-                Solid::Cuboid { half_extents: h } => SharedShape::cuboid(h.x, h.y),
-                Solid::Capsule {
-                    half_height,
-                    radius,
-                } => SharedShape::capsule_y(half_height, radius),
-                Solid::Convex { ref polytope } => {
-                    let corners: Vec<_> = polytope
-                        .corners
-                        .iter()
-                        .map(|c| parry2d_f64::math::Vector::new(c.x, c.y))
-                        .collect();
-                    SharedShape::convex_hull(&corners)
-                        .expect("validated: the corners span a convex polygon")
-                }
-            },
-            PhantomData,
-        )
+        match *solid {
+            Solid::Ball { radius } => SharedShape::ball(radius),
+            Solid::Cuboid { half_extents: h } => SharedShape::cuboid(h.x, h.y),
+            Solid::Capsule {
+                half_height,
+                radius,
+            } => SharedShape::capsule_y(half_height, radius),
+            Solid::Convex { ref polytope } => {
+                let corners: Vec<_> = polytope
+                    .corners
+                    .iter()
+                    .map(|c| parry2d_f64::math::Vector::new(c.x, c.y))
+                    .collect();
+                SharedShape::convex_hull(&corners)
+                    .expect("validated: the corners span a convex polygon")
+            }
+        }
     }
-    fn solid_gap(solid: &SharedSolid<Self>, local: &Self::V) -> (f64, Self::V) {
-        let SharedSolid::Planar(shape, _) = solid else {
-            unreachable!("a 2D model holds 2D shapes")
-        };
-        let at = |p: &Vector2<f64>| {
+    fn thinnest(shape: &Self::Shape) -> f64 {
+        shape.compute_local_aabb().half_extents().min_element()
+    }
+    fn solid_gap(shape: &Self::Shape, local: &Self::V) -> (f64, Self::V) {
+        let size = || shape.compute_local_aabb().half_extents().length();
+        gap_and_normal(local, size, |p| {
             let q = parry2d_f64::math::Vector::new(p.x, p.y);
             let projection = shape.project_local_point(q, false);
             let d = q - projection.point;
-            (
-                signed(d.length(), projection.is_inside),
-                Vector2::new(d.x, d.y),
-            )
-        };
-        let (gap, delta) = at(local);
-        let norm = delta.norm();
-        if norm > 0.0 {
-            let n = delta / norm;
-            return (gap, if projection_inside(gap) { -n } else { n });
-        }
-        let e = 1e-7 * shape.compute_local_aabb().half_extents().length();
-        let n = Vector2::new(
-            at(&(local + Vector2::x() * e)).0 - at(&(local - Vector2::x() * e)).0,
-            at(&(local + Vector2::y() * e)).0 - at(&(local - Vector2::y() * e)).0,
-        );
-        (gap, n / n.norm())
+            let distance = d.length();
+            let gap = if projection.is_inside {
+                -distance
+            } else {
+                distance
+            };
+            (gap, Vector2::new(d.x, d.y))
+        })
     }
-    fn crosses(solid: &SharedSolid<Self>, from: &Self::V, to: &Self::V) -> bool {
-        let SharedSolid::Planar(shape, _) = solid else {
-            unreachable!("a 2D model holds 2D shapes")
-        };
+    fn crosses(shape: &Self::Shape, from: &Self::V, to: &Self::V) -> bool {
         let v = |p: &Vector2<f64>| parry2d_f64::math::Vector::new(p.x, p.y);
         let ray = parry2d_f64::query::Ray::new(v(from), v(to) - v(from));
         shape.intersects_local_ray(&ray, 1.0)
@@ -392,6 +364,7 @@ impl Space for Planar {
     type V = Vector2<f64>;
     type W = f64;
     type R = Heading;
+    type Shape = parry2d_f64::shape::SharedShape;
     type Carry = [f64; 2];
     type Inertia = f64;
     const DIM: usize = 2;
@@ -554,36 +527,6 @@ impl Heading {
         1.0 + self.versine
     }
 
-    /// [`Space::advance_compensated`] of this heading by the angle `x`, with fused
-    /// multiply-adds where `x` is small (below [`TWO_TERMS`] in x²): the same series in
-    /// Estrin's form, δv = ((c·C₀ − s·S₀·x) + c·C₁·y)·y + (rest_v − s·x), each product and
-    /// sum one rounding (and likewise for s), so that from x to the new heading the chain is
-    /// four operations (x·x, two fused steps, the compensated sum) instead of six. To
-    /// round-off the same; where x² is at or above [`TWO_TERMS`], the unfused update itself.
-    #[inline(always)]
-    pub fn advanced_fused(&self, carry: &mut [f64; 2], x: f64) -> Heading {
-        let (v, s) = (self.versine, self.sine);
-        let c = 1.0 + v;
-        let y = x * x;
-        if y >= TWO_TERMS {
-            return Planar::advance_compensated(self, carry, &x);
-        }
-        let excess = ((2.0 * v + s * s) + v * v) - 2.0 * (c * carry[0] + s * carry[1]);
-        let rest_v = (-0.5 * excess).mul_add(c, -carry[0]);
-        let rest_s = (-0.5 * excess).mul_add(s, -carry[1]);
-        let inner_v = (c * COS[1]).mul_add(y, (-(s * SINC[0])).mul_add(x, c * COS[0]));
-        let inner_s = (s * COS[1]).mul_add(y, (c * SINC[0]).mul_add(x, s * COS[0]));
-        let delta_v = inner_v.mul_add(y, (-s).mul_add(x, rest_v));
-        let delta_s = inner_s.mul_add(y, c.mul_add(x, rest_s));
-        let (v1, s1) = (v + delta_v, s + delta_s);
-        carry[0] = (v1 - v) - delta_v;
-        carry[1] = (s1 - s) - delta_s;
-        Heading {
-            versine: v1,
-            sine: s1,
-        }
-    }
-
     /// θ in (−π, π].
     pub fn angle(&self) -> f64 {
         self.sine.atan2(self.cos())
@@ -671,59 +614,45 @@ impl Space for Spatial {
     fn unrotate(r: &Self::R, x: &Self::V) -> Self::V {
         x + r.turn.tr_mul(x)
     }
-    fn solid(solid: &Solid) -> SharedSolid<Self> {
+    fn solid(solid: &Solid) -> Self::Shape {
         use parry3d_f64::shape::SharedShape;
-        SharedSolid::Spatial(
-            match *solid {
-                Solid::Ball { radius } => SharedShape::ball(radius),
-                Solid::Cuboid { half_extents: h } => SharedShape::cuboid(h.x, h.y, h.z),
-                Solid::Capsule {
-                    half_height,
-                    radius,
-                } => SharedShape::capsule_y(half_height, radius),
-                Solid::Convex { ref polytope } => {
-                    let corners: Vec<_> = polytope
-                        .corners
-                        .iter()
-                        .map(|c| parry3d_f64::math::Vector::new(c.x, c.y, c.z))
-                        .collect();
-                    SharedShape::convex_hull(&corners)
-                        .expect("validated: the corners span a convex polyhedron")
-                }
-            },
-            PhantomData,
-        )
+        match *solid {
+            Solid::Ball { radius } => SharedShape::ball(radius),
+            Solid::Cuboid { half_extents: h } => SharedShape::cuboid(h.x, h.y, h.z),
+            Solid::Capsule {
+                half_height,
+                radius,
+            } => SharedShape::capsule_y(half_height, radius),
+            Solid::Convex { ref polytope } => {
+                let corners: Vec<_> = polytope
+                    .corners
+                    .iter()
+                    .map(|c| parry3d_f64::math::Vector::new(c.x, c.y, c.z))
+                    .collect();
+                SharedShape::convex_hull(&corners)
+                    .expect("validated: the corners span a convex polyhedron")
+            }
+        }
     }
-    fn solid_gap(solid: &SharedSolid<Self>, local: &Self::V) -> (f64, Self::V) {
-        let SharedSolid::Spatial(shape, _) = solid else {
-            unreachable!("a 3D model holds 3D shapes")
-        };
-        let at = |p: &Vector3<f64>| {
+    fn thinnest(shape: &Self::Shape) -> f64 {
+        shape.compute_local_aabb().half_extents().min_element()
+    }
+    fn solid_gap(shape: &Self::Shape, local: &Self::V) -> (f64, Self::V) {
+        let size = || shape.compute_local_aabb().half_extents().length();
+        gap_and_normal(local, size, |p| {
             let q = parry3d_f64::math::Vector::new(p.x, p.y, p.z);
             let projection = shape.project_local_point(q, false);
             let d = q - projection.point;
-            (
-                signed(d.length(), projection.is_inside),
-                Vector3::new(d.x, d.y, d.z),
-            )
-        };
-        let (gap, delta) = at(local);
-        let norm = delta.norm();
-        if norm > 0.0 {
-            let n = delta / norm;
-            return (gap, if projection_inside(gap) { -n } else { n });
-        }
-        let e = 1e-7 * shape.compute_local_aabb().half_extents().length();
-        let n = Vector3::from_fn(|i, _| {
-            let step = Vector3::from_fn(|j, _| if i == j { e } else { 0.0 });
-            at(&(local + step)).0 - at(&(local - step)).0
-        });
-        (gap, n / n.norm())
+            let distance = d.length();
+            let gap = if projection.is_inside {
+                -distance
+            } else {
+                distance
+            };
+            (gap, Vector3::new(d.x, d.y, d.z))
+        })
     }
-    fn crosses(solid: &SharedSolid<Self>, from: &Self::V, to: &Self::V) -> bool {
-        let SharedSolid::Spatial(shape, _) = solid else {
-            unreachable!("a 3D model holds 3D shapes")
-        };
+    fn crosses(shape: &Self::Shape, from: &Self::V, to: &Self::V) -> bool {
         let v = |p: &Vector3<f64>| parry3d_f64::math::Vector::new(p.x, p.y, p.z);
         let ray = parry3d_f64::query::Ray::new(v(from), v(to) - v(from));
         shape.intersects_local_ray(&ray, 1.0)
@@ -731,6 +660,7 @@ impl Space for Spatial {
     type V = Vector3<f64>;
     type W = Vector3<f64>;
     type R = Orientation;
+    type Shape = parry3d_f64::shape::SharedShape;
     type Carry = [f64; 4];
     type Inertia = Matrix3<f64>;
     const DIM: usize = 3;

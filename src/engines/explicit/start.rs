@@ -16,7 +16,7 @@ fn consistent_forces<S: Space, const FINITE: bool>(
     tau: f64,
     counters: &mut Counters,
 ) -> Option<(DVector<f64>, Rates<S>, DMatrix<f64>)> {
-    let n = model.contact_count();
+    let n = model.contacts.len();
     let response = |given: &[f64], counters: &mut Counters| -> (DVector<f64>, Rates<S>) {
         let mut f = model.zero_forces();
         model.forces(cfg, ContactMode::Given(given), &mut f, counters);
@@ -83,8 +83,7 @@ pub(super) fn consistent_start<S: Space, const FINITE: bool>(
     else {
         return;
     };
-    let jerk = acc_ahead.plus(-1.0, &acc_behind).plus(0.0, &zero);
-    let jerk = zero.plus(0.5 / tau, &jerk);
+    let jerk = zero.plus(0.5 / tau, &acc_ahead.plus(-1.0, &acc_behind));
     let (Some((ahead, _, _)), Some((behind, _, _))) = (at(tau, &jerk), at(-tau, &jerk)) else {
         return;
     };
@@ -94,7 +93,7 @@ pub(super) fn consistent_start<S: Space, const FINITE: bool>(
         .lu()
         .solve(&curvature)
         .unwrap_or_else(|| DVector::zeros(f0.len()));
-    for k in 0..model.contact_count() {
+    for k in 0..model.contacts.len() {
         if f0[k] > 0.0 {
             model.set_penetration(cfg, k, (f0[k] - correction[k]) / model.penalty);
             // The leapfrog's smooth solution through (q₀, v₀) moves at q̇(0) = v₀ − (h²/6)·q⃛

@@ -10,6 +10,7 @@
 //! explicit form).
 
 use super::centred::ParticleDashpots;
+use super::integrate::DENSE_LIMIT;
 use super::model::{Config, Constraints, Counters, Forces, Model, Rates, Target};
 use super::space::Space;
 use crate::engines::EngineError;
@@ -21,6 +22,18 @@ const MAX_DAMPING_ITERATIONS: usize = 100;
 /// The centred velocity iteration stops when v(n) is within this fraction of the largest
 /// velocity component of its fixed point (a few units of round-off).
 const VELOCITY_TOLERANCE: f64 = 1e-14;
+
+/// What the accelerations of increment n read: the model at x(n) with its position forces,
+/// v(n−½) and a(n−1), the increment and the step's constraints.
+pub(super) struct AtIncrement<'a, S: Space, const FINITE: bool> {
+    pub(super) model: &'a Model<S, FINITE>,
+    pub(super) cfg: &'a Config<S>,
+    pub(super) forces: &'a Forces<S>,
+    pub(super) v_half: &'a Rates<S>,
+    pub(super) acc_prev: &'a Rates<S>,
+    pub(super) h: f64,
+    pub(super) held: &'a Constraints<S>,
+}
 
 /// How one dynamic step finds v(n) and the accelerations at it.
 pub(super) enum VelocityRule<S: Space> {
@@ -75,7 +88,6 @@ impl<S: Space> VelocityRule<S> {
         held: &Constraints<S>,
         h: f64,
         treatment: DampingTreatment,
-        dense_limit: usize,
     ) -> Self {
         let velocity_terms = held.any_velocity_terms();
         if !model.has_dashpots() && !velocity_terms {
@@ -93,28 +105,23 @@ impl<S: Space> VelocityRule<S> {
         }
         let dofs = model.free_dofs(held);
         VelocityRule::Iterated {
-            affine: model.has_dashpots() && !velocity_terms && dofs.len() <= dense_limit,
+            affine: model.has_dashpots() && !velocity_terms && dofs.len() <= DENSE_LIMIT,
             solved: false,
             dofs,
         }
     }
 
-    /// The accelerations at increment time t = n·h into `acc`, from the position forces
-    /// `forces`, the half-step velocity `v_half` and the last increment's accelerations
-    /// `acc_prev`; v(n) into `work.v_n`. Returns the dashpots' dissipation power.
-    #[allow(clippy::too_many_arguments)]
+    /// The accelerations at increment time t = n·h into `acc`; v(n) into `work.v_n`. Returns
+    /// the dashpots' dissipation power.
     pub(super) fn accelerations<const FINITE: bool>(
         &mut self,
-        model: &Model<S, FINITE>,
-        cfg: &Config<S>,
-        forces: &Forces<S>,
-        (v_half, acc_prev): (&Rates<S>, &Rates<S>),
-        h: f64,
-        held: &Constraints<S>,
+        at: &AtIncrement<S, FINITE>,
         work: &mut Velocities<S>,
         acc: &mut Rates<S>,
         counters: &mut Counters,
     ) -> Result<f64, EngineError> {
+        let (model, cfg, forces) = (at.model, at.cfg, at.forces);
+        let (v_half, h, held) = (at.v_half, at.h, at.held);
         match self {
             // v(n) is formed only where a row reads it (`VelocityRule::reads_velocity`).
             VelocityRule::Absent => {
@@ -132,17 +139,7 @@ impl<S: Space> VelocityRule<S> {
                 model.accelerations(cfg, &work.total, &work.v_n, held, acc, counters);
                 Ok(work.total.dissipation)
             }
-            VelocityRule::Direct(dashpots) => Ok(dashpots.solve(
-                model,
-                cfg,
-                forces,
-                v_half,
-                h,
-                held,
-                acc,
-                Some(&mut work.v_n),
-                counters,
-            )),
+            VelocityRule::Direct(dashpots) => Ok(dashpots.solve(at, acc, &mut work.v_n, counters)),
             VelocityRule::Iterated {
                 affine,
                 solved,
@@ -150,21 +147,10 @@ impl<S: Space> VelocityRule<S> {
             } => {
                 model.dashpot_directions(cfg, &mut work.directions);
                 if !*solved {
-                    let rates = (v_half, acc_prev);
-                    let stop_diverging = *affine;
-                    if iterate(
-                        model,
-                        cfg,
-                        forces,
-                        rates,
-                        h,
-                        held,
-                        stop_diverging,
-                        work,
-                        acc,
-                        counters,
-                    ) {
-                        return Ok(dissipation(model, work));
+                    // Without dashpots `work.total` holds the position forces, whose
+                    // dissipation is 0.
+                    if iterate(at, *affine, work, acc, counters) {
+                        return Ok(work.total.dissipation);
                     }
                     // Stiff dashpots (h·|M⁻¹C|/2 ≥ 1): the iteration cannot contract, but
                     // where the map is affine it is solved directly from now on.
@@ -175,24 +161,10 @@ impl<S: Space> VelocityRule<S> {
                     }
                     *solved = true;
                 }
-                centred_affine(
-                    model, cfg, forces, v_half, h, held, dofs, work, acc, counters,
-                )?;
-                Ok(dissipation(model, work))
+                centred_affine(at, dofs, work, acc, counters)?;
+                Ok(work.total.dissipation)
             }
         }
-    }
-}
-
-/// The dashpots' dissipation power at the solved velocity (none without dashpots).
-fn dissipation<S: Space, const FINITE: bool>(
-    model: &Model<S, FINITE>,
-    work: &Velocities<S>,
-) -> f64 {
-    if model.has_dashpots() {
-        work.total.dissipation
-    } else {
-        0.0
     }
 }
 
@@ -200,19 +172,15 @@ fn dissipation<S: Space, const FINITE: bool>(
 /// v(n−½) + (h/2)·a(n−1). True when it met its tolerance (v(n) in `work.v_n`, the
 /// accelerations in `acc`, the dissipation in `work.total`); it gives up early where it
 /// diverges and `stop_diverging`.
-#[allow(clippy::too_many_arguments)]
 fn iterate<S: Space, const FINITE: bool>(
-    model: &Model<S, FINITE>,
-    cfg: &Config<S>,
-    forces: &Forces<S>,
-    (v_half, acc_prev): (&Rates<S>, &Rates<S>),
-    h: f64,
-    held: &Constraints<S>,
+    at: &AtIncrement<S, FINITE>,
     stop_diverging: bool,
     work: &mut Velocities<S>,
     acc: &mut Rates<S>,
     counters: &mut Counters,
 ) -> bool {
+    let (model, cfg, forces) = (at.model, at.cfg, at.forces);
+    let (v_half, acc_prev, h, held) = (at.v_half, at.acc_prev, at.h, at.held);
     work.guess.set_plus(v_half, 0.5 * h, acc_prev);
     work.total.copy_from(forces);
     let mut previous_change = 0.0;
@@ -258,19 +226,15 @@ fn iterate<S: Space, const FINITE: bool>(
 /// gyroscopic term): with g(v) = v(n−½) + (h/2)·a(v) = b + J·v in the free DOFs, (I − J)·v = b,
 /// J from g at the unit rates. Leaves `work` (v(n), the forces and their dissipation) and `acc`
 /// at the solution.
-#[allow(clippy::too_many_arguments)]
 fn centred_affine<S: Space, const FINITE: bool>(
-    model: &Model<S, FINITE>,
-    cfg: &Config<S>,
-    forces: &Forces<S>,
-    v_half: &Rates<S>,
-    h: f64,
-    held: &Constraints<S>,
+    at: &AtIncrement<S, FINITE>,
     dofs: &[Target<S>],
     work: &mut Velocities<S>,
     acc: &mut Rates<S>,
     counters: &mut Counters,
 ) -> Result<(), EngineError> {
+    let (model, cfg, forces) = (at.model, at.cfg, at.forces);
+    let (v_half, h, held) = (at.v_half, at.h, at.held);
     let directions = &work.directions;
     let mut map = |v: &Rates<S>, total: &mut Forces<S>, acc: &mut Rates<S>, out: &mut Rates<S>| {
         total.copy_from(forces);

@@ -20,10 +20,7 @@
 //! formed from the unnormalised `e_j`; `S + (h/2)·K` is non-singular while every |l_j| > 0.
 //! The force on the ends is `−c_j σ_j e_j` and the power `Σ c_j |l_j|² σ_j²`. No square root
 //! or normalising division is on the increment's chain. Where no line turns, `I + (h/2)·K` is
-//! the same at every increment of a step, and its inverse is formed once per step. A scene with
-//! a single dashpot (every springs seed case), turning or not, keeps its 1×1 solve in
-//! registers. (Under `explicit` the seed cases' axial dashpot is held on its line: their
-//! masses move only along it.)
+//! the same at every increment of a step, and its inverse is formed once per step.
 
 use super::model::{
     Config, Constraints, Counters, DashpotLine, Model, ParticleDashpot, Rates, fill_zero,
@@ -42,8 +39,6 @@ pub type End<S> = (usize, usize, <S as Space>::V, <S as Space>::V);
 pub struct ParticleDashpots<S: Space> {
     list: Vec<ParticleDashpot<S>>,
     /// Each dashpot's moving ends at this increment (for the whole step where no line turns).
-    /// A single turning dashpot keeps its ends in registers and leaves this, `span_squares`
-    /// and `system` unused.
     ends: Vec<End<S>>,
     /// Each dashpot's |l|² at this increment (1 for a fixed unit line).
     span_squares: [f64; MAX_DASHPOTS],
@@ -179,50 +174,6 @@ impl<S: Space> ParticleDashpots<S> {
         let k = self.list.len();
         // The centred velocity before the dashpots act, as `Rates::set_plus` forms it.
         let centred = |p: usize| v_half.p[p] + acc.p[p] * (0.5 * h);
-        if self.steady.is_none()
-            && let [dashpot] = self.list.as_slice()
-            && let DashpotLine::TwoPoint {
-                dashpot: line,
-                scale,
-            } = dashpot.line
-        {
-            // One turning line: the 1×1 system of `fill_ends` and `fill_matrix`, with the same
-            // sums in the same order, kept in registers instead of `self.ends` and
-            // `self.system` (whose stores and reloads sat on the increment's chain).
-            let l = model.dashpot_span(cfg, line) * scale;
-            let span_square = l.dot(&l);
-            let mut diagonal = span_square;
-            let mut rhs = 0.0;
-            let mut ends = [None; 2];
-            for (slot, (end, e)) in [(dashpot.a, -l), (dashpot.b, l)].into_iter().enumerate() {
-                if let Some(p) = end {
-                    let g = model.particle_response(held, p, e);
-                    diagonal += 0.5 * h * dashpot.c * e.dot(&g);
-                    rhs += e.dot(&centred(p));
-                    ends[slot] = Some((p, g));
-                }
-            }
-            let sigma = rhs * (1.0 / diagonal);
-            for (p, g) in ends.into_iter().flatten() {
-                acc.p[p] -= g * (dashpot.c * sigma);
-                v_n.p[p] = v_half.p[p] + acc.p[p] * (0.5 * h);
-            }
-            return dashpot.c * span_square * sigma * sigma;
-        }
-        if let (Some(inverse), [dashpot]) = (&self.steady, self.list.as_slice()) {
-            // One steady line: E w and σ in registers, the same sums in the same order as
-            // below (whose arrays on the stack sat on the increment's chain).
-            let mut rhs = 0.0;
-            for &(_, p, e, _) in &self.ends {
-                rhs += e.dot(&centred(p));
-            }
-            let sigma = inverse[0] * rhs;
-            for &(_, p, _, g) in &self.ends {
-                acc.p[p] -= g * (dashpot.c * sigma);
-                v_n.p[p] = v_half.p[p] + acc.p[p] * (0.5 * h);
-            }
-            return dashpot.c * self.span_squares[0] * sigma * sigma;
-        }
         // σ_j: the rates over |l_j| (the rates themselves on fixed unit lines).
         let mut sigma = [0.0; MAX_DASHPOTS];
         if let Some(inverse) = &self.steady {
@@ -231,7 +182,6 @@ impl<S: Space> ParticleDashpots<S> {
             for &(i, p, e, _) in &self.ends {
                 rhs[i] += e.dot(&centred(p));
             }
-            // k ≥ 2 here (one dashpot is solved above).
             for (j, s) in sigma[..k].iter_mut().enumerate() {
                 *s = inverse[j * k..(j + 1) * k]
                     .iter()
@@ -246,7 +196,6 @@ impl<S: Space> ParticleDashpots<S> {
             for &(i, p, e, _) in &self.ends {
                 self.system[i * width + k] += e.dot(&centred(p));
             }
-            // k ≥ 2 here: a single dashpot is either steady or turning (above).
             eliminate(&mut self.system, k, &mut sigma);
         }
         let mut power = 0.0;

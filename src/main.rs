@@ -435,17 +435,25 @@ fn progress_bar(len: u64, quiet: bool, unit: &str) -> indicatif::ProgressBar {
     bar
 }
 
-/// Write `text` to `path` and, where given, the figure to `figure`.
-fn write_study(
-    path: &Path,
+/// Print a study's `text`, write its CSV (path, text) and, where given, its figure (path,
+/// SVG), and say where.
+fn publish(
+    stdout: &mut Stdout,
     text: &str,
+    (path, csv): (PathBuf, String),
     figure: Option<(PathBuf, String)>,
-) -> Result<(), report::data::DataError> {
-    report::data::write_atomic(path, text.as_bytes())?;
-    match figure {
+) -> ExitCode {
+    stdout.print(text);
+    let written = report::data::write_atomic(&path, csv.as_bytes()).and_then(|_| match figure {
         Some((path, svg)) => report::data::write_atomic(&path, svg.as_bytes()),
         None => Ok(()),
+    });
+    if let Err(e) = written {
+        eprintln!("error: {e}");
+        return ExitCode::FAILURE;
     }
+    stdout.print(&format!("written: {}\n", path.display()));
+    ExitCode::SUCCESS
 }
 
 /// The element-cost study: run, print the model and how well it predicts, write the files.
@@ -484,20 +492,13 @@ fn element_study(target: &Path, quiet: bool, dir: &Path, stdout: &mut Stdout) ->
             return ExitCode::FAILURE;
         }
     };
-    stdout.print(&format!(
+    let text = format!(
         "explicit, ns per increment = sum of coefficient × count:\n\n{}",
         written::summary(&study)
-    ));
+    );
     let figure = written::render(&study).map(|svg| (written::figure_path(target), svg));
-    if let Err(e) = write_study(&written::csv_path(target), &written::csv(&study), figure) {
-        eprintln!("error: {e}");
-        return ExitCode::FAILURE;
-    }
-    stdout.print(&format!(
-        "written: {}\n",
-        written::csv_path(target).display()
-    ));
-    ExitCode::SUCCESS
+    let csv = (written::csv_path(target), written::csv(&study));
+    publish(stdout, &text, csv, figure)
 }
 
 /// The chain study: run, print, write the files.
@@ -519,17 +520,9 @@ fn chain_study(max_n: usize, target: &Path, quiet: bool, stdout: &mut Stdout) ->
             return ExitCode::FAILURE;
         }
     };
-    stdout.print(&written::table(&study));
     let figure = written::render(&study).map(|svg| (written::figure_path(target), svg));
-    if let Err(e) = write_study(&written::csv_path(target), &written::csv(&study), figure) {
-        eprintln!("error: {e}");
-        return ExitCode::FAILURE;
-    }
-    stdout.print(&format!(
-        "written: {}\n",
-        written::csv_path(target).display()
-    ));
-    ExitCode::SUCCESS
+    let csv = (written::csv_path(target), written::csv(&study));
+    publish(stdout, &written::table(&study), csv, figure)
 }
 
 /// Standard output that may be closed (`| head`) or full: the first failure is kept and

@@ -1,16 +1,68 @@
-//! Records the compiler's version for the report's "what was run" line.
+//! Records what the binary is, for the report's "what was run" line, when it is built (an
+//! installed binary reports itself, wherever it runs): the compiler's version and the git
+//! commit of the source, with "+ uncommitted changes" where tracked files outside `report/`
+//! differ from it.
 use std::process::Command;
+
+fn output(program: &str, args: &[&str]) -> Option<String> {
+    let out = Command::new(program).args(args).output().ok()?;
+    out.status
+        .success()
+        .then(|| String::from_utf8_lossy(&out.stdout).trim().to_string())
+}
+
+/// `commit 1234abcd5678`, with "+ uncommitted changes"; or that it is unknown (no git, or not
+/// a checkout).
+fn commit() -> String {
+    let Some(hash) = output("git", &["rev-parse", "--short=12", "HEAD"]) else {
+        return "git commit unknown".into();
+    };
+    let status = output(
+        "git",
+        &[
+            "status",
+            "--porcelain",
+            "--untracked-files=no",
+            "--",
+            ".",
+            ":!report",
+        ],
+    );
+    if status.is_some_and(|s| !s.is_empty()) {
+        format!("commit {hash} + uncommitted changes")
+    } else {
+        format!("commit {hash}")
+    }
+}
 
 fn main() {
     let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
-    let version = Command::new(rustc)
-        .arg("--version")
-        .output()
-        .ok()
-        .and_then(|o| String::from_utf8(o.stdout).ok())
-        .map(|s| s.trim().to_string())
-        .unwrap_or_else(|| "unknown".into());
+    let version = output(&rustc, &["--version"]).unwrap_or_else(|| "unknown".into());
     println!("cargo:rustc-env=CROSSCHECK_RUSTC={version}");
+    println!("cargo:rustc-env=CROSSCHECK_COMMIT={}", commit());
     println!("cargo:rerun-if-changed=build.rs");
     println!("cargo:rerun-if-env-changed=RUSTC");
+    // A new commit moves HEAD or the branch it names; staging changes the index; the tracked
+    // sources change the answer to "uncommitted changes".
+    for path in ["HEAD", "index", "packed-refs"] {
+        if let Some(p) = output("git", &["rev-parse", "--git-path", path]) {
+            println!("cargo:rerun-if-changed={p}");
+        }
+    }
+    if let Some(branch) = output("git", &["symbolic-ref", "-q", "HEAD"])
+        && let Some(p) = output("git", &["rev-parse", "--git-path", &branch])
+    {
+        println!("cargo:rerun-if-changed={p}");
+    }
+    for tracked in [
+        "src",
+        "cases",
+        "tests",
+        "benches",
+        "examples",
+        "Cargo.toml",
+        "Cargo.lock",
+    ] {
+        println!("cargo:rerun-if-changed={tracked}");
+    }
 }

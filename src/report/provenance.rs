@@ -3,7 +3,6 @@
 //! shows it (like the wall times), so `summary.json` stays byte-identical across machines.
 
 use crate::engines::RunSettings;
-use std::process::Command;
 
 /// How rapier is built, to be said wherever its time is compared: with its
 /// `enhanced-determinism` feature (Cargo.toml), and what that was measured to cost.
@@ -38,7 +37,11 @@ impl Provenance {
     /// Gather it now, for a run with `settings`.
     pub fn gather(settings: &RunSettings) -> Provenance {
         Provenance {
-            version: format!("crosscheck {} ({})", env!("CARGO_PKG_VERSION"), commit()),
+            version: format!(
+                "crosscheck {} ({})",
+                env!("CARGO_PKG_VERSION"),
+                env!("CROSSCHECK_COMMIT")
+            ),
             rustc: env!("CROSSCHECK_RUSTC").to_string(),
             rapier: rapier_versions(),
             machine: machine(),
@@ -48,40 +51,6 @@ impl Provenance {
             } else {
                 format!("overrides {settings:?}")
             },
-        }
-    }
-}
-
-fn git(args: &[&str]) -> Option<String> {
-    let out = Command::new("git")
-        .arg("-C")
-        .arg(env!("CARGO_MANIFEST_DIR"))
-        .args(args)
-        .output()
-        .ok()?;
-    out.status
-        .success()
-        .then(|| String::from_utf8_lossy(&out.stdout).trim().to_string())
-}
-
-fn commit() -> String {
-    match git(&["rev-parse", "--short=12", "HEAD"]) {
-        None => "git commit unknown".into(),
-        Some(hash) => {
-            let dirty = git(&[
-                "status",
-                "--porcelain",
-                "--untracked-files=no",
-                "--",
-                ".",
-                ":!report",
-            ])
-            .is_some_and(|s| !s.is_empty());
-            if dirty {
-                format!("commit {hash} + uncommitted changes")
-            } else {
-                format!("commit {hash}")
-            }
         }
     }
 }

@@ -435,6 +435,19 @@ fn progress_bar(len: u64, quiet: bool, unit: &str) -> indicatif::ProgressBar {
     bar
 }
 
+/// A study's result, or the exit code of its failure: interrupted, or an error said on
+/// standard error.
+fn finished<T>(study: Result<T, String>) -> Result<T, ExitCode> {
+    study.map_err(|e| {
+        if interrupt::requested() {
+            interrupted()
+        } else {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    })
+}
+
 /// Print a study's `text`, write its CSV (path, text) and, where given, its figure (path,
 /// SVG), and say where.
 fn publish(
@@ -484,13 +497,9 @@ fn element_study(target: &Path, quiet: bool, dir: &Path, stdout: &mut Stdout) ->
         bar.inc(1);
     });
     bar.finish_and_clear();
-    let study = match study {
+    let study = match finished(study) {
         Ok(s) => s,
-        Err(_) if interrupt::requested() => return interrupted(),
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::FAILURE;
-        }
+        Err(code) => return code,
     };
     let text = format!(
         "explicit, ns per increment = sum of coefficient × count:\n\n{}",
@@ -512,13 +521,9 @@ fn chain_study(max_n: usize, target: &Path, quiet: bool, stdout: &mut Stdout) ->
         bar.inc(1);
     });
     bar.finish_and_clear();
-    let study = match study {
+    let study = match finished(study) {
         Ok(s) => s,
-        Err(_) if interrupt::requested() => return interrupted(),
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::FAILURE;
-        }
+        Err(code) => return code,
     };
     let figure = written::render(&study).map(|svg| (written::figure_path(target), svg));
     let csv = (written::csv_path(target), written::csv(&study));

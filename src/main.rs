@@ -9,7 +9,7 @@
 use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand, ValueEnum};
 use crosscheck::case;
 use crosscheck::comparison::{self, work_precision};
-use crosscheck::engines::RunSettings;
+use crosscheck::engines::{Engine, RunSettings};
 use crosscheck::report::{self, staging};
 use crosscheck::run::{self, LoadError, Plan, budget, sweep};
 use crosscheck::scene::{ContactStart, DampingTreatment, Dimension, IncrementRule, PenaltyRule};
@@ -884,7 +884,7 @@ fn stopped(what: &str, e: pipeline::Stopped) -> ExitCode {
 
 fn sweep_command(args: SweepArgs, dir: &Path) -> ExitCode {
     use crosscheck::report::work_precision as written;
-    let engines = match chosen_engines(&args.engines, &sweep::ENGINES, "cannot be swept") {
+    let engines = match chosen_engines(&args.engines, "cannot be swept") {
         Ok(e) => e,
         Err(code) => return code,
     };
@@ -905,6 +905,7 @@ fn sweep_command(args: SweepArgs, dir: &Path) -> ExitCode {
         max_increments: args.max_increments,
         ..sweep::Grid::default()
     };
+    let engines: Vec<&dyn Engine> = engines.iter().map(|e| e.as_ref()).collect();
     let sweeps = work_precision::measure(&plan, &outcome, &engines, &grid, !args.quiet);
     if interrupt::requested() {
         return interrupted();
@@ -925,8 +926,7 @@ fn sweep_command(args: SweepArgs, dir: &Path) -> ExitCode {
 
 fn stability_command(args: StabilityArgs, dir: &Path) -> ExitCode {
     use crosscheck::report::stability as written;
-    use crosscheck::run::stability;
-    let engines = match chosen_engines(&args.engines, &stability::ENGINES, "has no stability map") {
+    let engines = match chosen_engines(&args.engines, "has no stability map") {
         Ok(e) => e,
         Err(code) => return code,
     };
@@ -943,6 +943,7 @@ fn stability_command(args: StabilityArgs, dir: &Path) -> ExitCode {
     if interrupt::requested() {
         return interrupted();
     }
+    let engines: Vec<&dyn Engine> = engines.iter().map(|e| e.as_ref()).collect();
     let map = comparison::stability::measure(&plan, &outcome, &engines, !args.quiet);
     if interrupt::requested() {
         return interrupted();
@@ -957,28 +958,27 @@ fn stability_command(args: StabilityArgs, dir: &Path) -> ExitCode {
     out.finish(ExitCode::SUCCESS)
 }
 
-/// The engines named in `asked` among `allowed` (all of them when none is named); an engine
-/// outside them is an error (exit 2) saying `refusal` and listing the allowed ones.
-fn chosen_engines(
-    asked: &[String],
-    allowed: &[&'static str],
-    refusal: &str,
-) -> Result<Vec<&'static str>, ExitCode> {
+/// The engines named in `asked` among those that step in time (all of them when none is
+/// named); another is an error (exit 2) saying `refusal` and listing those that step.
+fn chosen_engines(asked: &[String], refusal: &str) -> Result<Vec<Box<dyn Engine>>, ExitCode> {
+    let allowed: Vec<Box<dyn Engine>> = crosscheck::engines::all()
+        .into_iter()
+        .filter(|e| e.stepping().is_some())
+        .collect();
     if asked.is_empty() {
-        return Ok(allowed.to_vec());
+        return Ok(allowed);
     }
+    let names: Vec<&str> = allowed.iter().map(|e| e.name()).collect();
     asked
         .iter()
         .map(|name| {
-            allowed
-                .iter()
-                .find(|e| **e == name.trim())
-                .copied()
+            crosscheck::engines::named(name.trim())
+                .filter(|e| e.stepping().is_some())
                 .ok_or_else(|| {
                     eprintln!(
                         "error: `{}` {refusal}; engines that step in time: {}",
                         name.trim(),
-                        allowed.join(", ")
+                        names.join(", ")
                     );
                     ExitCode::from(2)
                 })

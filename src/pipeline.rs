@@ -4,7 +4,7 @@
 //! module is the last in the flow (it uses the modules before it, and none of them uses it).
 
 use crate::comparison::{self, discrepancy, work_precision};
-use crate::engines::{self, RunSettings};
+use crate::engines::{self, Engine, RunSettings};
 use crate::interrupt;
 use crate::report::data::DataError;
 use crate::report::staging::Staging;
@@ -138,7 +138,7 @@ fn measure(
     started: Instant,
     times: &mut StageTimes,
 ) -> Result<Measured, Stopped> {
-    let names: Vec<&str> = plan.engines.iter().map(|e| e.name()).collect();
+    let engines: Vec<&dyn Engine> = plan.engines.iter().map(|e| e.as_ref()).collect();
     let seeds = crate::case::discover(cases_dir).unwrap_or_default();
     let is_seed = |s: &Scene| {
         seeds
@@ -158,21 +158,21 @@ fn measure(
                 repeat,
                 ..sweep::Grid::default()
             };
-            work_precision::measure(&sweep_plan, outcome, &names, &grid, progress)
+            work_precision::measure(&sweep_plan, outcome, &engines, &grid, progress)
         }
         None => Vec::new(),
     };
     times.swept = seconds_since(started);
     stop_if_interrupted()?;
     let maps = if studies.stability {
-        comparison::stability::measure(plan, outcome, &names, progress)
+        comparison::stability::measure(plan, outcome, &engines, progress)
     } else {
         Default::default()
     };
     times.mapped = seconds_since(started);
     stop_if_interrupted()?;
     let requests = if studies.on_request {
-        comparison::on_request::measure(&seed_plan, outcome, &names, progress)
+        comparison::on_request::measure(&seed_plan, outcome, &engines, progress)
     } else {
         Vec::new()
     };

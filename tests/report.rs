@@ -1,5 +1,7 @@
 //! A run writes summary.json and REPORT.md whose numbers agree with each other and with the
 //! CSVs they were computed from.
+mod common;
+
 use crosscheck::case;
 use crosscheck::comparison;
 use crosscheck::report::data::read_history;
@@ -88,7 +90,7 @@ fn sweep_orders_and_floors_are_in_the_summary_and_the_report() {
             .lines()
             .find(|l| l.starts_with(&format!("| {} | ", c.id)))
             .unwrap_or_else(|| panic!("{}: no order row in REPORT.md", c.id));
-        for engine in crosscheck::run::sweep::ENGINES {
+        for engine in common::STEPPING {
             let r = c.runs.iter().find(|r| r.engine == engine).unwrap();
             if let Some(p) = r.observed_order {
                 let fit = r.order_fit.as_ref().unwrap();
@@ -365,7 +367,7 @@ fn the_stability_map_is_in_the_report_and_matches_its_csvs() {
     let (out, _, report) = run_into_temporary_directory();
     assert!(report.contains("## Where each engine stays stable"));
     let csv = std::fs::read_to_string(out.path().join("stability.csv")).unwrap();
-    for engine in crosscheck::run::stability::ENGINES {
+    for engine in common::STEPPING {
         // case, engine, search, ratio, increment_s, outcome, …: the grid's rows, ratio and
         // outcome in columns 1 and 3 as the table reads them.
         let rows: Vec<Vec<&str>> = csv
@@ -407,13 +409,16 @@ fn the_stability_map_is_in_the_report_and_matches_its_csvs() {
 #[test]
 fn accuracy_on_request_is_in_the_report_and_in_band() {
     use crosscheck::report::on_request::{COLUMNS, read};
-    use crosscheck::run::on_request::{ENGINES, TOLERANCES};
+    use crosscheck::run::on_request::TOLERANCES;
     let (out, _, report) = run_into_temporary_directory();
     assert!(report.contains("## Accuracy on request"));
     let text = std::fs::read_to_string(out.path().join("on_request.csv")).unwrap();
     assert_eq!(text.lines().next(), Some(COLUMNS.join(",").as_str()));
     let requests = read(out.path());
-    assert_eq!(requests.len(), 13 * ENGINES.len() * TOLERANCES.len());
+    assert_eq!(
+        requests.len(),
+        13 * common::ON_REQUEST.len() * TOLERANCES.len()
+    );
     for r in &requests {
         let a = r.achieved.unwrap_or_else(|| {
             panic!(
@@ -512,7 +517,7 @@ fn the_first_screen_answers_the_three_questions_as_the_csvs_do() {
         |line: &str| -> Vec<String> { line.split('|').map(|c| c.trim().to_string()).collect() };
     // How close: tolerances met, as the summary counts them.
     let checks = summary.tolerance_checks();
-    for e in crosscheck::run::sweep::ENGINES {
+    for e in common::STEPPING {
         let row = first
             .iter()
             .find(|l| l.starts_with(&format!("| `{e}` |")))
@@ -558,7 +563,7 @@ fn the_first_screen_answers_the_three_questions_as_the_csvs_do() {
         .expect("a critical increment row");
     let c = cells(row);
     let csv = std::fs::read_to_string(out.path().join("stability.csv")).unwrap();
-    for (k, e) in crosscheck::run::sweep::ENGINES.iter().enumerate() {
+    for (k, e) in common::STEPPING.iter().enumerate() {
         let k_crit = run("rigid2d_pin_lumped", e)
             .critical_increment
             .as_ref()

@@ -34,7 +34,8 @@ fn sweeps() -> &'static [CaseSweep] {
             repeat: 1,
             ..sweep::Grid::default()
         };
-        work_precision::measure(&plan, &outcome, &sweep::ENGINES, &grid, false)
+        let engines = common::engines_named(&common::STEPPING);
+        work_precision::measure(&plan, &outcome, &common::refs(&engines), &grid, false)
     })
 }
 
@@ -185,7 +186,7 @@ fn a_sweep_writes_its_csvs_and_figures() {
                 "{case}: no unstable probe"
             );
         }
-        for engine in sweep::ENGINES {
+        for engine in common::STEPPING {
             assert!(rows.iter().any(|r| r[1] == engine), "{case}: no {engine}");
         }
         let svg =
@@ -213,9 +214,38 @@ fn a_plateau_is_not_a_floor() {
         repeat: 1,
         ..sweep::Grid::default()
     };
-    let swept = work_precision::measure(&plan, &outcome, &["explicit"], &grid, false);
+    let engines = common::engines_named(&["explicit"]);
+    let swept = work_precision::measure(&plan, &outcome, &common::refs(&engines), &grid, false);
     let fit = &swept[0].fits[0];
     let order = fit.observed_order.as_ref().expect("an observed order");
     assert!((1.8..=2.2).contains(&order.value), "{order:?}");
     assert!(fit.floor.is_none(), "{:?}", fit.floor);
+}
+
+/// The studies take engines by what they say of their stepping, not from a list of names: the
+/// built-in engines that step are the six the report's tables are checked for, and accuracy on
+/// request asks the two explicit ones (rapier's pilot runs are too slow for the default run).
+#[test]
+fn the_studies_run_the_engines_that_say_they_step() {
+    let all = engines::all();
+    let stepping: Vec<&str> = all
+        .iter()
+        .filter(|e| e.stepping().is_some())
+        .map(|e| e.name())
+        .collect();
+    assert_eq!(stepping, common::STEPPING);
+    let on_request: Vec<&str> = all
+        .iter()
+        .filter(|e| e.stepping().is_some_and(|s| s.on_request))
+        .map(|e| e.name())
+        .collect();
+    assert_eq!(on_request, common::ON_REQUEST);
+    // The matched rapier engines have a substeps path; the default ones and the explicit
+    // engines do not.
+    let substeps: Vec<&str> = all
+        .iter()
+        .filter(|e| e.with_substeps(2).is_some())
+        .map(|e| e.name())
+        .collect();
+    assert_eq!(substeps, ["rapier_f64", "rapier_f32"]);
 }

@@ -4,19 +4,26 @@
 
 use crate::comparison::against_own_model;
 use crate::contract::History;
+use crate::run::Engine;
 use crate::run::on_request::{self, Request};
 use crate::run::{Outcome, Plan};
 use crate::scene::Scene;
 
-/// Ask the `engines` (those of [`on_request::ENGINES`]) for every tolerance of
+/// Ask the `engines` the study asks (`Stepping::on_request`) for every tolerance of
 /// [`on_request::TOLERANCES`] on every case of `plan`, measuring errors against the exact
 /// solutions in `outcome`.
-pub fn measure(plan: &Plan, outcome: &Outcome, engines: &[&str], progress: bool) -> Vec<Request> {
+pub fn measure(
+    plan: &Plan,
+    outcome: &Outcome,
+    engines: &[&dyn Engine],
+    progress: bool,
+) -> Vec<Request> {
     let error_of =
         |scene: &Scene, engine: &str, h: &History| against_own_model(outcome, scene, engine, h);
-    let chosen: Vec<&str> = on_request::ENGINES
-        .into_iter()
-        .filter(|e| engines.contains(e))
+    let chosen: Vec<&dyn Engine> = engines
+        .iter()
+        .copied()
+        .filter(|e| e.stepping().is_some_and(|s| s.on_request))
         .collect();
     let scenes: Vec<&Scene> = plan.cases.iter().collect();
     let bar = crate::run::progress_bar(

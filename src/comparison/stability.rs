@@ -3,20 +3,18 @@
 
 use crate::comparison::against_own_model;
 use crate::contract::History;
+use crate::run::Engine;
 use crate::run::stability::{self, Map};
 use crate::run::{Outcome, Plan};
 use crate::scene::Scene;
 
-/// Map every case of `plan` for the `engines` asked for (those of [`stability::ENGINES`]),
+/// Map every case of `plan` for the `engines` that step in time ([`Engine::stepping`]),
 /// measuring errors against the exact solutions in `outcome`, and bisect each pair's critical
 /// increment ([`stability::critical`]).
-pub fn measure(plan: &Plan, outcome: &Outcome, engines: &[&str], progress: bool) -> Map {
+pub fn measure(plan: &Plan, outcome: &Outcome, engines: &[&dyn Engine], progress: bool) -> Map {
     let error_of =
         |scene: &Scene, engine: &str, h: &History| against_own_model(outcome, scene, engine, h);
-    let chosen: Vec<&str> = stability::ENGINES
-        .into_iter()
-        .filter(|e| engines.contains(e))
-        .collect();
+    let chosen = crate::run::sweep::steppers(engines);
     let all: Vec<&Scene> = plan.cases.iter().collect();
     let scenes = stability::mapped(&all);
     let bar = crate::run::progress_bar(
@@ -28,7 +26,7 @@ pub fn measure(plan: &Plan, outcome: &Outcome, engines: &[&str], progress: bool)
         bar.inc(1)
     });
     bar.set_message("critical increments");
-    let critical = stability::critical(&scenes, &points, &error_of);
+    let critical = stability::critical(&scenes, &chosen, &points, &error_of);
     bar.finish_and_clear();
     Map { points, critical }
 }

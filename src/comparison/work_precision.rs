@@ -22,6 +22,7 @@
 
 use super::{baseline, compare};
 use crate::contract::History;
+use crate::run::Engine;
 use crate::run::sweep::{self, Grid, PathKind, Status, SweepPath};
 use crate::run::{Outcome, Plan};
 use crate::scene::Scene;
@@ -194,7 +195,7 @@ fn row(case: &str, path: &SweepPath, p: &sweep::Point, duration: f64) -> Row {
 pub fn measure(
     plan: &Plan,
     outcome: &Outcome,
-    engines: &[&str],
+    engines: &[&dyn Engine],
     grid: &Grid,
     progress: bool,
 ) -> Vec<CaseSweep> {
@@ -210,14 +211,13 @@ pub fn measure(
         Some((c.worst_max?, rms))
     };
     // Per case, the engines asked for whose own model's exact solution ran.
-    let scenes: Vec<(&Scene, Vec<&str>)> = plan
+    let scenes: Vec<(&Scene, Vec<&dyn Engine>)> = plan
         .cases
         .iter()
         .map(|s| {
-            let chosen = sweep::ENGINES
+            let chosen = sweep::steppers(engines)
                 .into_iter()
-                .filter(|e| engines.contains(e))
-                .filter(|e| baseline(e).is_some_and(|b| history(&s.id, b).is_some()))
+                .filter(|e| baseline(e.name()).is_some_and(|b| history(&s.id, b).is_some()))
                 .collect();
             (s, chosen)
         })
@@ -238,8 +238,8 @@ pub fn measure(
         .map(|((scene, engines), paths)| {
             let fits = engines
                 .iter()
-                .filter(|e| paths.iter().any(|p| p.engine == **e))
-                .map(|e| fit(e, &paths, !scene.contacts.is_empty()))
+                .filter(|e| paths.iter().any(|p| p.engine == e.name()))
+                .map(|e| fit(e.name(), &paths, !scene.contacts.is_empty()))
                 .collect();
             CaseSweep {
                 case: scene.id.clone(),

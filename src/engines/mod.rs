@@ -99,7 +99,25 @@ pub enum Needs {
     StudyIncrement,
 }
 
-/// An engine.
+/// An engine: what turns a scene into a time history.
+///
+/// **What an engine provides.** [`Engine::name`] (its CSV file stem and its name in every
+/// table) and [`Engine::run`]: for a [`Scene`] and the run's overrides, a [`History`] per the
+/// output contract ([`crate::contract`]: `t`, then the scene's output columns at its output
+/// times; then, if it keeps them, the energy columns, which the stability map reads), with
+/// what the run cost ([`RunInfo`]), or [`EngineError::Unsupported`] for a scene it does not
+/// model (the report then says "not applicable", never "failed"). The rest is optional:
+/// [`Engine::stepping`] puts it in the sweep, the stability map and accuracy on request;
+/// [`Engine::needs`] asks the planner for the explicit engine's increment; [`Engine::increments`]
+/// lets the run budget refuse a run too long before it starts; [`Engine::controls`] offers
+/// control experiments.
+///
+/// **What the harness does for it.** It checks each history against the contract, measures
+/// it against the exact solution of its model (`reference`; `analytic` for `explicit_small`)
+/// with the case's tolerance for it (`[tolerances]` in the case file, by engine name), builds
+/// the discrepancy budget, sweeps and maps it as its [`Stepping`] says, and writes it into
+/// every table of the report. `examples/own_engine` is a complete engine in about 250 lines,
+/// run through all of it (`cargo run --release --example own_engine`).
 pub trait Engine: Send + Sync {
     /// Name, used as the CSV file stem and in reports.
     fn name(&self) -> &str;
@@ -114,12 +132,81 @@ pub trait Engine: Send + Sync {
     }
     /// Run a scene.
     fn run(&self, scene: &Scene, settings: &RunSettings) -> Result<RunOutput, EngineError>;
+    /// How the studies step this engine (the sweep's paths, the stability map, accuracy on
+    /// request); `None`: it does not step in time (an exact solution), and no study runs it.
+    fn stepping(&self) -> Option<Stepping> {
+        None
+    }
+    /// The same engine with `substeps` solver substeps per increment, for the sweep's substeps
+    /// path (`None`: it has no substeps).
+    fn with_substeps(&self, _substeps: usize) -> Option<Box<dyn Engine>> {
+        None
+    }
     /// Control experiments of this engine's own on `scene` (beyond the time step and the
     /// penalty stiffness, which the comparison varies on any engine): each varies one thing
     /// the exact solution does not depend on, so that a discrepancy can be traced to it.
     fn controls(&self, _scene: &Scene) -> Vec<Control> {
         Vec::new()
     }
+}
+
+/// How the studies step an engine ([`Engine::stepping`]). The sweep refines its increment
+/// from [`Stepping::coarsest`] down (one path per penalty stiffness where it has penalty
+/// contact, and a substeps path where [`Engine::with_substeps`] gives one); the stability map
+/// runs it at ratios of the explicit engine's stable increment (handed over as the engine's
+/// [`Engine::needs`] says); accuracy on request asks it for tolerances when
+/// [`Stepping::on_request`] is set.
+#[derive(Debug, Clone, Copy)]
+pub struct Stepping {
+    /// Where the sweep's increment paths start.
+    pub coarsest: Coarsest,
+    /// Its contact is a penalty whose stiffness the run sets ([`RunSettings::penalty`]): on a
+    /// scene with contact the sweep runs one increment path per penalty stiffness.
+    pub penalty: bool,
+    /// Solver substeps per increment (`None`: one), counted against the sweep's budget.
+    pub substeps: Option<usize>,
+    /// The fraction of the sweep's budget of increments one of its runs may take (1: all of
+    /// it; an engine whose increment costs ten times more takes about a tenth).
+    pub budget_share: f64,
+    /// `f64` or `f32`: the arithmetic of its state (the figures draw f32 dashed).
+    pub precision: &'static str,
+    /// How far a stable run's kinetic plus elastic energy may read above its conserved energy
+    /// at an increment of `ratio` × the explicit engine's stable increment (the stability
+    /// map's allowance before it calls a run unstable): what the engine's scheme reads at the
+    /// turns of a stable oscillation. Central differences: [`central_difference_energy_reading`].
+    pub energy_reading: fn(f64) -> f64,
+    /// The accuracy-on-request study asks it ([`IncrementRule::Tolerance`]): it chooses its
+    /// own increment for a tolerance, cheaply enough for the default run.
+    pub on_request: bool,
+}
+
+/// How far a stable central-difference run's measured energy (kinetic at v(n), plus elastic)
+/// may stand above its conserved energy at increment ratio `ratio` = h/(2/ω_max): a mode
+/// entered with velocity only (an impact) reads up to 1/(1 − (ω·h/2)²) of its energy at the
+/// turns of its discrete oscillation (25× at 0.98; checked to round-off on one mass at
+/// ω·h = 0.5 … 1.96), and falls back, bounded. 1 at and above the limit, where nothing is
+/// bounded. What [`Stepping::energy_reading`] is for the explicit engines.
+pub fn central_difference_energy_reading(ratio: f64) -> f64 {
+    if ratio < 1.0 {
+        1.0 / (1.0 - ratio * ratio)
+    } else {
+        1.0
+    }
+}
+
+/// Where the sweep's increment paths of an engine start ([`Stepping::coarsest`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Coarsest {
+    /// This fraction of the engine's own stable increment ([`IncrementRule::Stable`]); the
+    /// path also runs once just above that increment, which must come back unstable.
+    Stable {
+        /// The fraction (0, 1].
+        safety: f64,
+    },
+    /// The case's output interval.
+    OutputInterval,
+    /// This increment (s), the engine's own default.
+    Increment(f64),
 }
 
 /// What a control experiment varies: the suspected cause of a discrepancy.

@@ -5,7 +5,7 @@
 
 use super::format::sci;
 use super::provenance::Provenance;
-use super::summary::{CaseSummary, EngineSummary, Summary};
+use super::summary::{CaseSummary, EngineSummary, Summary, ToleranceCheck};
 use crate::comparison::EXACT_SOLUTIONS;
 use crate::comparison::work_precision::{CostToAccuracy, Reached};
 use std::fmt::Write;
@@ -153,8 +153,7 @@ fn conclusions(w: &mut String, s: &Summary, engines: &[&str]) {
         .iter()
         .map(|e| {
             let mine: Vec<_> = checks.iter().filter(|c| c.engine == *e).collect();
-            let met = mine.iter().filter(|c| c.met()).count();
-            format!("`{e}` {met} of {}", mine.len())
+            format!("`{e}` {}", met_of(&mine))
         })
         .collect();
     let mut lines = vec![format!(
@@ -264,6 +263,21 @@ fn conclusions(w: &mut String, s: &Summary, engines: &[&str]) {
     let _ = writeln!(w, "{}\n", lines.join(" "));
 }
 
+/// How many of an engine's cells meet their tolerance, saying how many have none declared
+/// (a user's engine, until its cases declare one).
+fn met_of(cells: &[&ToleranceCheck]) -> String {
+    let met = cells.iter().filter(|c| c.met()).count();
+    let without = cells.iter().filter(|c| c.tolerance.is_none()).count();
+    match without {
+        0 => format!("{met} of {}", cells.len()),
+        n if n == cells.len() => format!("{met} of {n} (none has a tolerance declared)"),
+        n => format!(
+            "{met} of {} ({n} without a tolerance declared)",
+            cells.len()
+        ),
+    }
+}
+
 /// One row per engine: tolerances, errors, cost against `explicit`, stability, flags.
 fn engine_table(w: &mut String, s: &Summary, engines: &[&str]) {
     let checks = s.tolerance_checks();
@@ -274,7 +288,6 @@ fn engine_table(w: &mut String, s: &Summary, engines: &[&str]) {
     let _ = writeln!(w, "|---|---:|---:|---|---|---|---|---|");
     for e in engines {
         let mine: Vec<_> = checks.iter().filter(|c| c.engine == *e).collect();
-        let met = mine.iter().filter(|c| c.met()).count();
         let errs = errors(s, e);
         let values: Vec<f64> = errs.iter().map(|x| x.0).collect();
         let worst = errs
@@ -324,10 +337,10 @@ fn engine_table(w: &mut String, s: &Summary, engines: &[&str]) {
                 }
             }
         };
+        let met = met_of(&mine);
         let _ = writeln!(
             w,
-            "| `{e}` | {met} of {} | {} | {worst} | {} | {} | {crit_cell} | {} |",
-            mine.len(),
+            "| `{e}` | {met} | {} | {worst} | {} | {} | {crit_cell} | {} |",
             median(&values).map_or("–".into(), sci),
             ratio_cell(1e-2),
             ratio_cell(1e-4),

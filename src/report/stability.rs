@@ -5,7 +5,7 @@
 
 use crate::report::format::csv_finite as number;
 use crate::run::stability::{
-    BISECTION_WIDTH, Bound, Critical, ENERGY_GROWTH_LIMIT, ENGINES, Map, Outcome, Point, RATIOS,
+    BISECTION_WIDTH, Bound, Critical, ENERGY_GROWTH_LIMIT, Map, Outcome, Point, RATIOS,
 };
 use plotters::prelude::*;
 use std::fmt::Write;
@@ -319,11 +319,16 @@ pub fn write(out: &Path, map: &Map) -> Result<(), crate::report::data::DataError
     all.critical.retain(|c| !ran(&c.engine));
     all.points.extend(map.points.iter().cloned());
     all.critical.extend(map.critical.iter().cloned());
-    let order = |e: &str| ENGINES.iter().position(|x| *x == e);
+    let known: Vec<String> = crate::engines::all()
+        .iter()
+        .map(|e| e.name().to_string())
+        .collect();
+    // The registry's engines in its order, then any other (a user's) in the order met.
+    let order = |e: &str| known.iter().position(|x| x == e).unwrap_or(known.len());
     all.points.sort_by_key(|p| order(&p.engine));
     all.critical.sort_by_key(|c| order(&c.engine));
     write_atomic(&csv_path(out), csv(&all).as_bytes())?;
-    for engine in ENGINES {
+    for engine in engines_of(map.points.iter().map(|p| p.engine.as_str())) {
         let mine: Vec<&Point> = map.points.iter().filter(|p| p.engine == engine).collect();
         if mine.is_empty() {
             continue;
@@ -336,18 +341,29 @@ pub fn write(out: &Path, map: &Map) -> Result<(), crate::report::data::DataError
     Ok(())
 }
 
-/// The map's runs per engine, in [`ENGINES`] order.
-fn by_engine(map: &Map) -> Vec<(&'static str, Vec<Point>)> {
-    ENGINES
-        .iter()
+/// The engines of `names`, each once, in the order met.
+fn engines_of<'a>(names: impl Iterator<Item = &'a str>) -> Vec<&'a str> {
+    let mut engines: Vec<&str> = Vec::new();
+    for n in names {
+        if !engines.contains(&n) {
+            engines.push(n);
+        }
+    }
+    engines
+}
+
+/// The map's runs per engine, in the map's order.
+fn by_engine(map: &Map) -> Vec<(&str, Vec<Point>)> {
+    engines_of(map.points.iter().map(|p| p.engine.as_str()))
+        .into_iter()
         .map(|e| {
             let mine: Vec<Point> = map
                 .points
                 .iter()
-                .filter(|p| p.engine == *e)
+                .filter(|p| p.engine == e)
                 .cloned()
                 .collect();
-            (*e, mine)
+            (e, mine)
         })
         .filter(|(_, p)| !p.is_empty())
         .collect()
@@ -359,11 +375,7 @@ pub fn critical_table(w: &mut String, map: &Map) {
     if map.critical.is_empty() {
         return;
     }
-    let engines: Vec<&str> = ENGINES
-        .iter()
-        .copied()
-        .filter(|e| map.critical.iter().any(|c| c.engine == *e))
-        .collect();
+    let engines = engines_of(map.critical.iter().map(|c| c.engine.as_str()));
     let mut cases: Vec<&str> = map.critical.iter().map(|c| c.case.as_str()).collect();
     cases.sort_unstable();
     cases.dedup();

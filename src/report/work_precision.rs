@@ -224,7 +224,8 @@ pub fn render(sweep: &CaseSweep, tolerances: &BTreeMap<String, f64>) -> Option<S
         }
         // Each engine: every setting a faint dot, its own Pareto front a line.
         let mut entries: Vec<(String, RGBColor)> = Vec::new();
-        for engine in crate::run::sweep::ENGINES {
+        for engine in engines_of(rows.iter()) {
+            let engine = engine.as_str();
             let mine: Vec<Row> = rows
                 .iter()
                 .filter(|r| r.engine == engine)
@@ -423,14 +424,22 @@ pub fn reach_cell(rows: &[Row], engine: &str, target: f64, setting: bool) -> Str
     }
 }
 
+/// The engines of sweep rows, in the order they first appear (the run's engine order).
+fn engines_of<'a>(rows: impl Iterator<Item = &'a Row>) -> Vec<String> {
+    let mut engines: Vec<String> = Vec::new();
+    for r in rows {
+        if !engines.contains(&r.engine) {
+            engines.push(r.engine.clone());
+        }
+    }
+    engines
+}
+
 /// The report's section on what accuracy costs: how the sweep works, then per case and engine
 /// the observed order and floor, and the CPU time to 1e-4 of the peak.
 pub fn overview(w: &mut String, s: &crate::report::summary::Summary, sweeps: &SweepRows) {
     use std::fmt::Write;
-    let engines: Vec<&str> = crate::run::sweep::ENGINES
-        .into_iter()
-        .filter(|e| sweeps.values().flatten().any(|r| r.engine == *e))
-        .collect();
+    let engines = engines_of(sweeps.values().flatten());
     if engines.is_empty() {
         return;
     }
@@ -450,7 +459,7 @@ pub fn overview(w: &mut String, s: &crate::report::summary::Summary, sweeps: &Sw
          the budget). {}\n",
         grid.stall,
         grid.max_increments,
-        grid.max_increments * crate::run::sweep::RAPIER_SHARE,
+        grid.max_increments * crate::engines::rapier::SWEEP_BUDGET_SHARE,
         grid.repeat,
         crate::report::provenance::RAPIER_BUILD
     );
@@ -518,10 +527,8 @@ pub fn case_part(w: &mut String, c: &crate::report::summary::CaseSummary, rows: 
         "| engine | observed order (increments) | floor | to 1e-2 | to 1e-4 | to 1e-6 | cheapest within the tolerance |"
     );
     let _ = writeln!(w, "|---|---|---|---:|---:|---:|---|");
-    for e in crate::run::sweep::ENGINES {
-        if !rows.iter().any(|r| r.engine == e) {
-            continue;
-        }
+    for e in engines_of(rows.iter()) {
+        let e = e.as_str();
         let run = c.runs.iter().find(|r| r.engine == e);
         let order = run
             .and_then(|r| r.order_fit.as_ref())

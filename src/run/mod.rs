@@ -29,6 +29,10 @@
 
 pub mod budget;
 pub mod controls;
+
+/// The engine trait, as the studies take engines: the comparison reaches engines only through
+/// this layer.
+pub use crate::engines::Engine;
 pub mod element_cost;
 pub mod floor;
 pub mod load;
@@ -45,7 +49,7 @@ pub use load::{
 };
 
 use crate::contract::{self, History};
-use crate::engines::{Engine, EngineError, RunInfo, RunSettings};
+use crate::engines::{EngineError, RunInfo, RunSettings};
 use crate::scene::{IncrementRule, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;

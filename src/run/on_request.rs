@@ -7,7 +7,7 @@
 use super::matching;
 use super::sweep::thread_cpu_seconds;
 use crate::contract::History;
-use crate::engines::{self, RunSettings};
+use crate::engines::{Engine, RunSettings};
 use crate::scene::{IncrementRule, Scene};
 use rayon::prelude::*;
 
@@ -16,11 +16,6 @@ use rayon::prelude::*;
 /// the finite-rotation engine's runs for it take about 7 CPU-seconds on the rigid cases, which
 /// would put the default run over its 60-s budget on this 2-core machine.
 pub const TOLERANCES: [f64; 3] = [1e-3, 1e-4, 1e-5];
-
-/// The engines the default run asks. Rapier answers on the command line too, but its pilot
-/// runs cost about 40 s on the seed cases at 1e-3 (measured), more than the default run's
-/// whole budget for this study.
-pub const ENGINES: [&str; 2] = ["explicit", "explicit_small"];
 
 /// One engine asked for one tolerance on one case.
 #[derive(Debug, Clone, PartialEq)]
@@ -51,12 +46,12 @@ pub struct Request {
 /// scene, engine, tolerance order; `tick` is called once per request.
 pub fn run(
     scenes: &[&Scene],
-    engines: &[&str],
+    engines: &[&dyn Engine],
     tolerances: &[f64],
     error_of: &(dyn Fn(&Scene, &str, &History) -> Option<f64> + Sync),
     tick: &(dyn Fn() + Sync),
 ) -> Vec<Request> {
-    let jobs: Vec<(&Scene, &str, f64)> = scenes
+    let jobs: Vec<(&Scene, &dyn Engine, f64)> = scenes
         .iter()
         .flat_map(|s| {
             engines
@@ -65,8 +60,8 @@ pub fn run(
         })
         .collect();
     jobs.par_iter()
-        .map(|&(scene, name, eps)| {
-            let r = request(scene, name, eps, error_of);
+        .map(|&(scene, engine, eps)| {
+            let r = request(scene, engine, eps, error_of);
             tick();
             r
         })
@@ -75,10 +70,11 @@ pub fn run(
 
 fn request(
     scene: &Scene,
-    name: &str,
+    engine: &dyn Engine,
     eps: f64,
     error_of: &(dyn Fn(&Scene, &str, &History) -> Option<f64> + Sync),
 ) -> Request {
+    let name = engine.name();
     let mut r = Request {
         case: scene.id.clone(),
         engine: name.to_string(),
@@ -90,15 +86,11 @@ fn request(
         achieved: None,
         message: None,
     };
-    let Some(engine) = engines::named(name) else {
-        r.message = Some(format!("no engine named {name}"));
-        return r;
-    };
     let asked = RunSettings {
         increment: Some(IncrementRule::Tolerance(eps)),
         ..Default::default()
     };
-    let settings = matching::job_settings(engine.as_ref(), scene, &asked);
+    let settings = matching::job_settings(engine, scene, &asked);
     let start = thread_cpu_seconds();
     let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         engine.run(scene, &settings)

@@ -9,8 +9,9 @@
 //! - **unstable**: the engine stopped the run as unstable (its state turned non-finite, or
 //!   `explicit`'s energy guard tripped), or the run's kinetic plus elastic energy rose above
 //!   [`ENERGY_GROWTH_LIMIT`] × what it may hold (its initial energy plus the work of the loads),
-//!   times what a stable central-difference mode at the ratio reads above its energy
-//!   ([`measured_energy_allowance`]: 1/(1 − r²) below 1, 1 from 1 on);
+//!   times what a stable run of the engine's scheme at the ratio reads above its energy
+//!   ([`crate::engines::Stepping::energy_reading`]; for central differences 1/(1 − r²) below
+//!   1, 1 from 1 on);
 //! - **failed**: the engine refused or failed for another reason;
 //! - **accurate**: the largest error against the exact solution of the engine's own model is
 //!   within the case's tolerance for the engine ([`tolerance`]);
@@ -18,17 +19,13 @@
 
 use crate::contract::History;
 use crate::engines::explicit::ExplicitEngine;
-use crate::engines::explicit::integrate::measured_energy_allowance;
-use crate::engines::{self, RunSettings};
+use crate::engines::{self, Engine, RunSettings};
 use crate::run::matching;
 use crate::scene::{IncrementRule, Scene};
 use rayon::prelude::*;
 
 /// The ratios of the map.
 pub const RATIOS: [f64; 10] = [0.25, 0.5, 0.75, 0.9, 0.98, 1.02, 1.1, 1.5, 2.0, 4.0];
-
-/// The engines mapped (every engine that steps in time, as the sweep's).
-pub const ENGINES: [&str; 6] = crate::run::sweep::ENGINES;
 
 /// A run is unstable when its energy rose above this multiple of what it may hold: the
 /// explicit engine's own guard ([`crate::engines::explicit::integrate::ENERGY_GUARD`]), applied
@@ -135,12 +132,12 @@ pub fn energy_growth(history: &History) -> Option<f64> {
 /// case, engine, ratio order.
 pub fn run(
     scenes: &[&Scene],
-    engines: &[&str],
+    engines: &[&dyn Engine],
     ratios: &[f64],
     error_of: &(dyn Fn(&Scene, &str, &History) -> Option<f64> + Sync),
     tick: &(dyn Fn() + Sync),
 ) -> Vec<Point> {
-    let jobs: Vec<(&Scene, &str, f64)> = mapped(scenes)
+    let jobs: Vec<(&Scene, &dyn Engine, f64)> = mapped(scenes)
         .into_iter()
         .flat_map(|s| {
             engines
@@ -149,8 +146,8 @@ pub fn run(
         })
         .collect();
     jobs.par_iter()
-        .map(|(scene, name, ratio)| {
-            let point = map_point(scene, name, *ratio, error_of);
+        .map(|(scene, engine, ratio)| {
+            let point = map_point(scene, *engine, *ratio, error_of);
             tick();
             point
         })
@@ -178,10 +175,11 @@ pub fn len(scenes: usize, engines: usize, ratios: usize) -> usize {
 
 fn map_point(
     scene: &Scene,
-    name: &str,
+    engine: &dyn Engine,
     ratio: f64,
     error_of: &(dyn Fn(&Scene, &str, &History) -> Option<f64> + Sync),
 ) -> Point {
+    let name = engine.name();
     let mut point = Point {
         case: scene.id.clone(),
         engine: name.to_string(),
@@ -192,15 +190,11 @@ fn map_point(
         energy_growth: None,
         message: None,
     };
-    let Some(engine) = engines::named(name) else {
-        point.message = Some(format!("no engine named {name}"));
-        return point;
-    };
     let asked = RunSettings {
         increment: Some(IncrementRule::StableRatio(ratio)),
         ..RunSettings::default()
     };
-    let settings = matching::job_settings(engine.as_ref(), scene, &asked);
+    let settings = matching::job_settings(engine, scene, &asked);
     let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         engine.run(scene, &settings)
     }));
@@ -210,7 +204,11 @@ fn map_point(
             point.energy_growth = energy_growth(&out.history);
             point.error_max = error_of(scene, name, &out.history);
             let finite = out.history.rows.iter().flatten().all(|x| x.is_finite());
-            let limit = ENERGY_GROWTH_LIMIT * measured_energy_allowance(ratio);
+            let reading = engine.stepping().map_or(
+                engines::central_difference_energy_reading as fn(f64) -> f64,
+                |s| s.energy_reading,
+            );
+            let limit = ENERGY_GROWTH_LIMIT * reading(ratio);
             point.outcome = if !finite || point.energy_growth.is_some_and(|g| g > limit) {
                 Outcome::Unstable
             } else {
@@ -321,15 +319,19 @@ fn bounded(o: Outcome) -> bool {
 /// applicable run, or whose case has no explicit stable increment, has none.
 pub fn critical(
     scenes: &[&Scene],
+    engines: &[&dyn Engine],
     points: &[Point],
     error_of: &(dyn Fn(&Scene, &str, &History) -> Option<f64> + Sync),
 ) -> Vec<Critical> {
-    let mut pairs: Vec<(&Scene, &str)> = Vec::new();
+    let mut pairs: Vec<(&Scene, &dyn Engine)> = Vec::new();
     for p in points {
         if let Some(s) = scenes.iter().find(|s| s.id == p.case)
-            && !pairs.iter().any(|(c, e)| c.id == p.case && *e == p.engine)
+            && let Some(e) = engines.iter().find(|e| e.name() == p.engine)
+            && !pairs
+                .iter()
+                .any(|(c, e)| c.id == p.case && e.name() == p.engine)
         {
-            pairs.push((s, p.engine.as_str()));
+            pairs.push((s, *e));
         }
     }
     pairs
@@ -337,10 +339,10 @@ pub fn critical(
         .filter_map(|(scene, engine)| {
             let mut grid: Vec<&Point> = points
                 .iter()
-                .filter(|p| p.case == scene.id && p.engine == *engine)
+                .filter(|p| p.case == scene.id && p.engine == engine.name())
                 .collect();
             grid.sort_by(|a, b| a.ratio.total_cmp(&b.ratio));
-            bisect(scene, engine, &grid, error_of)
+            bisect(scene, *engine, &grid, error_of)
         })
         .collect()
 }
@@ -348,7 +350,7 @@ pub fn critical(
 /// One pair's critical increment (see [`critical`]).
 fn bisect(
     scene: &Scene,
-    engine: &str,
+    engine: &dyn Engine,
     grid: &[&Point],
     error_of: &(dyn Fn(&Scene, &str, &History) -> Option<f64> + Sync),
 ) -> Option<Critical> {
@@ -418,7 +420,7 @@ fn bisect(
     let at = low.or(high)?;
     Some(Critical {
         case: scene.id.clone(),
-        engine: engine.to_string(),
+        engine: engine.name().to_string(),
         increment: at.increment?,
         explicit_stable,
         bound,

@@ -1,25 +1,28 @@
 //! Sweeps: each engine rerun on a case over a grid of settings, every point timed, so that the
 //! comparison can say what accuracy costs (work–precision, `comparison::work_precision`).
 //!
-//! A sweep is a set of *paths*, each a sequence of settings that refine one thing:
+//! A sweep is a set of *paths*, each a sequence of settings that refine one thing, planned
+//! from what each engine says of its stepping ([`Engine::stepping`]), never from its name:
 //!
-//! - `explicit`, `explicit_small`: the time increment, from 0.9 of the stable one (or the
-//!   output interval, whichever is shorter) down by [`Grid::refinement`] per point; on a scene
-//!   with penalty contact one such path per penalty stiffness of [`Grid::penalty_ratios`] (× the
-//!   largest spring stiffness `k`; on a scene without springs `k` is the case's own penalty
-//!   stiffness over the grid's geometric middle ratio, so the middle path runs the case's own). Each path also runs once just above its stable increment (the
-//!   shortest increment above it that divides the output interval, where there is one): that
-//!   point must come back unstable.
-//! - `rapier_f64`, `rapier_f32` (matched configuration): the increment from the output interval
-//!   down, and the substeps (`solver_iterations`: 1, 2, 4, …) at the output interval;
-//! - `rapier_f64_default`, `rapier_f32_default`: the increment from rapier's 1/60 s down.
+//! - the time increment, from the engine's coarsest ([`Coarsest`]) down by
+//!   [`Grid::refinement`] per point. `explicit` and `explicit_small` start at 0.9 of their
+//!   stable increment, the matched rapier engines at the output interval, the default ones at
+//!   rapier's 1/60 s. An engine with penalty contact runs, on a scene with contact, one such
+//!   path per penalty stiffness of [`Grid::penalty_ratios`] (× the largest spring stiffness
+//!   `k`; on a scene without springs `k` is the case's own penalty stiffness over the grid's
+//!   geometric middle ratio, so the middle path runs the case's own). A path that starts at
+//!   the stable increment also runs once just above it (the shortest increment above it that
+//!   divides the output interval, where there is one): that point must come back unstable.
+//! - the substeps of an engine that has them ([`Engine::with_substeps`]: the matched rapier
+//!   engines' `solver_iterations`, 1, 2, 4, …) at the output interval.
 //!
 //! A path stops when its error stalls twice in a row (two successive points each more than
 //! [`Grid::stall`] of the point before: the refinement no longer pays; a single stall can be
 //! a plateau, such as a small fast mode whose phase error has saturated before the step
 //! resolves it; a stall that the budget leaves unconfirmed counts) or when the next point
 //! would take more than
-//! the grid's budget of increments ([`Grid::max_increments`], substeps counted for rapier).
+//! the engine's share of the grid's budget of increments ([`Grid::max_increments`] ×
+//! [`Stepping::budget_share`], substeps counted).
 //! Both rules depend only on the errors and the settings, never on timings, so the same inputs
 //! run the same points. Each point runs [`Grid::repeat`] times; the CPU seconds of each run are
 //! the running thread's own (`CLOCK_THREAD_CPUTIME_ID`), setup included.
@@ -28,8 +31,7 @@
 //! is measured ([`ErrorOf`]), which the stall rule needs.
 
 use crate::contract::{self, History};
-use crate::engines::rapier::{self, Configuration, MatchedSettings, Precision, RapierEngine};
-use crate::engines::{Engine, RunSettings, explicit};
+use crate::engines::{Coarsest, Engine, RunSettings, Stepping};
 use crate::scene::{IncrementRule, PenaltyRule, Scene};
 use rayon::prelude::*;
 
@@ -43,13 +45,13 @@ pub struct Grid {
     /// Penalty stiffnesses, as multiples of the scene's largest spring stiffness, one
     /// increment path each (scenes with penalty contact).
     pub penalty_ratios: Vec<f64>,
-    /// Rapier substep counts of the substeps path.
+    /// Substep counts of the substeps path.
     pub substeps: Vec<usize>,
     /// A path stops after two successive points whose errors each exceed this fraction of the
     /// point before.
     pub stall: f64,
-    /// Most increments one run of a point may take (explicit engines: increments; rapier:
-    /// increments × substeps, [`RAPIER_SHARE`] of it). About 0.1–0.3 s of CPU for the explicit
+    /// Most increments one run of a point may take (substeps counted), of which an engine
+    /// takes its [`Stepping::budget_share`] (rapier's: a fifth). About 0.1–0.3 s of CPU for the explicit
     /// engines and 0.3–1 s for rapier at the shipped speeds. Points above a tenth of it run
     /// once whatever [`Grid::repeat`] says (a long run's time varies little).
     pub max_increments: f64,
@@ -71,10 +73,6 @@ impl Default for Grid {
         }
     }
 }
-
-/// Rapier's increments are budgeted at this fraction of [`Grid::max_increments`] (one rapier
-/// substep costs ~1–3 µs against ~0.1–0.3 µs for an explicit increment).
-pub const RAPIER_SHARE: f64 = 0.2;
 
 /// Errors (max over peak) at or above this are pre-asymptotic: a path does not stall there.
 pub const PRE_ASYMPTOTIC: f64 = 0.5;
@@ -177,74 +175,66 @@ pub type ErrorOf<'a> = dyn Fn(&str, &History) -> Option<(f64, f64)> + Sync + 'a;
 /// How the caller measures a history's error on a scene (see [`ErrorOf`]).
 pub type SceneErrorOf<'a> = dyn Fn(&Scene, &str, &History) -> Option<(f64, f64)> + Sync + 'a;
 
-/// The engines a sweep can run (those that step in time), in report order.
-pub const ENGINES: [&str; 6] = [
-    "explicit",
-    "explicit_small",
-    "rapier_f64",
-    "rapier_f32",
-    "rapier_f64_default",
-    "rapier_f32_default",
-];
+/// The engines of `engines` a sweep can run: those that step in time ([`Engine::stepping`]).
+pub fn steppers<'a>(engines: &[&'a dyn Engine]) -> Vec<&'a dyn Engine> {
+    engines
+        .iter()
+        .copied()
+        .filter(|e| e.stepping().is_some())
+        .collect()
+}
 
-/// The paths of `engines` (names from [`ENGINES`]) on `scene`, before they run.
-fn plan(scene: &Scene, engines: &[&str], grid: &Grid) -> Vec<(String, PathKind)> {
+/// The paths of `engines` on `scene`, before they run: per engine, one increment path (one
+/// per penalty stiffness of the grid where it has penalty contact and the scene has contact),
+/// and a substeps path at the output interval where it has substeps.
+fn plan<'a>(
+    scene: &Scene,
+    engines: &[&'a dyn Engine],
+    grid: &Grid,
+) -> Vec<(&'a dyn Engine, PathKind)> {
     let interval = scene.duration() / (scene.output_rows - 1) as f64;
     let mut paths = Vec::new();
     for &e in engines {
-        match e {
-            "explicit" | "explicit_small" if !scene.contacts.is_empty() => {
-                for r in &grid.penalty_ratios {
-                    paths.push((
-                        e.to_string(),
-                        PathKind::Increment {
-                            penalty_ratio: Some(*r),
-                        },
-                    ));
-                }
+        let Some(stepping) = e.stepping() else {
+            continue;
+        };
+        if stepping.penalty && !scene.contacts.is_empty() {
+            for r in &grid.penalty_ratios {
+                let penalty_ratio = Some(*r);
+                paths.push((e, PathKind::Increment { penalty_ratio }));
             }
-            "explicit" | "explicit_small" | "rapier_f64_default" | "rapier_f32_default" => paths
-                .push((
-                    e.to_string(),
-                    PathKind::Increment {
-                        penalty_ratio: None,
-                    },
-                )),
-            "rapier_f64" | "rapier_f32" => {
-                paths.push((
-                    e.to_string(),
-                    PathKind::Increment {
-                        penalty_ratio: None,
-                    },
-                ));
-                paths.push((
-                    e.to_string(),
-                    PathKind::Substeps {
-                        increment: interval,
-                    },
-                ));
-            }
-            _ => {}
+        } else {
+            let penalty_ratio = None;
+            paths.push((e, PathKind::Increment { penalty_ratio }));
+        }
+        if e.with_substeps(1).is_some() {
+            let increment = interval;
+            paths.push((e, PathKind::Substeps { increment }));
         }
     }
     paths
 }
 
+/// The contact softness (Hz) of the matched rapier engine named `name`.
+pub fn matched_contact_frequency(name: &str) -> f64 {
+    crate::engines::rapier::matched_contact_frequency(name)
+}
+
 /// How many paths [`run`] runs on `scene` (for a progress bar).
-pub fn plan_len(scene: &Scene, engines: &[&str], grid: &Grid) -> usize {
+pub fn plan_len(scene: &Scene, engines: &[&dyn Engine], grid: &Grid) -> usize {
     plan(scene, engines, grid).len()
 }
 
-/// Run every path of every case in `scenes`, each with the engines named beside it (those of
-/// [`ENGINES`]; others are skipped), in parallel; `tick` is called once per finished path. Paths come back
-/// per case in the order of `scenes`, each case's in engine order.
+/// Run every path of every case in `scenes`, each with the engines given beside it (those
+/// that do not step in time are skipped), in parallel; `tick` is called once per finished
+/// path. Paths come back per case in the order of `scenes`, each case's in engine order.
 pub fn run(
-    scenes: &[(&Scene, Vec<&str>)],
+    scenes: &[(&Scene, Vec<&dyn Engine>)],
     grid: &Grid,
     error_of: &SceneErrorOf,
     tick: &(dyn Fn(&str) + Sync),
 ) -> Vec<Vec<SweepPath>> {
-    let jobs: Vec<(usize, &Scene, String, PathKind)> = scenes
+    let jobs: Vec<(usize, &Scene, &dyn Engine, PathKind)> = scenes
         .iter()
         .enumerate()
         .flat_map(|(i, (s, engines))| {
@@ -257,7 +247,7 @@ pub fn run(
         .par_iter()
         .map(|(i, scene, engine, kind)| {
             let error = |e: &str, h: &History| error_of(scene, e, h);
-            let path = run_path(scene, engine, *kind, grid, &error);
+            let path = run_path(scene, *engine, *kind, grid, &error);
             tick(&format!("{}/{}", scene.id, path.label()));
             (*i, path)
         })
@@ -267,57 +257,6 @@ pub fn run(
         out[i].push(p);
     }
     out
-}
-
-/// The contact softness (Hz) of a matched rapier engine's points, by engine name.
-pub fn matched_contact_frequency(name: &str) -> f64 {
-    MatchedSettings::chosen(precision_of(name)).contact_frequency
-}
-
-fn precision_of(name: &str) -> Precision {
-    if name.contains("f32") {
-        Precision::F32
-    } else {
-        Precision::F64
-    }
-}
-
-/// The settings of one point of a path: the engine (rapier's substeps are its configuration)
-/// and the run overrides.
-fn point_engine(name: &str, kind: PathKind, substeps: Option<usize>) -> Box<dyn Engine> {
-    let precision = precision_of(name);
-    match name {
-        "explicit" => Box::new(explicit::ExplicitEngine::finite()),
-        "explicit_small" => Box::new(explicit::ExplicitEngine::small()),
-        "rapier_f64_default" | "rapier_f32_default" => {
-            Box::new(RapierEngine::default_configuration(precision))
-        }
-        _ => {
-            let solver_iterations = match kind {
-                PathKind::Substeps { .. } => substeps.unwrap_or(1),
-                PathKind::Increment { .. } => MatchedSettings::CHOSEN.solver_iterations,
-            };
-            Box::new(RapierEngine::with(
-                precision,
-                Configuration::Matched(MatchedSettings {
-                    solver_iterations,
-                    ..MatchedSettings::chosen(precision)
-                }),
-            ))
-        }
-    }
-}
-
-/// Substeps per increment of a rapier engine (None for others).
-fn substeps_of(engine: &str, kind: PathKind, substeps: Option<usize>) -> Option<usize> {
-    match (engine, kind) {
-        (e, _) if !e.starts_with("rapier") => None,
-        (_, PathKind::Substeps { .. }) => substeps,
-        ("rapier_f64_default" | "rapier_f32_default", _) => {
-            Some(rapier::backend::DEFAULT_SOLVER_ITERATIONS)
-        }
-        _ => Some(MatchedSettings::CHOSEN.solver_iterations),
-    }
 }
 
 /// CPU seconds this thread has used.
@@ -435,70 +374,21 @@ fn run_point(
 /// Run one path until it stalls, fails, or the next point exceeds the budget.
 fn run_path(
     scene: &Scene,
-    engine_name: &str,
+    engine: &dyn Engine,
     kind: PathKind,
     grid: &Grid,
     error: &ErrorOf,
 ) -> SweepPath {
-    let interval = scene.duration() / (scene.output_rows - 1) as f64;
-    let precision = if engine_name.contains("f32") {
-        "f32"
-    } else {
-        "f64"
-    };
+    let stepping = engine.stepping().unwrap_or(UNSTEPPED);
     let penalty = match kind {
         PathKind::Increment {
             penalty_ratio: Some(r),
         } => Some(penalty_rule(scene, r, grid)),
         _ => None,
     };
-    let rapier = engine_name.starts_with("rapier");
-    let budget = if rapier {
-        grid.max_increments * RAPIER_SHARE
-    } else {
-        grid.max_increments
-    };
+    let budget = grid.max_increments * stepping.budget_share;
     let mut points: Vec<Point> = Vec::new();
     let mut ended = "points";
-    // The settings of the k-th point of the path.
-    let setting = |k: usize, first: Option<&Point>| -> (RunSettings, Option<usize>) {
-        let base = RunSettings {
-            penalty,
-            ..RunSettings::default()
-        };
-        match kind {
-            PathKind::Substeps { increment } => (
-                RunSettings {
-                    increment: Some(IncrementRule::Forced(increment)),
-                    ..base
-                },
-                grid.substeps.get(k).copied(),
-            ),
-            PathKind::Increment { .. } => {
-                let start = if rapier {
-                    if engine_name.ends_with("default") {
-                        rapier::DEFAULT_INCREMENT
-                    } else {
-                        interval
-                    }
-                } else {
-                    first.map_or(0.0, |p| p.increment)
-                };
-                let rule = if k == 0 && !rapier {
-                    IncrementRule::Stable { safety: 0.9 }
-                } else {
-                    IncrementRule::Forced(start / grid.refinement.powi(k as i32))
-                };
-                (
-                    RunSettings {
-                        increment: Some(rule),
-                        ..base
-                    },
-                    None,
-                )
-            }
-        }
-    };
     let count = match kind {
         PathKind::Substeps { .. } => grid.substeps.len().min(grid.max_points),
         PathKind::Increment { .. } => grid.max_points,
@@ -506,9 +396,15 @@ fn run_path(
     let mut probe: Option<Point> = None;
     let mut stalls = 0;
     for k in 0..count {
-        let (settings, substeps) = setting(k, points.first());
-        let iterations = substeps_of(engine_name, kind, substeps);
-        let engine = point_engine(engine_name, kind, substeps);
+        let at = PathPoint {
+            k,
+            penalty,
+            first: points.first(),
+        };
+        let (settings, substeps) = point_setting(scene, &stepping, kind, grid, &at);
+        let varied = substeps.and_then(|n| engine.with_substeps(n));
+        let engine = varied.as_deref().unwrap_or(engine);
+        let iterations = substeps.or(stepping.substeps);
         let increments =
             engine.increments(scene, &settings).unwrap_or(0.0) * iterations.unwrap_or(1) as f64;
         if increments > budget * (1.0 + 1e-9) {
@@ -521,12 +417,14 @@ fn run_path(
         } else {
             grid.repeat
         };
-        let point = run_point(scene, engine.as_ref(), &settings, iterations, repeat, error);
+        let point = run_point(scene, engine, &settings, iterations, repeat, error);
         let status = point.status;
         let this = point.error.map(|e| e.0);
         let previous = points.last().and_then(|p| p.error.map(|e| e.0));
-        if k == 0 && !rapier && status == Status::Ok {
-            probe = unstable_probe(scene, engine.as_ref(), &settings, &point, interval, error);
+        let from_stable = matches!(stepping.coarsest, Coarsest::Stable { .. });
+        if k == 0 && from_stable && status == Status::Ok {
+            let interval = scene.duration() / (scene.output_rows - 1) as f64;
+            probe = unstable_probe(scene, engine, &settings, &point, interval, error);
         }
         points.push(point);
         if status != Status::Ok {
@@ -547,12 +445,61 @@ fn run_path(
         points.insert(0, p);
     }
     SweepPath {
-        engine: engine_name.to_string(),
-        precision,
+        engine: engine.name().to_string(),
+        precision: stepping.precision,
         kind,
         points,
         ended,
     }
+}
+
+/// What [`run_path`] assumes of an engine that does not say how it steps (none is planned).
+const UNSTEPPED: Stepping = Stepping {
+    coarsest: Coarsest::OutputInterval,
+    penalty: false,
+    substeps: None,
+    budget_share: 1.0,
+    precision: "f64",
+    energy_reading: crate::engines::central_difference_energy_reading,
+    on_request: false,
+};
+
+/// Where a path is: the point's index, the path's penalty rule, and its first point (whose
+/// increment a stable-increment start chose).
+struct PathPoint<'a> {
+    k: usize,
+    penalty: Option<PenaltyRule>,
+    first: Option<&'a Point>,
+}
+
+/// The run settings of a path's point and its substeps (substeps paths only): a substeps path
+/// at its fixed increment; an increment path from the engine's coarsest increment down by the
+/// grid's refinement.
+fn point_setting(
+    scene: &Scene,
+    stepping: &Stepping,
+    kind: PathKind,
+    grid: &Grid,
+    at: &PathPoint,
+) -> (RunSettings, Option<usize>) {
+    let interval = scene.duration() / (scene.output_rows - 1) as f64;
+    let refined = |h: f64| IncrementRule::Forced(h / grid.refinement.powi(at.k as i32));
+    let (increment, substeps) = match (kind, stepping.coarsest) {
+        (PathKind::Substeps { increment }, _) => (
+            IncrementRule::Forced(increment),
+            grid.substeps.get(at.k).copied(),
+        ),
+        (_, Coarsest::Stable { safety }) if at.k == 0 => (IncrementRule::Stable { safety }, None),
+        (_, Coarsest::Stable { .. }) => (refined(at.first.map_or(0.0, |p| p.increment)), None),
+        (_, Coarsest::OutputInterval) => (refined(interval), None),
+        (_, Coarsest::Increment(h)) => (refined(h), None),
+    };
+    let settings = RunSettings {
+        increment: Some(increment),
+        penalty: at.penalty,
+        ..RunSettings::default()
+    };
+    (settings, substeps)
 }
 
 /// A penalty path's stiffness: `ratio` × the scene's largest spring stiffness `k`. A scene

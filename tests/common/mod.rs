@@ -8,6 +8,33 @@ use crosscheck::scene::{IncrementRule, Scene};
 use std::collections::BTreeMap;
 use std::path::Path;
 
+/// The built-in engines that step in time, in report order: those the sweep and the stability
+/// map run (`tests/sweep.rs` checks that [`crosscheck::engines::all`] says the same).
+pub const STEPPING: [&str; 6] = [
+    "explicit",
+    "explicit_small",
+    "rapier_f64",
+    "rapier_f32",
+    "rapier_f64_default",
+    "rapier_f32_default",
+];
+
+/// The built-in engines accuracy on request asks.
+pub const ON_REQUEST: [&str; 2] = ["explicit", "explicit_small"];
+
+/// The engines named, as the studies take them.
+pub fn engines_named(names: &[&str]) -> Vec<Box<dyn Engine>> {
+    names
+        .iter()
+        .map(|n| crosscheck::engines::named(n).unwrap_or_else(|| panic!("no engine {n}")))
+        .collect()
+}
+
+/// Borrowed, as the studies take them.
+pub fn refs(engines: &[Box<dyn Engine>]) -> Vec<&dyn Engine> {
+    engines.iter().map(|e| e.as_ref()).collect()
+}
+
 /// The five springs seed cases.
 pub const SPRINGS_CASES: [&str; 5] = [
     "springs_grounded_a",

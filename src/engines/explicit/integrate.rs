@@ -49,19 +49,9 @@ pub struct Integration {
 /// between 2.2× and 50× (measured), which a guard at 100× let through.
 pub const ENERGY_GUARD: f64 = 2.0;
 
-/// How far a stable run's measured energy (kinetic at v(n), plus elastic) may stand above its
-/// conserved energy at increment ratio `ratio` = h/(2/ω_max): a mode stepped by central
-/// differences and entered with velocity only (an impact) reads up to 1/(1 − (ω·h/2)²) of
-/// its energy at the turns of its discrete oscillation (25× at 0.98; checked to round-off on
-/// one mass at ω·h = 0.5 … 1.96), and falls back, bounded. 1 at and above the limit, where
-/// nothing is bounded.
-pub fn measured_energy_allowance(ratio: f64) -> f64 {
-    if ratio < 1.0 {
-        1.0 / (1.0 - ratio * ratio)
-    } else {
-        1.0
-    }
-}
+/// How far a stable run's measured energy may stand above its conserved energy at increment
+/// ratio `ratio` = h/(2/ω_max): central differences' reading, 1/(1 − ratio²) below 1.
+pub use crate::engines::central_difference_energy_reading as measured_energy_allowance;
 
 /// Increments between two looks at the interruption flag.
 const INTERRUPT_STRIDE: u64 = 4096;

@@ -16,7 +16,7 @@ pub mod space;
 pub mod start;
 pub mod velocity;
 
-use super::{Engine, EngineError, RunInfo, RunOutput, RunSettings};
+use super::{Coarsest, Engine, EngineError, RunInfo, RunOutput, RunSettings, Stepping};
 use crate::scene::{ContactState, Dimension, Dof, IncrementRule, Scene, SceneSettings, StepKind};
 use integrate::{Integration, integrate};
 use space::{Planar, Spatial};
@@ -100,6 +100,17 @@ impl Engine for ExplicitEngine {
             Kinematics::Finite => "explicit",
             Kinematics::Small => "explicit_small",
         }
+    }
+    fn stepping(&self) -> Option<Stepping> {
+        Some(Stepping {
+            coarsest: Coarsest::Stable { safety: 0.9 },
+            penalty: true,
+            substeps: None,
+            budget_share: 1.0,
+            precision: "f64",
+            energy_reading: super::central_difference_energy_reading,
+            on_request: true,
+        })
     }
     fn increments(&self, scene: &Scene, settings: &RunSettings) -> Option<f64> {
         let h = self.increment(scene, settings).ok()?;

@@ -1,5 +1,7 @@
 //! The discrepancy budget: its parts add up to the total read from the CSVs, and one more
 //! extrapolation level leaves them where they were.
+mod common;
+
 use crosscheck::comparison::discrepancy::{self, Budget, JobBudget, Order};
 use crosscheck::report::data::{budget_path, csv_path, read_history};
 use crosscheck::run::refinement::Depth;
@@ -40,7 +42,7 @@ fn the_budget_adds_up_to_the_total_read_from_the_csvs() {
     let (plan, outcome, budgets) = budgets();
     assert_eq!(
         budgets.len(),
-        13 * 6,
+        13 * common::STEPPING.len(),
         "every stepping engine on every seed case"
     );
     let out = tempfile::tempdir().unwrap();
@@ -150,6 +152,7 @@ fn explicit_budgets_are_converged_one_level_further() {
 /// says: columns whose closed form is zero (a pinned body's ux, where rapier's pin drifts by
 /// its joint's softness: absolute metres, second order) and time-step parts under 1 % of the
 /// error (the grounded springs' middle node: round-off).
+#[cfg(feature = "rapier")]
 #[test]
 fn rapier_time_step_part_is_first_order_and_stable_one_level_further() {
     let (_, _, budgets) = budgets();

@@ -46,6 +46,13 @@ fn edit_column(file: &Path, column: &str, f: impl Fn(&str) -> String) {
     std::fs::write(file, out.join("\n") + "\n").unwrap();
 }
 
+/// The engine whose history is perturbed: `rapier_f64` (`explicit` in a build without rapier).
+const PERTURBED: &str = if cfg!(feature = "rapier") {
+    "rapier_f64"
+} else {
+    "explicit"
+};
+
 #[test]
 fn two_runs_compare_clean_and_a_perturbed_history_is_named() {
     let root = tempfile::tempdir().unwrap();
@@ -64,7 +71,7 @@ fn two_runs_compare_clean_and_a_perturbed_history_is_named() {
 
     // rapier_f64's ux_node on one case 10 % larger: drift 1e-1 of the peak, named.
     edit_column(
-        &b.join("data/rigid2d_pin_lumped/rapier_f64.csv"),
+        &b.join(format!("data/rigid2d_pin_lumped/{PERTURBED}.csv")),
         "ux_node",
         |x| format!("{:e}", 1.1 * x.parse::<f64>().unwrap()),
     );
@@ -73,7 +80,9 @@ fn two_runs_compare_clean_and_a_perturbed_history_is_named() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert_eq!(out.status.code(), Some(1), "{stdout}");
     assert!(
-        stdout.contains("| rigid2d_pin_lumped | `rapier_f64` | ux_node | 1.00e-1 |"),
+        stdout.contains(&format!(
+            "| rigid2d_pin_lumped | `{PERTURBED}` | ux_node | 1.00e-1 |"
+        )),
         "{stdout}"
     );
     let xml = std::fs::read_to_string(&junit).unwrap();
@@ -90,7 +99,10 @@ fn two_runs_compare_clean_and_a_perturbed_history_is_named() {
             )
         })
         .collect();
-    assert_eq!(failures, ["rigid2d_pin_lumped/rapier_f64 ux_node"]);
+    assert_eq!(
+        failures,
+        [format!("rigid2d_pin_lumped/{PERTURBED} ux_node")]
+    );
     // Drift alone does not fail --physics-only.
     assert_eq!(compare(&a, &b, &["--physics-only"]).status.code(), Some(0));
 

@@ -3,6 +3,7 @@
 //!
 //! Each finding about rapier is measured here beside its control: the same case varied in the
 //! suspected cause only.
+#![cfg(feature = "rapier")]
 mod common;
 
 use common::{scene, stress_scene};

@@ -1,6 +1,7 @@
 //! The rapier engines: contract, equivalences inside rapier, regression bounds, agreement with
 //! the explicit engine to rapier's order, colliders only for contact, the PGS-sweep study and
 //! reproducibility. Every tolerance below states what was measured and why it is what it is.
+#![cfg(feature = "rapier")]
 mod common;
 use common::*;
 use crosscheck::comparison::compare;
@@ -565,4 +566,16 @@ fn memory_is_independent_of_the_number_of_steps() {
         };
         assert!((row[col] - expected).abs() <= 1e-6 * expected, "{row:?}");
     }
+}
+
+/// A case file may name the rapier engines in `[tolerances]` in a build without them: the
+/// names the registry keeps for that are the rapier engines' own.
+#[test]
+fn the_rapier_names_kept_for_builds_without_rapier_are_its_engines_names() {
+    let built: Vec<String> = crosscheck::engines::all()
+        .iter()
+        .map(|e| e.name().to_string())
+        .filter(|n| n.starts_with("rapier"))
+        .collect();
+    assert_eq!(built, crosscheck::engines::registry::RAPIER_NAMES);
 }

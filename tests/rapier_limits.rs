@@ -1,6 +1,7 @@
 //! Rapier where the problem gets hard: its implicit springs lose energy as backward Euler
 //! predicts, f32 loses the pinned case's accuracy as the scene moves away from the origin, and
 //! a fast node tunnels through a thin cuboid unless CCD is on.
+#![cfg(feature = "rapier")]
 mod common;
 
 use crosscheck::case;

@@ -3,6 +3,7 @@
 //! world frame and the kinetic energy are recovered from the histories of three body points on
 //! the principal axes, and the intermediate axis's flip is timed against `reference`. Then a
 //! body that turns about one tilted axis after a free turn, against `reference`.
+#![cfg(feature = "rapier")]
 use crosscheck::case;
 use crosscheck::engines::{self, History, RunSettings};
 use crosscheck::scene::IncrementRule;

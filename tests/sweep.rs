@@ -72,6 +72,7 @@ fn the_explicit_engines_converge_at_second_order_on_every_seed_case() {
 /// substep: first order in the increment. Measured 0.951–0.988 on every seed case, frozen at
 /// 0.97 ± 0.05; the sliding cases were at 0.83 with f64's former 3 kHz contact, whose own
 /// dynamics kept them out of the asymptotic range (`MatchedSettings::chosen`).
+#[cfg(feature = "rapier")]
 #[test]
 fn rapier_converges_at_first_order() {
     for s in sweeps() {
@@ -108,7 +109,7 @@ fn floors_are_where_the_budget_says() {
                 s.case
             );
         }
-        if s.case.contains("pin") {
+        if s.case.contains("pin") && cfg!(feature = "rapier") {
             let f = floor("rapier_f32").unwrap();
             assert_eq!(f.cause, "f32 round-off", "{}", s.case);
         }
@@ -160,7 +161,9 @@ fn a_sweep_writes_its_csvs_and_figures() {
     let (all_a, all_b) = (records(&a), records(&b));
     for case in cases {
         let rows: Vec<&Vec<String>> = all_a.iter().filter(|r| r[0] == case).collect();
-        assert!(rows.len() > 20, "{case}: {} rows", rows.len());
+        // At least three points per engine's path.
+        let least = 3 * common::STEPPING.len();
+        assert!(rows.len() > least, "{case}: {} rows", rows.len());
         for r in &rows {
             assert_eq!(r.len(), 15, "{r:?}");
             assert!(
@@ -247,5 +250,10 @@ fn the_studies_run_the_engines_that_say_they_step() {
         .filter(|e| e.with_substeps(2).is_some())
         .map(|e| e.name())
         .collect();
-    assert_eq!(substeps, ["rapier_f64", "rapier_f32"]);
+    let matched: &[&str] = if cfg!(feature = "rapier") {
+        &["rapier_f64", "rapier_f32"]
+    } else {
+        &[]
+    };
+    assert_eq!(substeps, matched);
 }

@@ -370,6 +370,7 @@ fn floor_cause(path: &SweepPath, value: f64, twin: Option<&SweepPath>, contact: 
         (false, PathKind::Substeps { increment }) => {
             format!("solver at the fixed increment {increment:.1e} s")
         }
+        #[cfg(feature = "rapier")]
         (false, _) if path.engine.starts_with("rapier") => {
             format!(
                 "solver: rapier's contact softness ({} kHz) and PGS sweeps",

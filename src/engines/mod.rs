@@ -6,11 +6,12 @@
 
 pub mod analytic;
 pub mod explicit;
+#[cfg(feature = "rapier")]
 pub mod rapier;
 pub mod reference;
 pub mod registry;
 
-pub use registry::{all, named};
+pub use registry::{all, known_names, named};
 
 pub use crate::contract::History;
 use crate::scene::{ContactStart, DampingTreatment, IncrementRule, PenaltyRule, Scene};

@@ -424,6 +424,30 @@ pub fn reach_cell(rows: &[Row], engine: &str, target: f64, setting: bool) -> Str
     }
 }
 
+/// The engines whose runs take a share of the sweep's budget (rapier: a fifth), as
+/// " (`rapier_f64`: 2e5 substeps, …)"; empty when every engine takes all of it.
+fn budget_shares(engines: &[String], budget: f64) -> String {
+    let shares: Vec<String> = engines
+        .iter()
+        .filter_map(|e| {
+            let stepping = crate::engines::named(e)?.stepping()?;
+            (stepping.budget_share < 1.0).then(|| {
+                let unit = if stepping.substeps.is_some() {
+                    "substeps"
+                } else {
+                    "increments"
+                };
+                format!("`{e}`: {:.0e} {unit}", budget * stepping.budget_share)
+            })
+        })
+        .collect();
+    if shares.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", shares.join(", "))
+    }
+}
+
 /// The engines of sweep rows, in the order they first appear (the run's engine order).
 fn engines_of<'a>(rows: impl Iterator<Item = &'a Row>) -> Vec<String> {
     let mut engines: Vec<String> = Vec::new();
@@ -453,13 +477,13 @@ pub fn overview(w: &mut String, s: &crate::report::summary::Summary, sweeps: &Sw
          penalty stiffness of 1e2 … 1e6 × the largest spring stiffness, rapier's matched \
          configuration also over 1 … 64 substeps, f32 and f64. A path stops where its error stalls \
          (two points in a row each more than {} of the one before) or where the next point would take more than \
-         {:.0e} increments (rapier: {:.0e} substeps). Errors are against the exact solution of \
+         {:.0e} increments{}. Errors are against the exact solution of \
          the engine's own model, as in the verdicts; CPU time is the running thread's, setup \
          included, per simulated second, the minimum of {} runs (one for points over a tenth of \
          the budget). {}\n",
         grid.stall,
         grid.max_increments,
-        grid.max_increments * crate::engines::rapier::SWEEP_BUDGET_SHARE,
+        budget_shares(&engines, grid.max_increments),
         grid.repeat,
         crate::report::provenance::RAPIER_BUILD
     );

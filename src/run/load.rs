@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 /// Checks that need the engines: tolerance names must be engine names, and a given increment
 /// must not exceed the stable one.
 pub fn check_scene(scene: &Scene) -> Result<(), SceneError> {
-    let names = engine_names();
+    let names = engines::known_names();
     for engine in scene.tolerances.keys() {
         if !names.contains(engine) {
             return Err(SceneError {

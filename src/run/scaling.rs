@@ -18,7 +18,6 @@
 
 use crate::case::chain::Chain;
 use crate::engines::explicit::ExplicitEngine;
-use crate::engines::rapier::{Precision, RapierEngine};
 use crate::engines::{Engine, RunSettings};
 use crate::run::matching;
 use std::time::Instant;
@@ -103,10 +102,10 @@ pub fn repeats_for(n: usize) -> u64 {
 /// Run the study; `progress` is told each point as it starts (engine, N).
 pub fn study(max_n: usize, mut progress: impl FnMut(&str, usize)) -> Result<Study, String> {
     let mut out = Study::default();
-    let engines: [Box<dyn Engine>; 2] = [
-        Box::new(ExplicitEngine::finite()),
-        Box::new(RapierEngine::matched(Precision::F64)),
-    ];
+    // `rapier_f64` where the build has the rapier engines (the `rapier` feature).
+    let engines: Vec<Box<dyn Engine>> = std::iter::once(Box::new(ExplicitEngine::finite()) as _)
+        .chain(crate::engines::named("rapier_f64"))
+        .collect();
     for engine in &engines {
         // Seconds of one longer run at the last N.
         let mut last: Option<(usize, f64)> = None;

@@ -216,6 +216,7 @@ fn plan<'a>(
 }
 
 /// The contact softness (Hz) of the matched rapier engine named `name`.
+#[cfg(feature = "rapier")]
 pub fn matched_contact_frequency(name: &str) -> f64 {
     crate::engines::rapier::matched_contact_frequency(name)
 }

@@ -9,7 +9,9 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 /// The built-in engines that step in time, in report order: those the sweep and the stability
-/// map run (`tests/sweep.rs` checks that [`crosscheck::engines::all`] says the same).
+/// map run, and every engine the report judges (`tests/sweep.rs` checks that
+/// [`crosscheck::engines::all`] says the same).
+#[cfg(feature = "rapier")]
 pub const STEPPING: [&str; 6] = [
     "explicit",
     "explicit_small",
@@ -18,6 +20,10 @@ pub const STEPPING: [&str; 6] = [
     "rapier_f64_default",
     "rapier_f32_default",
 ];
+
+/// The built-in engines that step in time, without the `rapier` feature.
+#[cfg(not(feature = "rapier"))]
+pub const STEPPING: [&str; 2] = ["explicit", "explicit_small"];
 
 /// The built-in engines accuracy on request asks.
 pub const ON_REQUEST: [&str; 2] = ["explicit", "explicit_small"];

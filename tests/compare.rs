@@ -144,3 +144,34 @@ fn reports_that_cannot_be_compared_are_refused() {
     std::fs::write(&summary, newer).unwrap();
     refused(&b, &b, "schema version 99");
 }
+
+/// The main command says what changed since the report it replaces, with `compare`'s two
+/// tiers: nothing after a second run of the same build; a history of the previous report
+/// 10 % larger in one column is named with its drift, 0.1/1.1 of that report's peak.
+#[test]
+fn the_main_command_says_what_changed_since_the_previous_report() {
+    let root = tempfile::tempdir().unwrap();
+    let out = root.path().join("report");
+    let cases = ["springs_grounded_a"];
+    let first_screen = || std::fs::read_to_string(out.join("REPORT.md")).unwrap();
+    report(&out, &cases);
+    assert!(!first_screen().contains("Since the previous report"));
+    report(&out, &cases);
+    let text = first_screen();
+    assert!(
+        text.contains("no verdict changed, no error moved by more than 1 % and no history by"),
+        "{text}"
+    );
+    edit_column(
+        &out.join("data/springs_grounded_a/explicit.csv"),
+        "u_end",
+        |x| format!("{:e}", 1.1 * x.parse::<f64>().unwrap()),
+    );
+    report(&out, &cases);
+    let text = first_screen();
+    assert!(
+        text.contains("1 history columns moved by more than 1.00e-9 of their peak")
+            && text.contains("springs_grounded_a / `explicit` u_end by 9.09e-2"),
+        "{text}"
+    );
+}

@@ -5,6 +5,7 @@
 
 use super::format::sci;
 use super::provenance::Provenance;
+use super::regression::Since;
 use super::summary::{CaseSummary, EngineSummary, Summary, ToleranceCheck};
 use crate::comparison::EXACT_SOLUTIONS;
 use crate::comparison::work_precision::{CostToAccuracy, Reached};
@@ -16,13 +17,14 @@ const BASE: &str = "explicit";
 /// The accuracies the first screen asks for.
 const TARGETS: [f64; 2] = [1e-2, 1e-4];
 
-/// The first screen (about 60 lines); `previous`: the report this run replaces, if any.
+/// The first screen (about 60 lines); `since`: what changed since the report this run
+/// replaces, if there was one.
 pub fn render(
     w: &mut String,
     s: &Summary,
     p: &Provenance,
     parts: &[(&str, f64)],
-    previous: Option<&Summary>,
+    since: Option<&Since>,
 ) {
     let _ = writeln!(w, "# crosscheck report\n");
     let took: f64 = parts.iter().map(|(_, t)| t).sum();
@@ -46,8 +48,8 @@ pub fn render(
     let cases = representatives(s);
     cost_table(w, &cases, &engines);
     critical_table(w, &cases, &engines);
-    if let Some(old) = previous {
-        changes(w, old, s);
+    if let Some(since) = since {
+        let _ = writeln!(w, "{}", since.paragraph());
     }
 }
 
@@ -487,95 +489,3 @@ fn critical_table(w: &mut String, cases: &[&CaseSummary], engines: &[&str]) {
     }
     let _ = writeln!(w);
 }
-
-/// What changed since the previous report: verdicts that flipped, errors that moved by more
-/// than [`MOVED`], cells added or gone.
-fn changes(w: &mut String, old: &Summary, new: &Summary) {
-    let cells = |s: &Summary| -> Vec<(String, String, Option<f64>, Option<bool>)> {
-        s.cases
-            .iter()
-            .flat_map(|c| {
-                c.runs.iter().map(move |r| {
-                    (
-                        c.id.clone(),
-                        r.engine.clone(),
-                        r.against_baseline.as_ref().and_then(|a| a.worst_max),
-                        r.meets_tolerance,
-                    )
-                })
-            })
-            .collect()
-    };
-    let (before, after) = (cells(old), cells(new));
-    let mut flipped = Vec::new();
-    let mut moved: Vec<(f64, String)> = Vec::new();
-    let mut added = 0;
-    for (case, engine, error, meets) in &after {
-        let Some((_, _, e0, m0)) = before.iter().find(|b| b.0 == *case && b.1 == *engine) else {
-            added += 1;
-            continue;
-        };
-        if m0 != meets && meets.is_some() {
-            flipped.push(format!(
-                "{case} / `{engine}` now {} ({} → {})",
-                if *meets == Some(true) {
-                    "meets its tolerance"
-                } else {
-                    "misses its tolerance"
-                },
-                e0.map_or("–".into(), sci),
-                error.map_or("–".into(), sci)
-            ));
-        }
-        if let (Some(a), Some(b)) = (e0, error)
-            && *a > 0.0
-            && (b / a - 1.0).abs() > MOVED
-        {
-            moved.push((
-                (b / a).ln().abs(),
-                format!("{case} / `{engine}` {} → {}", sci(*a), sci(*b)),
-            ));
-        }
-    }
-    let gone = before
-        .iter()
-        .filter(|b| !after.iter().any(|a| a.0 == b.0 && a.1 == b.1))
-        .count();
-    let _ = write!(w, "**Since the previous report in this directory:** ");
-    if flipped.is_empty() && moved.is_empty() && added == 0 && gone == 0 {
-        let _ = writeln!(
-            w,
-            "no verdict changed and no error moved by more than {:.0} %.\n",
-            MOVED * 100.0
-        );
-        return;
-    }
-    moved.sort_by(|a, b| b.0.total_cmp(&a.0));
-    let mut parts = Vec::new();
-    if !flipped.is_empty() {
-        parts.push(format!(
-            "{} verdicts changed ({})",
-            flipped.len(),
-            flipped.join("; ")
-        ));
-    }
-    if !moved.is_empty() {
-        let shown: Vec<&str> = moved.iter().take(3).map(|m| m.1.as_str()).collect();
-        parts.push(format!(
-            "{} errors moved by more than {:.0} % (most: {})",
-            moved.len(),
-            MOVED * 100.0,
-            shown.join("; ")
-        ));
-    }
-    if added > 0 {
-        parts.push(format!("{added} new cells"));
-    }
-    if gone > 0 {
-        parts.push(format!("{gone} cells no longer run"));
-    }
-    let _ = writeln!(w, "{}.\n", parts.join("; "));
-}
-
-/// An error has moved when it changed by more than this fraction.
-pub const MOVED: f64 = 0.01;

@@ -57,8 +57,8 @@ pub struct Inputs<'a> {
     pub requests: &'a [crate::run::on_request::Request],
     /// How long each part of the run took, seconds, in order (empty: not said).
     pub parts: &'a [(&'a str, f64)],
-    /// The report this run replaces, if there was one.
-    pub previous: Option<&'a Summary>,
+    /// What changed since the report this run replaces, if there was one.
+    pub since: Option<&'a super::regression::Since>,
 }
 
 /// A page's title and the link back to the first screen.
@@ -75,7 +75,7 @@ pub fn render(s: &Summary, inputs: &Inputs) -> Pages {
         s,
         inputs.provenance,
         inputs.parts,
-        inputs.previous,
+        inputs.since,
     );
     index(&mut report, s);
     pages.report = report;

@@ -212,6 +212,11 @@ pub fn write(
     let json = serde_json::to_string_pretty(&timings).expect("timings serialise") + "\n";
     data::write_atomic(&timings_path(out), json.as_bytes())?;
     checkpoint("report")?;
+    // Both tiers of `crosscheck compare`, this report's files against the previous report's.
+    let since = regression::read(previous)
+        .ok()
+        .zip(regression::read(out).ok())
+        .map(|(base, new)| regression::since(&base, &new));
     let pages = markdown::render(
         &summary,
         &markdown::Inputs {
@@ -221,7 +226,7 @@ pub fn write(
             maps: &stability::read_all(out),
             requests: &on_request::read(out),
             parts: &study.parts,
-            previous: old.as_ref(),
+            since: since.as_ref(),
         },
     );
     write_pages(out, &pages)?;

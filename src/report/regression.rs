@@ -209,7 +209,55 @@ fn drift_of(base: &Path, new: &Path) -> Result<Vec<(String, f64)>, Unusable> {
         .collect())
 }
 
-/// Compare two reports: every column of every cell, both tiers.
+/// The (case, engine) cells of a report, in order.
+fn cells_of(report: &Report) -> Vec<(&str, &str)> {
+    let mut c: Vec<(&str, &str)> = report
+        .verdicts
+        .keys()
+        .map(|k| (k.0.as_str(), k.1.as_str()))
+        .collect();
+    c.dedup();
+    c
+}
+
+/// Both tiers of one cell, every column of its history.
+fn cell_changes(
+    base: &Report,
+    new: &Report,
+    case: &str,
+    engine: &str,
+) -> Result<Vec<Change>, Unusable> {
+    let file = |r: &Report| r.dir.join("data").join(case).join(format!("{engine}.csv"));
+    let drifts = if file(base).is_file() || file(new).is_file() {
+        drift_of(&file(base), &file(new))?
+    } else {
+        // No history on either side (a run that failed in both): the verdicts alone.
+        base.verdicts
+            .keys()
+            .filter(|k| k.0 == case && k.1 == engine)
+            .map(|k| (k.2.clone(), 0.0))
+            .collect()
+    };
+    Ok(drifts
+        .into_iter()
+        .map(|(column, drift)| {
+            let key = (case.to_string(), engine.to_string(), column);
+            let physics = base
+                .verdicts
+                .get(&key)
+                .zip(new.verdicts.get(&key))
+                .map(|(a, b)| (a.clone(), b.clone()));
+            Change {
+                key,
+                physics,
+                drift,
+            }
+        })
+        .collect())
+}
+
+/// Compare two reports: every column of every cell, both tiers; they must hold the same
+/// cells and columns.
 pub fn compare(base: &Report, new: &Report) -> Result<Vec<Change>, Unusable> {
     let differ = only_on_one_side(base.verdicts.keys(), new.verdicts.keys());
     if !differ.is_empty() {
@@ -218,43 +266,148 @@ pub fn compare(base: &Report, new: &Report) -> Result<Vec<Change>, Unusable> {
             list: differ.into_iter().take(5).collect::<Vec<_>>().join("; "),
         });
     }
-    let cells: Vec<(&str, &str)> = {
-        let mut c: Vec<(&str, &str)> = base
-            .verdicts
-            .keys()
-            .map(|k| (k.0.as_str(), k.1.as_str()))
-            .collect();
-        c.dedup();
-        c
-    };
     let mut changes = Vec::new();
-    for (case, engine) in cells {
-        let file = |r: &Report| r.dir.join("data").join(case).join(format!("{engine}.csv"));
-        let drifts = if file(base).is_file() || file(new).is_file() {
-            drift_of(&file(base), &file(new))?
-        } else {
-            // No history on either side (a run that failed in both): the verdicts alone.
-            base.verdicts
-                .keys()
-                .filter(|k| k.0 == case && k.1 == engine)
-                .map(|k| (k.2.clone(), 0.0))
-                .collect()
-        };
-        for (column, drift) in drifts {
-            let key = (case.to_string(), engine.to_string(), column);
-            let physics = base
-                .verdicts
-                .get(&key)
-                .zip(new.verdicts.get(&key))
-                .map(|(a, b)| (a.clone(), b.clone()));
-            changes.push(Change {
-                key,
-                physics,
-                drift,
-            });
-        }
+    for (case, engine) in cells_of(base) {
+        changes.extend(cell_changes(base, new, case, engine)?);
     }
     Ok(changes)
+}
+
+/// What changed between a report and the one that replaces it (the main command's "since the
+/// previous report"): [`compare`]'s two tiers over the cells both hold, and the cells either
+/// holds alone.
+#[derive(Debug, Clone, Default)]
+pub struct Since {
+    /// Both tiers of every column of the cells both reports hold.
+    pub changes: Vec<Change>,
+    /// Cells (case, engine) only the new report has.
+    pub added: Vec<(String, String)>,
+    /// Cells only the previous report has.
+    pub gone: Vec<(String, String)>,
+    /// Cells both have whose histories cannot be compared (other columns or rows), and why.
+    pub incomparable: Vec<String>,
+}
+
+/// [`compare`] over the cells `base` and `new` share, the others counted apart.
+pub fn since(base: &Report, new: &Report) -> Since {
+    let (a, b) = (cells_of(base), cells_of(new));
+    let owned = |c: &(&str, &str)| (c.0.to_string(), c.1.to_string());
+    let mut since = Since {
+        added: b.iter().filter(|c| !a.contains(c)).map(owned).collect(),
+        gone: a.iter().filter(|c| !b.contains(c)).map(owned).collect(),
+        ..Since::default()
+    };
+    for (case, engine) in a.iter().filter(|c| b.contains(c)) {
+        match cell_changes(base, new, case, engine) {
+            Ok(changes) => since.changes.extend(changes),
+            Err(e) => since.incomparable.push(e.to_string()),
+        }
+    }
+    since
+}
+
+/// An error has moved when it changed by more than this fraction.
+pub const MOVED: f64 = 0.01;
+
+impl Since {
+    /// One paragraph: verdicts that flipped (physics), errors that moved by more than
+    /// [`MOVED`], histories that drifted by more than [`DRIFT`] of their peak (machine), and
+    /// the cells added, gone or not comparable.
+    pub fn paragraph(&self) -> String {
+        let cell = |c: &Change| format!("{} / `{}` {}", c.key.0, c.key.1, c.key.2);
+        let flipped: Vec<String> = self
+            .changes
+            .iter()
+            .filter_map(|c| {
+                let (a, b) = c.physics.as_ref()?;
+                let verdict = match (a.pass, b.pass) {
+                    (Some(true), Some(false)) => "now misses its tolerance",
+                    (Some(false), Some(true)) => "now meets its tolerance",
+                    _ => return None,
+                };
+                Some(format!(
+                    "{} {verdict} ({} → {})",
+                    cell(c),
+                    sci(a.error),
+                    sci(b.error)
+                ))
+            })
+            .collect();
+        let mut moved: Vec<(f64, String)> = self
+            .changes
+            .iter()
+            .filter_map(|c| {
+                let (a, b) = c
+                    .physics
+                    .as_ref()
+                    .filter(|(a, b)| a.relative && b.relative)?;
+                let ratio = b.error / a.error;
+                (a.error > 0.0 && (ratio - 1.0).abs() > MOVED).then(|| {
+                    let text = format!("{} {} → {}", cell(c), sci(a.error), sci(b.error));
+                    (ratio.ln().abs(), text)
+                })
+            })
+            .collect();
+        moved.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let mut drifted: Vec<&Change> = self.changes.iter().filter(|c| c.drift > DRIFT).collect();
+        drifted.sort_by(|a, b| b.drift.total_cmp(&a.drift));
+        let mut parts = Vec::new();
+        if !flipped.is_empty() {
+            parts.push(format!(
+                "{} verdicts changed ({})",
+                flipped.len(),
+                flipped.join("; ")
+            ));
+        }
+        if !moved.is_empty() {
+            let shown: Vec<&str> = moved.iter().take(3).map(|m| m.1.as_str()).collect();
+            parts.push(format!(
+                "{} errors moved by more than {:.0} % (most: {})",
+                moved.len(),
+                MOVED * 100.0,
+                shown.join("; ")
+            ));
+        }
+        if !drifted.is_empty() {
+            let shown: Vec<String> = drifted
+                .iter()
+                .take(3)
+                .map(|c| format!("{} by {}", cell(c), sci(c.drift)))
+                .collect();
+            parts.push(format!(
+                "{} history columns moved by more than {} of their peak (most: {})",
+                drifted.len(),
+                sci(DRIFT),
+                shown.join("; ")
+            ));
+        }
+        for (cells, what) in [
+            (&self.added, "new cells"),
+            (&self.gone, "cells no longer run"),
+        ] {
+            if !cells.is_empty() {
+                parts.push(format!("{} {what}", cells.len()));
+            }
+        }
+        if !self.incomparable.is_empty() {
+            parts.push(format!(
+                "{} cells whose histories cannot be compared ({})",
+                self.incomparable.len(),
+                self.incomparable[0]
+            ));
+        }
+        let head = "**Since the previous report in this directory** (the two tiers of \
+                    `crosscheck compare`):";
+        if parts.is_empty() {
+            return format!(
+                "{head} no verdict changed, no error moved by more than {:.0} % and no \
+                 history by more than {} of its peak.\n",
+                MOVED * 100.0,
+                sci(DRIFT)
+            );
+        }
+        format!("{head} {}.\n", parts.join("; "))
+    }
 }
 
 /// The comparison as markdown: a verdict line, then the physics regressions and the drifted

@@ -424,28 +424,37 @@ pub fn reach_cell(rows: &[Row], engine: &str, target: f64, setting: bool) -> Str
     }
 }
 
-/// The engines whose runs take a share of the sweep's budget (rapier: a fifth), as
-/// " (`rapier_f64`: 2e5 substeps, …)"; empty when every engine takes all of it.
+/// The engines whose runs take a share of the sweep's budget (rapier: a fifth), grouped by
+/// the budget they get, as " (`rapier_f64`, `rapier_f32`: 2e5 substeps)"; empty when every
+/// engine takes all of it.
 fn budget_shares(engines: &[String], budget: f64) -> String {
-    let shares: Vec<String> = engines
-        .iter()
-        .filter_map(|e| {
-            let stepping = crate::engines::named(e)?.stepping()?;
-            (stepping.budget_share < 1.0).then(|| {
-                let unit = if stepping.substeps.is_some() {
-                    "substeps"
-                } else {
-                    "increments"
-                };
-                format!("`{e}`: {:.0e} {unit}", budget * stepping.budget_share)
-            })
-        })
-        .collect();
-    if shares.is_empty() {
-        String::new()
-    } else {
-        format!(" ({})", shares.join(", "))
+    let mut groups: Vec<(String, Vec<String>)> = Vec::new();
+    for e in engines {
+        let Some(stepping) = crate::engines::named(e).and_then(|e| e.stepping()) else {
+            continue;
+        };
+        if stepping.budget_share >= 1.0 {
+            continue;
+        }
+        let unit = if stepping.substeps.is_some() {
+            "substeps"
+        } else {
+            "increments"
+        };
+        let amount = format!("{:.0e} {unit}", budget * stepping.budget_share);
+        match groups.iter_mut().find(|g| g.0 == amount) {
+            Some(g) => g.1.push(format!("`{e}`")),
+            None => groups.push((amount, vec![format!("`{e}`")])),
+        }
     }
+    if groups.is_empty() {
+        return String::new();
+    }
+    let parts: Vec<String> = groups
+        .iter()
+        .map(|(amount, names)| format!("{}: {amount}", names.join(", ")))
+        .collect();
+    format!(" ({})", parts.join("; "))
 }
 
 /// The engines of sweep rows, in the order they first appear (the run's engine order).

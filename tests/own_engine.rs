@@ -12,6 +12,35 @@ use crosscheck::engines::Engine;
 use crosscheck::pipeline::exact_solutions;
 use crosscheck::run::{stability, sweep};
 
+/// Its history meets the output contract on every springs case at the case's own increment
+/// (the explicit engine's, as its `Needs` asks), 20,000 increments on the seed cases: every
+/// output row, the last at the end of the duration.
+#[test]
+fn its_history_meets_the_output_contract() {
+    use crosscheck::contract;
+    use crosscheck::run::{Plan, execute};
+    let cases: Vec<_> = common::SPRINGS_CASES
+        .iter()
+        .map(|c| common::scene(c))
+        .collect();
+    let plan = Plan {
+        cases,
+        engines: vec![Box::new(engine::SemiImplicitEuler)],
+        settings: Default::default(),
+    };
+    let outcome = execute(&plan, false);
+    assert_eq!(outcome.jobs.len(), common::SPRINGS_CASES.len());
+    for job in &outcome.jobs {
+        let scene = plan.cases.iter().find(|s| s.id == job.case).unwrap();
+        // The harness checks the contract as it runs the job: a breach is an `Err` here.
+        let run = job
+            .result
+            .as_ref()
+            .unwrap_or_else(|e| panic!("{}: {e}", job.case));
+        contract::check(scene, &run.history).unwrap_or_else(|e| panic!("{}: {e}", job.case));
+    }
+}
+
 /// The sweep refines its increment from the output interval down and fits the order: 1 for
 /// semi-implicit Euler (its velocity lags half an increment), within 0.1 (the fit's spread over
 /// the points of a path, measured 1.00), beside `explicit`'s 2.

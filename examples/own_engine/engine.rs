@@ -143,7 +143,7 @@ impl State {
         let mut previous = self.row(scene)?;
         self.initial_energy = previous[previous.len() - 5] + previous[previous.len() - 4];
         previous = self.row(scene)?;
-        let mut step_end = 0.0;
+        let mut step_start = 0.0;
         for step in &scene.steps[dynamic.unwrap_or(scene.steps.len())..] {
             let StepKind::Dynamic { duration } = step.kind else {
                 return Err(EngineError::Unsupported(
@@ -151,15 +151,22 @@ impl State {
                 ));
             };
             self.hold(scene, step);
-            step_end += duration;
-            while t < step_end * (1.0 - 1e-12) {
-                let dt = h.min(step_end - t);
+            // Times from the step's start, so that round-off does not add up over increments;
+            // the last increment is shortened to end the step.
+            let increments = (duration / h - 1e-9).ceil().max(1.0) as u64;
+            for k in 1..=increments {
+                let next = if k == increments {
+                    step_start + duration
+                } else {
+                    step_start + k as f64 * h
+                };
+                let dt = next - t;
                 self.advance(scene, dt);
                 steps += 1;
                 let current = self.row(scene)?;
-                // Rows at output times in (t, t + dt], interpolated linearly.
+                // Rows at output times in (t, next], interpolated linearly.
                 while let Some(&at) = times.get(rows.len())
-                    && at <= t + dt * (1.0 + 1e-9)
+                    && at <= next + 1e-9 * dt
                 {
                     let w = ((at - t) / dt).clamp(0.0, 1.0);
                     let mut row: Vec<f64> = (previous.iter().zip(&current))
@@ -168,8 +175,9 @@ impl State {
                     row.insert(0, at);
                     rows.push(row);
                 }
-                (previous, t) = (current, t + dt);
+                (previous, t) = (current, next);
             }
+            step_start += duration;
         }
         Ok((History { columns, rows }, steps))
     }

@@ -47,6 +47,20 @@ const DRAWN: [&str; 8] = [
     "explicit",
 ];
 
+/// The engines of `histories` in drawing order: those of [`DRAWN`] in its order, then any
+/// other (a user's engine, in black) in the order given.
+fn drawing_order<'a>(histories: &'a [(&'a str, History)]) -> Vec<&'a str> {
+    let known = DRAWN
+        .iter()
+        .copied()
+        .filter(|e| histories.iter().any(|(h, _)| h == e));
+    let others = histories
+        .iter()
+        .map(|(e, _)| *e)
+        .filter(|e| !DRAWN.contains(e));
+    known.chain(others).collect()
+}
+
 /// Height of the one legend, under the title.
 const LEGEND_HEIGHT: u32 = 50;
 
@@ -101,11 +115,7 @@ pub fn render(
     if live.is_empty() {
         return None;
     }
-    let drawn: Vec<&str> = DRAWN
-        .iter()
-        .copied()
-        .filter(|e| histories.iter().any(|(h, _)| h == e))
-        .collect();
+    let drawn = drawing_order(histories);
     let mut leaves: Vec<&str> = Vec::new();
     let mut svg = String::new();
     {
@@ -365,8 +375,8 @@ pub fn render_errors(scene: &Scene, histories: &[(&str, History)]) -> Option<Str
     let find = |name: &str| histories.iter().find(|(e, _)| *e == name).map(|(_, h)| h);
     let mut panels: Vec<(String, Vec<LabelledSeries>)> = Vec::new();
     for column in contract::columns(scene.family) {
-        let series: Vec<_> = DRAWN
-            .iter()
+        let series: Vec<_> = drawing_order(histories)
+            .into_iter()
             .filter_map(|engine| {
                 let colour = palette::engine(engine);
                 let against = comparison::baseline(engine)?;
@@ -389,8 +399,8 @@ pub fn render_errors(scene: &Scene, histories: &[(&str, History)]) -> Option<Str
             panels.push((format!("|error| / peak of {column}"), series));
         }
     }
-    let balance: Vec<_> = DRAWN
-        .iter()
+    let balance: Vec<_> = drawing_order(histories)
+        .into_iter()
         .filter_map(|engine| {
             let colour = palette::engine(engine);
             let h = find(engine)?;

@@ -281,7 +281,7 @@ pub fn render(engine: &str, points: &[&Point], critical: &[&Critical]) -> Option
                 Outcome::Accurate => "accurate (within the case's tolerance)".to_string(),
                 Outcome::Inaccurate => "inaccurate (bounded)".to_string(),
                 Outcome::Unstable => {
-                    format!("unstable (energy > {ENERGY_GROWTH_LIMIT}×, ÷ (1 − r²) below 1)")
+                    format!("unstable (energy > {ENERGY_GROWTH_LIMIT}× a stable run's reading)")
                 }
                 Outcome::Failed => "failed".to_string(),
                 Outcome::NotApplicable => "not applicable".to_string(),
@@ -425,7 +425,8 @@ pub fn overview(w: &mut String, map: &Map) {
          engines at that ratio of their own, rapier, which has no stable increment, at that ratio of \
          the explicit one's), each increment exactly. A run is *unstable* when the engine stopped it \
          as such or its kinetic plus elastic energy rose above {ENERGY_GROWTH_LIMIT}× what it may hold \
-         (its initial energy plus the work of the loads), *accurate* when its largest error against \
+         (its initial energy plus the work of the loads) times what a stable run of the engine's \
+         scheme reads at that ratio (central differences: 1/(1 − r²) below 1), *accurate* when its largest error against \
          its own model's exact solution is within the case's tolerance for it (a rapier engine \
          without one takes the case's `rapier_f64` tolerance, any other the tightest the case \
          declares), *inaccurate* when bounded but outside it. Cases without a stable increment \

@@ -10,7 +10,14 @@ use std::path::{Path, PathBuf};
 /// Checks that need the engines: tolerance names must be engine names, and a given increment
 /// must not exceed the stable one.
 pub fn check_scene(scene: &Scene) -> Result<(), SceneError> {
-    let names = engines::known_names();
+    check_scene_for(scene, &[])
+}
+
+/// [`check_scene`], with the names of engines beyond crosscheck's own (a user's) accepted in
+/// `[tolerances]`.
+pub fn check_scene_for(scene: &Scene, also: &[&str]) -> Result<(), SceneError> {
+    let mut names = engines::known_names();
+    names.extend(also.iter().map(|n| n.to_string()));
     for engine in scene.tolerances.keys() {
         if !names.contains(engine) {
             return Err(SceneError {
@@ -147,6 +154,17 @@ pub enum LoadError {
 /// caller sees every problem at once; a case given twice is kept once. The scenes come back
 /// sorted by id (the report order).
 pub fn load_cases(args: &[String], dir: &Path) -> Result<Vec<Scene>, Vec<LoadError>> {
+    load_cases_for(args, dir, &[])
+}
+
+/// [`load_cases`] for a plan with engines beyond crosscheck's own: their names (`also`) may
+/// have tolerances in the case files.
+pub fn load_cases_for(
+    args: &[String],
+    dir: &Path,
+    also: &[&str],
+) -> Result<Vec<Scene>, Vec<LoadError>> {
+    let check = |scene: &Scene| check_scene_for(scene, also);
     let paths: Vec<Result<PathBuf, LoadError>> = if args.is_empty() {
         match case::discover(dir) {
             Ok(v) if v.is_empty() => return Err(vec![LoadError::NoCases(dir.to_path_buf())]),
@@ -173,7 +191,7 @@ pub fn load_cases(args: &[String], dir: &Path) -> Result<Vec<Scene>, Vec<LoadErr
                 continue;
             }
         };
-        let scene = match case::load_checked(&path, &check_scene) {
+        let scene = match case::load_checked(&path, &check) {
             Ok(s) => s,
             Err(e) => {
                 errors.push(e.into());

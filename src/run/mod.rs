@@ -44,8 +44,8 @@ pub mod stability;
 pub mod sweep;
 
 pub use load::{
-    LoadError, UnknownEngine, check_increment, check_overrides, check_scene, engine_names,
-    load_cases, select_engines,
+    LoadError, UnknownEngine, check_increment, check_overrides, check_scene, check_scene_for,
+    engine_names, load_cases, load_cases_for, select_engines,
 };
 
 use crate::contract::{self, History};

@@ -147,7 +147,8 @@ fn reports_that_cannot_be_compared_are_refused() {
 
 /// The main command says what changed since the report it replaces, with `compare`'s two
 /// tiers: nothing after a second run of the same build; a history of the previous report
-/// 10 % larger in one column is named with its drift, 0.1/1.1 of that report's peak.
+/// 10 % larger in one column is named with its drift, 0.1/1.1 of that report's peak; one of
+/// another schema version is said to be incomparable.
 #[test]
 fn the_main_command_says_what_changed_since_the_previous_report() {
     let root = tempfile::tempdir().unwrap();
@@ -172,6 +173,18 @@ fn the_main_command_says_what_changed_since_the_previous_report() {
     assert!(
         text.contains("1 history columns moved by more than 1.00e-9 of their peak")
             && text.contains("springs_grounded_a / `explicit` u_end by 9.09e-2"),
+        "{text}"
+    );
+    // A previous report of another schema version is said to be incomparable, not skipped.
+    let path = out.join("summary.json");
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    json["schema_version"] = serde_json::json!(0);
+    std::fs::write(&path, json.to_string()).unwrap();
+    report(&out, &cases);
+    let text = first_screen();
+    assert!(
+        text.contains("it cannot be compared with this one") && text.contains("schema version 0"),
         "{text}"
     );
 }

@@ -1,6 +1,6 @@
 //! The module layout shows the data flow, and the imports follow it: engines never know each
 //! other, the scene knows no file format, the run writes nothing and knows no comparison, the
-//! comparison knows no engine. The README's architecture diagram names files that exist and every module there is.
+//! comparison reaches engines only through the run (the `Engine` trait it re-exports). The README's architecture diagram names files that exist and every module there is.
 use std::fs;
 use std::path::{Path, PathBuf};
 

@@ -161,7 +161,7 @@ fn a_sweep_writes_its_csvs_and_figures() {
     let (all_a, all_b) = (records(&a), records(&b));
     for case in cases {
         let rows: Vec<&Vec<String>> = all_a.iter().filter(|r| r[0] == case).collect();
-        // At least three points per engine's path.
+        // At least three rows per engine.
         let least = 3 * common::STEPPING.len();
         assert!(rows.len() > least, "{case}: {} rows", rows.len());
         for r in &rows {

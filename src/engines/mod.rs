@@ -117,7 +117,7 @@ pub enum Needs {
 /// it against the exact solution of its model (`reference`; `analytic` for `explicit_small`)
 /// with the case's tolerance for it (`[tolerances]` in the case file, by engine name), builds
 /// the discrepancy budget, sweeps and maps it as its [`Stepping`] says, and writes it into
-/// every table of the report. `examples/own_engine` is a complete engine in about 250 lines,
+/// every table of the report. `examples/own_engine` is a complete engine in about 300 lines,
 /// run through all of it (`cargo run --release --example own_engine`).
 pub trait Engine: Send + Sync {
     /// Name, used as the CSV file stem and in reports.

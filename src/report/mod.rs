@@ -213,10 +213,7 @@ pub fn write(
     data::write_atomic(&timings_path(out), json.as_bytes())?;
     checkpoint("report")?;
     // Both tiers of `crosscheck compare`, this report's files against the previous report's.
-    let since = regression::read(previous)
-        .ok()
-        .zip(regression::read(out).ok())
-        .map(|(base, new)| regression::since(&base, &new));
+    let since = regression::since_dirs(previous, out);
     let pages = markdown::render(
         &summary,
         &markdown::Inputs {

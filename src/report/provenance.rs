@@ -43,7 +43,11 @@ impl Provenance {
                 env!("CROSSCHECK_COMMIT")
             ),
             rustc: env!("CROSSCHECK_RUSTC").to_string(),
-            rapier: rapier_versions(),
+            rapier: if cfg!(feature = "rapier") {
+                rapier_versions()
+            } else {
+                "rapier not built (cargo feature `rapier` off)".into()
+            },
             machine: machine(),
             date: utc_date(),
             settings: if *settings == RunSettings::default() {

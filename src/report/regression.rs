@@ -286,6 +286,23 @@ pub struct Since {
     pub gone: Vec<(String, String)>,
     /// Cells both have whose histories cannot be compared (other columns or rows), and why.
     pub incomparable: Vec<String>,
+    /// Why the two reports cannot be compared at all (a previous report of another schema
+    /// version, an unreadable file), where they cannot.
+    pub unusable: Option<String>,
+}
+
+/// What changed from the report in `previous` to the one in `new`: `None` where `previous`
+/// holds no report; [`Since::unusable`] says why where the two cannot be compared.
+pub fn since_dirs(previous: &Path, new: &Path) -> Option<Since> {
+    let compared = match (read(previous), read(new)) {
+        (Err(Unusable::NotAReport(_)), _) => return None,
+        (Ok(base), Ok(new)) => since(&base, &new),
+        (Err(e), _) | (_, Err(e)) => Since {
+            unusable: Some(e.to_string()),
+            ..Since::default()
+        },
+    };
+    Some(compared)
 }
 
 /// [`compare`] over the cells `base` and `new` share, the others counted apart.
@@ -398,6 +415,9 @@ impl Since {
         }
         let head = "**Since the previous report in this directory** (the two tiers of \
                     `crosscheck compare`):";
+        if let Some(why) = &self.unusable {
+            return format!("{head} it cannot be compared with this one: {why}.\n");
+        }
         if parts.is_empty() {
             return format!(
                 "{head} no verdict changed, no error moved by more than {:.0} % and no \

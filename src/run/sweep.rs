@@ -406,8 +406,13 @@ fn run_path(
         let varied = substeps.and_then(|n| engine.with_substeps(n));
         let engine = varied.as_deref().unwrap_or(engine);
         let iterations = substeps.or(stepping.substeps);
-        let increments =
-            engine.increments(scene, &settings).unwrap_or(0.0) * iterations.unwrap_or(1) as f64;
+        // An engine that cannot tell is counted from the increment it is given.
+        let given = match settings.increment {
+            Some(IncrementRule::Forced(h)) if h > 0.0 => Some(scene.duration() / h),
+            _ => None,
+        };
+        let increments = engine.increments(scene, &settings).or(given).unwrap_or(0.0)
+            * iterations.unwrap_or(1) as f64;
         if increments > budget * (1.0 + 1e-9) {
             // A stall the budget left unconfirmed still ends the path as stalled.
             ended = if stalls > 0 { "stalled" } else { "budget" };
@@ -422,7 +427,8 @@ fn run_path(
         let status = point.status;
         let this = point.error.map(|e| e.0);
         let previous = points.last().and_then(|p| p.error.map(|e| e.0));
-        let from_stable = matches!(stepping.coarsest, Coarsest::Stable { .. });
+        let from_stable = matches!(stepping.coarsest, Coarsest::Stable { .. })
+            && matches!(kind, PathKind::Increment { .. });
         if k == 0 && from_stable && status == Status::Ok {
             let interval = scene.duration() / (scene.output_rows - 1) as f64;
             probe = unstable_probe(scene, engine, &settings, &point, interval, error);

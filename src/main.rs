@@ -505,7 +505,10 @@ fn element_study(target: &Path, quiet: bool, dir: &Path, stdout: &mut Stdout) ->
         "explicit, ns per increment = sum of coefficient × count:\n\n{}",
         written::summary(&study)
     );
+    #[cfg(feature = "figures")]
     let figure = written::render(&study).map(|svg| (written::figure_path(target), svg));
+    #[cfg(not(feature = "figures"))]
+    let figure = None;
     let csv = (written::csv_path(target), written::csv(&study));
     publish(stdout, &text, csv, figure)
 }
@@ -525,7 +528,10 @@ fn chain_study(max_n: usize, target: &Path, quiet: bool, stdout: &mut Stdout) ->
         Ok(s) => s,
         Err(code) => return code,
     };
+    #[cfg(feature = "figures")]
     let figure = written::render(&study).map(|svg| (written::figure_path(target), svg));
+    #[cfg(not(feature = "figures"))]
+    let figure = None;
     let csv = (written::csv_path(target), written::csv(&study));
     publish(stdout, &written::table(&study), csv, figure)
 }

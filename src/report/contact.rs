@@ -53,11 +53,14 @@ pub fn section(w: &mut String, s: &Summary) {
         .collect();
     if !drops.is_empty() {
         let names = engines(drops[0]);
-        let _ = writeln!(
+        let _ = write!(
             w,
             "Rebound height of the first impact over the drop, against e² (penalty contact: a \
-             contact dashpot sized for e; rapier: its `restitution`, the block a fixed body):\n\n\
-             ![first rebound over the drop against e, every engine, over e²](figures/rebound.svg)\n"
+             contact dashpot sized for e; rapier: its `restitution`, the block a fixed body):\n\n{}",
+            super::format::figure(
+                "first rebound over the drop against e, every engine, over e²",
+                "figures/rebound.svg"
+            )
         );
         let _ = writeln!(w, "| case | e | e² | {} |", names.join(" | "));
         let _ = writeln!(w, "|---|---:|---:|{}", "---:|".repeat(names.len()));

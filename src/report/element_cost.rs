@@ -3,9 +3,11 @@
 //! against predicted, log–log, with the line of equality and the band of 1.5× either way).
 
 use crate::report::format::csv_finite as number;
+#[cfg(feature = "figures")]
 use crate::report::palette;
 use crate::run::element_cost::{Origin, Study, TERMS};
 use crate::scene::Dimension;
+#[cfg(feature = "figures")]
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -114,6 +116,7 @@ pub fn summary(study: &Study) -> String {
     s + "\n"
 }
 
+#[cfg(feature = "figures")]
 /// The figure: measured against predicted ns per increment, log–log; the family as filled
 /// circles, the seed cases as crosses, 2D and 3D in two colours; the line of equality solid and
 /// the band of 1.5× dashed. The legend sits lower right, below the diagonal.

@@ -1,15 +1,23 @@
 //! SVG figures (plotters): per case, each live contract column (and each contact gap) over time
 //! for the closed form and the engines, so a reader sees what the error tables measure.
 
+#[cfg(feature = "figures")]
 use crate::comparison;
+#[cfg(feature = "figures")]
 use crate::contract::{self, History};
+#[cfg(feature = "figures")]
 use crate::report::format::tick;
+#[cfg(feature = "figures")]
 use crate::report::palette;
+#[cfg(feature = "figures")]
 use crate::scene::Scene;
+#[cfg(feature = "figures")]
 use plotters::prelude::*;
+#[cfg(feature = "figures")]
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::path::{Path, PathBuf};
 
+#[cfg(feature = "figures")]
 /// Width of the legend column on the right of every panel (outside the data).
 const LEGEND_WIDTH: u32 = 240;
 
@@ -26,6 +34,7 @@ pub fn unit(column: &str) -> &'static str {
     }
 }
 
+#[cfg(feature = "figures")]
 /// One engine's line in a panel: name, colour, (t, value) points.
 type Series<'a> = (&'a str, RGBColor, Vec<(f64, f64)>);
 
@@ -34,6 +43,7 @@ pub fn figure_path(out: &Path, case: &str) -> PathBuf {
     out.join("figures").join(format!("{case}.svg"))
 }
 
+#[cfg(feature = "figures")]
 /// Drawn, in drawing order: the exact solutions first (thick, grey, underneath), then every
 /// engine.
 const DRAWN: [&str; 8] = [
@@ -47,6 +57,7 @@ const DRAWN: [&str; 8] = [
     "explicit",
 ];
 
+#[cfg(feature = "figures")]
 /// The engines of `histories` in drawing order: those of [`DRAWN`] in its order, then any
 /// other (a user's engine, in black) in the order given.
 fn drawing_order<'a>(histories: &'a [(&'a str, History)]) -> Vec<&'a str> {
@@ -61,13 +72,16 @@ fn drawing_order<'a>(histories: &'a [(&'a str, History)]) -> Vec<&'a str> {
     known.chain(others).collect()
 }
 
+#[cfg(feature = "figures")]
 /// Height of the one legend, under the title.
 const LEGEND_HEIGHT: u32 = 50;
 
+#[cfg(feature = "figures")]
 /// Markers per line: each engine's at its own times, so that lines which agree and overlap
 /// still show every engine.
 const MARKERS: usize = 8;
 
+#[cfg(feature = "figures")]
 /// A line's width: the exact solutions thick, under the engines.
 fn stroke(engine: &str) -> u32 {
     match engine {
@@ -77,6 +91,7 @@ fn stroke(engine: &str) -> u32 {
     }
 }
 
+#[cfg(feature = "figures")]
 /// The runs of consecutive points within [lo, hi] (a run that leaves the range is broken
 /// there, not drawn along the frame).
 fn within(points: &[(f64, f64)], lo: f64, hi: f64) -> Vec<Vec<(f64, f64)>> {
@@ -94,6 +109,7 @@ fn within(points: &[(f64, f64)], lo: f64, hi: f64) -> Vec<Vec<(f64, f64)>> {
     runs
 }
 
+#[cfg(feature = "figures")]
 /// Render a case's figure: one panel per column in `columns` (name and unit) whose values are
 /// not all zero, every available engine's history as a line (the exact solutions thick and
 /// grey underneath, each engine with markers at its own times), one legend under the title.
@@ -180,6 +196,7 @@ pub fn render(
     Some(svg)
 }
 
+#[cfg(feature = "figures")]
 /// One panel: its axes scaled to the exact solution, each series drawn where it is within
 /// them. Returns the engines that leave the range.
 fn panel_lines<'a, DB: DrawingBackend>(
@@ -265,6 +282,7 @@ fn panel_lines<'a, DB: DrawingBackend>(
     Some(leaves)
 }
 
+#[cfg(feature = "figures")]
 /// One line of a panel's legend (in its own column right of the data): a run that leaves the
 /// panel's range is clipped at its edge, and says so.
 fn legend_entry<DB: DrawingBackend>(
@@ -297,13 +315,16 @@ fn legend_entry<DB: DrawingBackend>(
 /// meaningful relative to a peak).
 pub const LOG_FLOOR: f64 = 1e-16;
 
+#[cfg(feature = "figures")]
 /// Errors above this are clipped on the log-scale panels (a run off by ten times the peak has
 /// no accuracy left to show).
 const LOG_CEILING: f64 = 10.0;
 
+#[cfg(feature = "figures")]
 /// A labelled line of a log-scale panel: label, colour, (t, value) points.
 type LabelledSeries = (String, RGBColor, Vec<(f64, f64)>);
 
+#[cfg(feature = "figures")]
 /// One log-scale panel: named series of (t, value ≥ 0), drawn between [`LOG_FLOOR`] and
 /// [`LOG_CEILING`], the legend in its own column.
 fn log_panel<DB: DrawingBackend>(
@@ -366,6 +387,7 @@ pub fn errors_figure_path(out: &Path, case: &str) -> PathBuf {
     out.join("figures").join(format!("{case}.errors.svg"))
 }
 
+#[cfg(feature = "figures")]
 /// Render a case's error figure: per live contract column, each engine's error against the
 /// exact solution of its own model ([`comparison::baseline`]) over time, over the column's
 /// peak, on a log scale (the rows the comparison measures: valid rows, a contact force from the
@@ -457,6 +479,7 @@ pub fn budget_figure_path(out: &Path, family: &str) -> PathBuf {
     out.join("figures").join(format!("budget-{family}.svg"))
 }
 
+#[cfg(feature = "figures")]
 /// The budget's parts, with their colours.
 const PARTS: [(&str, RGBColor); 4] = [
     ("model_form", RGBColor(120, 120, 120)),
@@ -476,6 +499,7 @@ pub struct BudgetBar {
     pub total: f64,
 }
 
+#[cfg(feature = "figures")]
 /// Render a family's budget as a dot plot on a log scale: one row per case and engine, a dot
 /// per part (its norm over the column's peak) and a black bar for the total, so that a part of
 /// 1e-16 sits sixteen decades left of one of 1.
@@ -594,6 +618,7 @@ pub fn render_budget(family: &str, bars: &[BudgetBar]) -> Option<String> {
     Some(svg)
 }
 
+#[cfg(feature = "figures")]
 /// A value range widened by 15 % (at least 1e-9 of its magnitude, at least 1e-12), or `None`
 /// when it is empty or not finite: the figure is skipped rather than drawn on a degenerate
 /// axis.
@@ -607,6 +632,7 @@ fn padded(lo: f64, hi: f64) -> Option<(f64, f64)> {
     (lo.is_finite() && hi.is_finite() && hi > lo).then_some((lo, hi))
 }
 
+#[cfg(feature = "figures")]
 #[cfg(test)]
 mod tests {
     use super::*;

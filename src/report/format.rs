@@ -54,6 +54,16 @@ pub fn csv_finite(x: f64) -> String {
     }
 }
 
+/// A figure's markdown image link, followed by a blank line; nothing in a build without the
+/// figures (the cargo feature `figures`), which writes none.
+pub fn figure(alt: &str, path: &str) -> String {
+    if cfg!(feature = "figures") {
+        format!("![{alt}]({path})\n\n")
+    } else {
+        String::new()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,7 +1,7 @@
 //! `REPORT.md`, rendered from a [`Summary`]: every number in it is one of the summary's.
 
 use super::Timings;
-use super::format::{sci, sci_or_dash};
+use super::format::{figure, sci, sci_or_dash};
 use super::provenance::Provenance;
 use super::summary::{CaseSummary, EngineSummary, Summary, not_applicable};
 use super::verdicts::engine_table_header;
@@ -417,14 +417,19 @@ fn engine_notes(c: &CaseSummary, r: &EngineSummary) -> String {
 
 fn case_section(w: &mut String, c: &CaseSummary) {
     let _ = writeln!(w, "{} ({}D, {} s).\n", c.title, c.dimension, c.duration);
-    let _ = writeln!(
-        w,
-        "![{0}: the scene, drawn from the case file](../figures/{0}.sketch.svg)\n\n\
-         ![{0}: every engine's histories](../figures/{0}.svg)\n\n\
-         ![{0}: each engine's error against its own model, and its energy balance, over time \
-         (log scale)](../figures/{0}.errors.svg)\n",
-        c.id
-    );
+    let id = &c.id;
+    for (alt, file) in [
+        ("the scene, drawn from the case file", "sketch.svg"),
+        ("every engine's histories", "svg"),
+        (
+            "each engine's error against its own model, and its energy balance, over time \
+             (log scale)",
+            "errors.svg",
+        ),
+    ] {
+        let link = figure(&format!("{id}: {alt}"), &format!("../figures/{id}.{file}"));
+        let _ = write!(w, "{link}");
+    }
     if let Some(m) = &c.contact {
         let validity = match m.valid_until {
             None => {
@@ -783,10 +788,13 @@ fn at_a_glance(w: &mut String, s: &Summary, p: &Provenance, parts: &[(&str, f64)
     families.sort_unstable();
     families.dedup();
     for f in families {
-        let _ = writeln!(
-            w,
-            "\n![discrepancy budget, {f}: each source's share](figures/budget-{f}.svg)"
+        let link = figure(
+            &format!("discrepancy budget, {f}: each source's share"),
+            &format!("figures/budget-{f}.svg"),
         );
+        if !link.is_empty() {
+            let _ = writeln!(w, "\n{}", link.trim_end());
+        }
     }
     let _ = writeln!(w);
 }

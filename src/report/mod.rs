@@ -26,12 +26,15 @@ pub mod format;
 pub mod judge;
 pub mod markdown;
 pub mod on_request;
+#[cfg(feature = "figures")]
 pub mod palette;
 pub mod provenance;
+#[cfg(feature = "figures")]
 pub mod rebound;
 pub mod regression;
 pub mod results;
 pub mod scaling;
+#[cfg(feature = "figures")]
 pub mod sketch;
 pub mod stability;
 pub mod staging;
@@ -41,9 +44,7 @@ pub mod work_precision;
 
 use crate::comparison::discrepancy::JobBudget;
 use crate::comparison::work_precision::CaseSweep;
-use crate::contract::{self, History};
 use crate::run::{Outcome, Plan};
-use crate::scene::Family;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -143,6 +144,37 @@ pub fn write(
                 .insert(job.engine.clone(), s.info.wall_seconds);
         }
     }
+    #[cfg(feature = "figures")]
+    write_figures(out, plan, &summary)?;
+    data::write_atomic(&summary_path(out), summary.to_json().as_bytes())?;
+    data::write_atomic(&results::csv_path(out), results::csv(&summary).as_bytes())?;
+    let json = serde_json::to_string_pretty(&timings).expect("timings serialise") + "\n";
+    data::write_atomic(&timings_path(out), json.as_bytes())?;
+    checkpoint("report")?;
+    // Both tiers of `crosscheck compare`, this report's files against the previous report's.
+    let since = regression::since_dirs(previous, out);
+    let pages = markdown::render(
+        &summary,
+        &markdown::Inputs {
+            timings: &timings,
+            provenance: &provenance::Provenance::gather(&plan.settings),
+            sweeps: &work_precision::read_all(out),
+            maps: &stability::read_all(out),
+            requests: &on_request::read(out),
+            parts: &study.parts,
+            since: since.as_ref(),
+        },
+    );
+    write_pages(out, &pages)?;
+    Ok(summary)
+}
+
+/// The figures of a run: per case its histories, its sketch and its errors; the discrepancy
+/// budget per family; the rebounds.
+#[cfg(feature = "figures")]
+fn write_figures(out: &Path, plan: &Plan, summary: &Summary) -> Result<(), data::DataError> {
+    use crate::contract::{self, History};
+    use crate::scene::Family;
     for case in &summary.cases {
         let histories: Vec<(&str, History)> = summary
             .engines
@@ -203,31 +235,11 @@ pub fn write(
             )?;
         }
     }
-    if let Some(svg) = rebound::render(&rebound::points(&summary)) {
+    if let Some(svg) = rebound::render(&rebound::points(summary)) {
         checkpoint("figures")?;
         data::write_atomic(&rebound::figure_path(out), svg.as_bytes())?;
     }
-    data::write_atomic(&summary_path(out), summary.to_json().as_bytes())?;
-    data::write_atomic(&results::csv_path(out), results::csv(&summary).as_bytes())?;
-    let json = serde_json::to_string_pretty(&timings).expect("timings serialise") + "\n";
-    data::write_atomic(&timings_path(out), json.as_bytes())?;
-    checkpoint("report")?;
-    // Both tiers of `crosscheck compare`, this report's files against the previous report's.
-    let since = regression::since_dirs(previous, out);
-    let pages = markdown::render(
-        &summary,
-        &markdown::Inputs {
-            timings: &timings,
-            provenance: &provenance::Provenance::gather(&plan.settings),
-            sweeps: &work_precision::read_all(out),
-            maps: &stability::read_all(out),
-            requests: &on_request::read(out),
-            parts: &study.parts,
-            since: since.as_ref(),
-        },
-    );
-    write_pages(out, &pages)?;
-    Ok(summary)
+    Ok(())
 }
 
 /// Write the report's pages: each case's, then the question pages, `REPORT.md` last.

@@ -4,6 +4,7 @@
 
 use crate::report::format::csv_finite as number;
 use crate::run::scaling::{Study, fitted_exponent};
+#[cfg(feature = "figures")]
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -102,6 +103,7 @@ pub fn exponents(study: &Study) -> Vec<(String, f64)> {
         .collect()
 }
 
+#[cfg(feature = "figures")]
 /// The figure: ns per increment against N, log–log, one marked line per engine (legend: its
 /// fitted exponent), and the streaming limit × N as a dashed line; the legend sits lower right,
 /// below the lines (every line rises to the right).
@@ -206,6 +208,7 @@ pub fn render(study: &Study) -> Option<String> {
     Some(svg)
 }
 
+#[cfg(feature = "figures")]
 /// Tick label for a log axis: exact powers of ten as 10 with a superscript exponent, other
 /// values with 2 significant figures.
 fn power_of_ten(x: f64) -> String {

@@ -7,6 +7,7 @@ use crate::report::format::csv_finite as number;
 use crate::run::stability::{
     BISECTION_WIDTH, Bound, Critical, ENERGY_GROWTH_LIMIT, Map, Outcome, Point, RATIOS,
 };
+#[cfg(feature = "figures")]
 use plotters::prelude::*;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -147,6 +148,7 @@ pub fn critical_cell(c: &Critical) -> String {
     format!("{prefix}{:.3e}", c.increment)
 }
 
+#[cfg(feature = "figures")]
 fn colour(o: Outcome) -> RGBColor {
     match o {
         // Okabe–Ito blue, yellow and vermillion: apart in lightness as well as hue.
@@ -158,6 +160,7 @@ fn colour(o: Outcome) -> RGBColor {
     }
 }
 
+#[cfg(feature = "figures")]
 /// Where a ratio falls on the map's columns: log-linear between the centres of the two grid
 /// ratios around it, clamped to the first and last centres.
 fn column_x(ratios: &[f64], r: f64, left: u32, width: u32) -> i32 {
@@ -172,6 +175,7 @@ fn column_x(ratios: &[f64], r: f64, left: u32, width: u32) -> i32 {
     x.round() as i32
 }
 
+#[cfg(feature = "figures")]
 /// One engine's map: a row per case, a column per ratio, the outcome as colour; each row's
 /// critical increment (bisected) marked and printed in seconds at its right.
 pub fn render(engine: &str, points: &[&Point], critical: &[&Critical]) -> Option<String> {
@@ -328,6 +332,7 @@ pub fn write(out: &Path, map: &Map) -> Result<(), crate::report::data::DataError
     all.points.sort_by_key(|p| order(&p.engine));
     all.critical.sort_by_key(|c| order(&c.engine));
     write_atomic(&csv_path(out), csv(&all).as_bytes())?;
+    #[cfg(feature = "figures")]
     for engine in engines_of(map.points.iter().map(|p| p.engine.as_str())) {
         let mine: Vec<&Point> = map.points.iter().filter(|p| p.engine == engine).collect();
         if mine.is_empty() {
@@ -486,9 +491,13 @@ pub fn overview(w: &mut String, map: &Map) {
             words(engine, points),
             beyond_the_grid(map, engine)
         );
-        let _ = writeln!(
+        let _ = write!(
             w,
-            "![stability map of {engine}](figures/stability-{engine}.svg)\n"
+            "{}",
+            crate::report::format::figure(
+                &format!("stability map of {engine}"),
+                &format!("figures/stability-{engine}.svg")
+            )
         );
     }
 }

@@ -4,9 +4,14 @@
 //! case's tolerances).
 
 use crate::comparison::work_precision::{self, COLUMNS, CaseSweep, Row};
-use crate::report::format::{csv_finite as number, sci, tick};
+#[cfg(feature = "figures")]
+use crate::report::format::tick;
+use crate::report::format::{csv_finite as number, sci};
+#[cfg(feature = "figures")]
 use crate::report::palette;
+#[cfg(feature = "figures")]
 use plotters::prelude::*;
+#[cfg(feature = "figures")]
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -95,9 +100,11 @@ pub fn read(path: &Path) -> Option<Vec<Row>> {
         .collect()
 }
 
+#[cfg(feature = "figures")]
 /// Errors below this are drawn at it (round-off).
 const ERROR_FLOOR: f64 = 1e-16;
 
+#[cfg(feature = "figures")]
 /// The work–precision diagram of one case's sweep; `tolerances` are the case's declared ones
 /// (engine → max error over peak). None when no point has both an error and a time.
 pub fn render(sweep: &CaseSweep, tolerances: &BTreeMap<String, f64>) -> Option<String> {
@@ -317,6 +324,7 @@ pub fn render(sweep: &CaseSweep, tolerances: &BTreeMap<String, f64>) -> Option<S
 /// Write `sweep.csv` (the previous file's rows of cases this sweep did not run kept, every
 /// row in case order) and each case's work–precision figure into `out` (each file atomically;
 /// an interruption checkpoint before each).
+#[cfg_attr(not(feature = "figures"), allow(unused_variables))]
 pub fn write(
     out: &Path,
     sweeps: &[CaseSweep],
@@ -332,6 +340,7 @@ pub fn write(
     rows.extend(sweeps.iter().flat_map(CaseSweep::rows));
     rows.sort_by(|a, b| a.case.cmp(&b.case));
     write_atomic(&csv_path(out), csv(&rows).as_bytes())?;
+    #[cfg(feature = "figures")]
     for s in sweeps {
         crate::interrupt::checkpoint("sweep").map_err(|_| DataError::Interrupted)?;
         let tolerances = scenes
@@ -548,12 +557,17 @@ pub fn overview(w: &mut String, s: &crate::report::summary::Summary, sweeps: &Sw
 /// floor, the CPU time to each target and the cheapest setting within the case's tolerance.
 pub fn case_part(w: &mut String, c: &crate::report::summary::CaseSummary, rows: &[Row]) {
     use std::fmt::Write;
-    let _ = writeln!(
+    let _ = write!(
         w,
-        "\n**What accuracy costs.** Data: `sweep.csv`, the rows of case `{0}`.\n\n\
-         ![{0}: work–precision diagram (error against CPU time per simulated second, log–log)]\
-         (../figures/{0}.work-precision.svg)\n",
-        c.id
+        "\n**What accuracy costs.** Data: `sweep.csv`, the rows of case `{}`.\n\n{}",
+        c.id,
+        crate::report::format::figure(
+            &format!(
+                "{}: work–precision diagram (error against CPU time per simulated second, log–log)",
+                c.id
+            ),
+            &format!("../figures/{}.work-precision.svg", c.id)
+        )
     );
     let _ = writeln!(
         w,

@@ -290,6 +290,18 @@ pub fn write_histories(out: &Path, outcome: &Outcome) -> Result<(), data::DataEr
         })
 }
 
+/// Engine names, each once, in the order met: the run's order, a user's engine after the
+/// registry's.
+pub(crate) fn in_order_met<'a>(names: impl Iterator<Item = &'a str>) -> Vec<&'a str> {
+    let mut engines: Vec<&str> = Vec::new();
+    for n in names {
+        if !engines.contains(&n) {
+            engines.push(n);
+        }
+    }
+    engines
+}
+
 fn checkpoint(phase: &str) -> Result<(), data::DataError> {
     crate::interrupt::checkpoint(phase).map_err(|_| data::DataError::Interrupted)
 }

@@ -333,7 +333,7 @@ pub fn write(out: &Path, map: &Map) -> Result<(), crate::report::data::DataError
     all.critical.sort_by_key(|c| order(&c.engine));
     write_atomic(&csv_path(out), csv(&all).as_bytes())?;
     #[cfg(feature = "figures")]
-    for engine in engines_of(map.points.iter().map(|p| p.engine.as_str())) {
+    for engine in crate::report::in_order_met(map.points.iter().map(|p| p.engine.as_str())) {
         let mine: Vec<&Point> = map.points.iter().filter(|p| p.engine == engine).collect();
         if mine.is_empty() {
             continue;
@@ -346,20 +346,9 @@ pub fn write(out: &Path, map: &Map) -> Result<(), crate::report::data::DataError
     Ok(())
 }
 
-/// The engines of `names`, each once, in the order met.
-fn engines_of<'a>(names: impl Iterator<Item = &'a str>) -> Vec<&'a str> {
-    let mut engines: Vec<&str> = Vec::new();
-    for n in names {
-        if !engines.contains(&n) {
-            engines.push(n);
-        }
-    }
-    engines
-}
-
 /// The map's runs per engine, in the map's order.
 fn by_engine(map: &Map) -> Vec<(&str, Vec<Point>)> {
-    engines_of(map.points.iter().map(|p| p.engine.as_str()))
+    crate::report::in_order_met(map.points.iter().map(|p| p.engine.as_str()))
         .into_iter()
         .map(|e| {
             let mine: Vec<Point> = map
@@ -380,7 +369,7 @@ pub fn critical_table(w: &mut String, map: &Map) {
     if map.critical.is_empty() {
         return;
     }
-    let engines = engines_of(map.critical.iter().map(|c| c.engine.as_str()));
+    let engines = crate::report::in_order_met(map.critical.iter().map(|c| c.engine.as_str()));
     let mut cases: Vec<&str> = map.critical.iter().map(|c| c.case.as_str()).collect();
     cases.sort_unstable();
     cases.dedup();

@@ -232,7 +232,6 @@ pub fn render(sweep: &CaseSweep, tolerances: &BTreeMap<String, f64>) -> Option<S
         // Each engine: every setting a faint dot, its own Pareto front a line.
         let mut entries: Vec<(String, RGBColor)> = Vec::new();
         for engine in engines_of(rows.iter()) {
-            let engine = engine.as_str();
             let mine: Vec<Row> = rows
                 .iter()
                 .filter(|r| r.engine == engine)
@@ -436,7 +435,7 @@ pub fn reach_cell(rows: &[Row], engine: &str, target: f64, setting: bool) -> Str
 /// The engines whose runs take a share of the sweep's budget (rapier: a fifth), grouped by
 /// the budget they get, as " (`rapier_f64`, `rapier_f32`: 2e5 substeps)"; empty when every
 /// engine takes all of it.
-fn budget_shares(engines: &[String], budget: f64) -> String {
+fn budget_shares(engines: &[&str], budget: f64) -> String {
     let mut groups: Vec<(String, Vec<String>)> = Vec::new();
     for e in engines {
         let Some(stepping) = crate::engines::named(e).and_then(|e| e.stepping()) else {
@@ -467,14 +466,8 @@ fn budget_shares(engines: &[String], budget: f64) -> String {
 }
 
 /// The engines of sweep rows, in the order they first appear (the run's engine order).
-fn engines_of<'a>(rows: impl Iterator<Item = &'a Row>) -> Vec<String> {
-    let mut engines: Vec<String> = Vec::new();
-    for r in rows {
-        if !engines.contains(&r.engine) {
-            engines.push(r.engine.clone());
-        }
-    }
-    engines
+fn engines_of<'a>(rows: impl Iterator<Item = &'a Row>) -> Vec<&'a str> {
+    crate::report::in_order_met(rows.map(|r| r.engine.as_str()))
 }
 
 /// The report's section on what accuracy costs: how the sweep works, then per case and engine
@@ -575,7 +568,6 @@ pub fn case_part(w: &mut String, c: &crate::report::summary::CaseSummary, rows: 
     );
     let _ = writeln!(w, "|---|---|---|---:|---:|---:|---|");
     for e in engines_of(rows.iter()) {
-        let e = e.as_str();
         let run = c.runs.iter().find(|r| r.engine == e);
         let order = run
             .and_then(|r| r.order_fit.as_ref())

@@ -49,6 +49,22 @@ pub const IMPACTS_REPORTED: usize = 5;
 /// The fewest output rows a history may have.
 pub const MIN_ROWS: usize = 200;
 
+/// An engine's name in file names: its `@` (an engine on another release of a third-party
+/// code, `rapier_f64@0.34`) written `-` (`rapier_f64-0.34`), so that every file name keeps to
+/// the portable characters (letters, digits, `.`, `_`, `-`).
+pub fn file_stem(engine: &str) -> String {
+    engine.replace('@', "-")
+}
+
+/// An engine's name without its release (`rapier_f64@0.34` → `rapier_f64`), and the release
+/// (`0.34`) where it names one.
+pub fn release_of(engine: &str) -> (&str, Option<&str>) {
+    match engine.split_once('@') {
+        Some((base, release)) => (base, Some(release)),
+        None => (engine, None),
+    }
+}
+
 /// A time history: a header and rows, the first column `t`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct History {

@@ -11,7 +11,7 @@
 //! [`EXPLAINS`] or more, or meets the tolerance the cell misses; otherwise the cell is
 //! *unexplained*, and the controls tried are listed with their errors all the same.
 
-use super::{EXACT_SOLUTIONS, baseline, compare, tolerance};
+use super::{EXACT_SOLUTIONS, baseline, compare, judged_tolerance};
 use crate::contract::{History, IMPACTS_COLUMN};
 use crate::run::controls::{self, ControlKind, Planned};
 use crate::run::{JobSuccess, Outcome, Plan};
@@ -104,7 +104,7 @@ fn cells<'a>(plan: &'a Plan, outcome: &'a Outcome) -> Vec<Cell<'a>> {
         let explicit = outcome
             .history(&scene.id, "explicit")
             .and_then(|h| super::against_own_model(outcome, scene, "explicit", h));
-        let flag = match (tolerance(scene, &job.engine), explicit) {
+        let flag = match (judged_tolerance(scene, &job.engine), explicit) {
             (Some(t), _) if error > t => Flag::MissesTolerance(t),
             (_, Some(x)) if job.engine.starts_with("rapier") && error > FLAG_RATIO * x => {
                 Flag::OverExplicit(x)

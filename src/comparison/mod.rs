@@ -259,3 +259,11 @@ pub fn contact_validity(reference: &History) -> Option<ContactValidity> {
 pub fn tolerance(scene: &Scene, engine: &str) -> Option<f64> {
     scene.tolerances.get(engine).copied()
 }
+
+/// The tolerance an engine is held to: the one declared for it, or, for an engine on another
+/// release of a third-party code (`rapier_f64@0.34`), the one declared for the same engine on
+/// the release the case files are written for (`rapier_f64`). An older release's cells are
+/// judged against it in the report's versions section, not counted among the verdicts.
+pub fn judged_tolerance(scene: &Scene, engine: &str) -> Option<f64> {
+    tolerance(scene, engine).or_else(|| tolerance(scene, crate::contract::release_of(engine).0))
+}

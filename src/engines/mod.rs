@@ -224,6 +224,8 @@ pub enum ControlKind {
     ContactSoftness,
     /// The restitution of contact pairs that start closed and never strike.
     Restitution,
+    /// How a reported contact impulse is read (the motion unchanged).
+    ImpulseReading,
 }
 
 /// A control experiment an engine offers ([`Engine::controls`]): the same run with one thing

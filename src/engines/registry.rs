@@ -22,19 +22,15 @@ fn rapier_engines() -> Vec<Box<dyn Engine>> {
     Vec::new()
 }
 
-/// The rapier engines: matched and default configurations, f64 and f32.
+/// The rapier engines: matched and default configurations, f64 and f32; then, with the
+/// `rapier-versions` feature, the f64 ones on older releases (`rapier_f64@0.34`, ...).
 #[cfg(feature = "rapier")]
 fn rapier_engines() -> Vec<Box<dyn Engine>> {
-    vec![
-        Box::new(rapier::RapierEngine::matched(rapier::Precision::F64)),
-        Box::new(rapier::RapierEngine::matched(rapier::Precision::F32)),
-        Box::new(rapier::RapierEngine::default_configuration(
-            rapier::Precision::F64,
-        )),
-        Box::new(rapier::RapierEngine::default_configuration(
-            rapier::Precision::F32,
-        )),
-    ]
+    rapier::engines()
+        .into_iter()
+        .chain(rapier::older_releases())
+        .map(|e| Box::new(e) as Box<dyn Engine>)
+        .collect()
 }
 
 /// Engine by name.

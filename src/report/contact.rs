@@ -42,15 +42,7 @@ pub fn section(w: &mut String, s: &Summary) {
          not forces). Figures: each case's histories in `figures/<case>.svg`.\n"
     );
     // The restitution table.
-    let drops: Vec<&CaseSummary> = cases
-        .iter()
-        .copied()
-        .filter(|c| {
-            c.runs
-                .iter()
-                .any(|r| r.impacts.as_ref().is_some_and(|i| i.rebound.is_some()))
-        })
-        .collect();
+    let drops = drop_cases(&cases);
     if !drops.is_empty() {
         let names = engines(drops[0]);
         let _ = write!(
@@ -62,36 +54,7 @@ pub fn section(w: &mut String, s: &Summary) {
                 "figures/rebound.svg"
             )
         );
-        let _ = writeln!(w, "| case | e | e² | {} |", names.join(" | "));
-        let _ = writeln!(w, "|---|---:|---:|{}", "---:|".repeat(names.len()));
-        for c in &drops {
-            // The restitution the reference applied at the first impact: rebound over approach.
-            let e = c.runs.iter().find(|r| r.engine == REFERENCE).and_then(|r| {
-                Some(r.measures.get("impact_1_rebound")? / r.measures.get("impact_1_speed")?)
-            });
-            let cells: Vec<String> = names
-                .iter()
-                .map(|n| {
-                    c.runs
-                        .iter()
-                        .find(|r| r.engine == *n)
-                        .and_then(|r| r.impacts.as_ref()?.rebound)
-                        // Below the table's resolution, 0 (not −0.0000).
-                        .map_or("–".into(), |x| {
-                            format!("{:.4}", if x.abs() < 5e-5 { 0.0 } else { x })
-                        })
-                })
-                .collect();
-            let _ = writeln!(
-                w,
-                "| {} | {} | {} | {} |",
-                c.id,
-                e.map_or("–".into(), |e| format!("{e:.2}")),
-                e.map_or("–".into(), |e| format!("{:.4}", e * e)),
-                cells.join(" | ")
-            );
-        }
-        let _ = writeln!(w);
+        restitution_table(w, &drops, &names);
     }
     // Impact times and energy.
     let _ = writeln!(
@@ -153,6 +116,54 @@ pub fn section(w: &mut String, s: &Summary) {
                 first.map_or("–".into(), |t| format!("{t:.6}")),
             );
         }
+    }
+    let _ = writeln!(w);
+}
+
+/// The cases where some engine measured a first rebound (a drop onto a surface).
+pub fn drop_cases<'a>(cases: &[&'a CaseSummary]) -> Vec<&'a CaseSummary> {
+    cases
+        .iter()
+        .copied()
+        .filter(|c| {
+            c.runs
+                .iter()
+                .any(|r| r.impacts.as_ref().is_some_and(|i| i.rebound.is_some()))
+        })
+        .collect()
+}
+
+/// The restitution table: each drop case's e (the reference's, at its first impact), e², and
+/// each of `names`' first rebound over the drop.
+pub fn restitution_table(w: &mut String, drops: &[&CaseSummary], names: &[&str]) {
+    let _ = writeln!(w, "| case | e | e² | {} |", names.join(" | "));
+    let _ = writeln!(w, "|---|---:|---:|{}", "---:|".repeat(names.len()));
+    for c in drops {
+        // The restitution the reference applied at the first impact: rebound over approach.
+        let e = c.runs.iter().find(|r| r.engine == REFERENCE).and_then(|r| {
+            Some(r.measures.get("impact_1_rebound")? / r.measures.get("impact_1_speed")?)
+        });
+        let cells: Vec<String> = names
+            .iter()
+            .map(|n| {
+                c.runs
+                    .iter()
+                    .find(|r| r.engine == *n)
+                    .and_then(|r| r.impacts.as_ref()?.rebound)
+                    // Below the table's resolution, 0 (not −0.0000).
+                    .map_or("–".into(), |x| {
+                        format!("{:.4}", if x.abs() < 5e-5 { 0.0 } else { x })
+                    })
+            })
+            .collect();
+        let _ = writeln!(
+            w,
+            "| {} | {} | {} | {} |",
+            c.id,
+            e.map_or("–".into(), |e| format!("{e:.2}")),
+            e.map_or("–".into(), |e| format!("{:.4}", e * e)),
+            cells.join(" | ")
+        );
     }
     let _ = writeln!(w);
 }

@@ -63,7 +63,8 @@ pub enum DataError {
 
 /// The path of a case's CSV for one engine: `out/data/<case_id>/<engine>.csv`.
 pub fn csv_path(out: &Path, case_id: &str, engine: &str) -> PathBuf {
-    out.join("data").join(case_id).join(format!("{engine}.csv"))
+    let stem = crate::contract::file_stem(engine);
+    out.join("data").join(case_id).join(format!("{stem}.csv"))
 }
 
 /// The path of a case's discrepancy budget for one engine:
@@ -71,7 +72,7 @@ pub fn csv_path(out: &Path, case_id: &str, engine: &str) -> PathBuf {
 pub fn budget_path(out: &Path, case_id: &str, engine: &str) -> PathBuf {
     out.join("data")
         .join(case_id)
-        .join(format!("{engine}.budget.csv"))
+        .join(format!("{}.budget.csv", crate::contract::file_stem(engine)))
 }
 
 /// Write `history` to `out/data/<case_id>/<engine>.csv` (creating directories as needed,

@@ -53,12 +53,13 @@ pub fn render(
     }
 }
 
-/// The engines with a verdict, in report order.
+/// The engines with a verdict, in report order (an older release's are in the versions section).
 fn judged_engines(s: &Summary) -> Vec<&str> {
     s.engines
         .iter()
         .map(String::as_str)
         .filter(|e| !EXACT_SOLUTIONS.contains(e))
+        .filter(|e| crate::contract::release_of(e).1.is_none())
         .filter(|e| s.cases.iter().any(|c| run(c, e).is_some()))
         .collect()
 }

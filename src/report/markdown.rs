@@ -116,6 +116,13 @@ fn index(w: &mut String, s: &Summary) {
          - Data (columns and units in [README.md](README.md)): `results.csv`, `sweep.csv`, \
          `stability.csv`, `on_request.csv`, `summary.json`, `data/<case>/<engine>.csv`.\n"
     );
+    if !super::versions::lineages(s).is_empty() {
+        let _ = writeln!(
+            w,
+            "- [Releases side by side](#releases-side-by-side), below the cases: what each older \
+             release of rapier gets on every case, and why it differs.\n"
+        );
+    }
     let checks = s.tolerance_checks();
     let _ = writeln!(w, "| case | what it is | tolerances met |\n|---|---|---:|");
     for c in &s.cases {

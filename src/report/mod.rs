@@ -40,6 +40,7 @@ pub mod stability;
 pub mod staging;
 pub mod summary;
 pub mod verdicts;
+pub mod versions;
 pub mod work_precision;
 
 use crate::comparison::discrepancy::JobBudget;
@@ -165,6 +166,8 @@ pub fn write(
             since: since.as_ref(),
         },
     );
+    let mut pages = pages;
+    versions::section(&mut pages.report, &summary, out);
     write_pages(out, &pages)?;
     Ok(summary)
 }

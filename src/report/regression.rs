@@ -209,6 +209,19 @@ fn drift_of(base: &Path, new: &Path) -> Result<Vec<(String, f64)>, Unusable> {
         .collect())
 }
 
+/// The machine tier between two engines of one report on one case: the largest difference of
+/// each column of `new`'s history from `base`'s, over `base`'s peak (an engine's releases side
+/// by side).
+pub fn drift_between(
+    report: &Report,
+    case: &str,
+    base: &str,
+    new: &str,
+) -> Result<Vec<(String, f64)>, Unusable> {
+    let file = |engine: &str| crate::report::data::csv_path(&report.dir, case, engine);
+    drift_of(&file(base), &file(new))
+}
+
 /// The (case, engine) cells of a report, in order.
 fn cells_of(report: &Report) -> Vec<(&str, &str)> {
     let mut c: Vec<(&str, &str)> = report
@@ -227,7 +240,7 @@ fn cell_changes(
     case: &str,
     engine: &str,
 ) -> Result<Vec<Change>, Unusable> {
-    let file = |r: &Report| r.dir.join("data").join(case).join(format!("{engine}.csv"));
+    let file = |r: &Report| crate::report::data::csv_path(&r.dir, case, engine);
     let drifts = if file(base).is_file() || file(new).is_file() {
         drift_of(&file(base), &file(new))?
     } else {

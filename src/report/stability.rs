@@ -35,7 +35,8 @@ pub fn csv_path(out: &Path) -> PathBuf {
 
 /// `out/figures/stability-<engine>.svg`.
 pub fn figure_path(out: &Path, engine: &str) -> PathBuf {
-    out.join("figures").join(format!("stability-{engine}.svg"))
+    let stem = crate::contract::file_stem(engine);
+    out.join("figures").join(format!("stability-{stem}.svg"))
 }
 
 fn optional(x: Option<f64>) -> String {
@@ -485,7 +486,10 @@ pub fn overview(w: &mut String, map: &Map) {
             "{}",
             crate::report::format::figure(
                 &format!("stability map of {engine}"),
-                &format!("figures/stability-{engine}.svg")
+                &format!(
+                    "figures/stability-{}.svg",
+                    crate::contract::file_stem(engine)
+                )
             )
         );
     }

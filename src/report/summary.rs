@@ -396,13 +396,18 @@ impl Summary {
     /// Every cell that is judged, checked against its tolerance: each engine that is not an
     /// exact solution ([`comparison::EXACT_SOLUTIONS`]) on each case where it applies, i.e.
     /// where it ran and rows were compared against its baseline, or where it failed. A cell
-    /// whose case declares no tolerance for the engine is counted too, as such.
+    /// whose case declares no tolerance for the engine is counted too, as such. An engine on an
+    /// older release of a third-party code (`rapier_f64@0.34`) is not: the report's versions
+    /// section judges it against its current release's tolerance.
     pub fn tolerance_checks(&self) -> Vec<ToleranceCheck<'_>> {
         self.cases
             .iter()
             .flat_map(|c| {
                 c.runs.iter().filter_map(move |r| {
-                    if comparison::EXACT_SOLUTIONS.contains(&r.engine.as_str()) {
+                    // An engine on an older release is judged in the versions section.
+                    if comparison::EXACT_SOLUTIONS.contains(&r.engine.as_str())
+                        || crate::contract::release_of(&r.engine).1.is_some()
+                    {
                         return None;
                     }
                     // Compared over no row: the engine does not apply there. A cell compared

@@ -121,6 +121,7 @@ fn causes(w: &mut String, s: &Summary, checks: &[ToleranceCheck]) {
         .flat_map(|c| &c.runs)
         .filter_map(|r| Some((r.attribution.as_ref()?, r.baseline.as_deref()?)))
         .filter(|(a, _)| matches!(a.flag, Flag::OverExplicit(_)))
+        .filter(|(a, _)| crate::contract::release_of(&a.engine).1.is_none())
         .map(|(a, baseline)| attribution_row(a, baseline))
         .collect();
     if misses.is_empty() && far.is_empty() {
@@ -225,6 +226,7 @@ fn attribution_row(a: &Attribution, baseline: &str) -> String {
 
 /// The cause a control's kind names, short, with rapier's setting where it is rapier's.
 pub fn cause_label(kind: ControlKind, engine: &str) -> &'static str {
+    let engine = crate::contract::release_of(engine).0;
     match kind {
         ControlKind::TimeStep if engine.ends_with("_default") => "time step (rapier's 1/60 s)",
         ControlKind::TimeStep if engine.starts_with("rapier") => "time step (first-order substeps)",
@@ -233,6 +235,7 @@ pub fn cause_label(kind: ControlKind, engine: &str) -> &'static str {
         ControlKind::Precision => "precision (f32)",
         ControlKind::ContactSoftness => "model: rapier's soft contact",
         ControlKind::Restitution => "model: rapier's restitution on a resting contact",
+        ControlKind::ImpulseReading => "reading: rapier 0.34's reported contact impulse",
     }
 }
 
@@ -249,8 +252,10 @@ pub fn cause_meaning(kind: ControlKind) -> &'static str {
         }
         ControlKind::Precision => "the same run in f64 is within reach: single-precision round-off",
         ControlKind::ContactSoftness => {
-            "a stiffer `contact_softness` (rapier's positional correction of penetration, a \
-             spring–damper of that frequency) brings the error down"
+            "another `contact_softness` brings the error down: a stiffer one (rapier's positional \
+             correction of penetration, a spring–damper of that frequency) where the contact \
+             yields; a softer one on rapier 0.34, which puts restitution in every substep's \
+             contact constraint, where a stiff contact takes part of the bounce"
         }
         ControlKind::Restitution => {
             "the contact starts closed and never strikes in the exact solution, so its \
@@ -259,6 +264,9 @@ pub fn cause_meaning(kind: ControlKind) -> &'static str {
              impulse having fallen to zero (`is_bouncy`), so whatever approach is left at the \
              end of a step (round-off in f32, the curvature of a node sliding over a ball) is \
              reflected, and the node hops along the face"
+        }
+        ControlKind::ImpulseReading => {
+            "the same motion, its contact impulse read as n/(n + 1) of what rapier 0.34 reports              (n substeps), is within reach: 0.34 adds the previous step's warm-start impulse, one              substep's worth, to the step's total (`total_impulse_magnitude`; rapier 0.35.2              changed it to the step's own)"
         }
     }
 }

@@ -30,6 +30,12 @@ pub struct Run {
     /// alike) in place of rapier's default one, for the default configuration's control
     /// experiment (`None`: rapier's own).
     pub default_softness: Option<f64>,
+    /// Step by a length of 0 before the contact pairs are registered, as on 0.34, where it is
+    /// needed (a control experiment on the other releases; see [`release_helpers`]).
+    pub zero_step_first: bool,
+    /// What the reported contact impulses are multiplied by (1, or a control experiment's
+    /// reading of them).
+    pub impulse_scale: f64,
 }
 
 /// The state after a step (or at the start of a dynamic step).
@@ -158,8 +164,119 @@ macro_rules! dimension_helpers {
     };
 }
 
+/// What differs between the rapier releases the backend is built on.
+///
+/// - 0.36 (`current`) registers the contact pairs before the first step with
+///   `PhysicsWorld::detect_collisions` and reports a quarantine.
+/// - 0.35 has neither: its `CollisionPipeline` registers the pairs (the same broad and narrow
+///   phases), and a non-finite state is caught by the finiteness check alone.
+/// - 0.34 has no `static_contact_softness` (one softness for every contact; the matched
+///   configuration sets both to one value anyway) and no contact recycling (the matched
+///   configuration turns it off). Its `CollisionPipeline` takes the bodies' pending changes
+///   without clearing their marks, so a body that is not yet in an island never gets one (and
+///   the pipeline asserts it has one): [`before_joints`] first steps the world by a length of
+///   0 with every collider's groups emptied, which puts each body in an island and touches
+///   nothing else, the velocities (that step zeroes them) restored after the detection. On 0.35
+///   and 0.36 the same construct ([`Run::zero_step_first`]) gives bit-identical histories
+///   (`tests/versions.rs`).
+macro_rules! release_helpers {
+    (current) => {
+        fn set_softness(p: &mut IntegrationParameters, softness: SpringCoefficients<Real>) {
+            p.contact_softness = softness;
+            p.static_contact_softness = softness;
+        }
+        fn set_recycling(p: &mut IntegrationParameters, recycling: bool) {
+            p.contact_recycling = recycling;
+        }
+        fn detect(world: &mut PhysicsWorld) {
+            world.detect_collisions(&(), &());
+        }
+        fn quarantined(world: &PhysicsWorld) -> bool {
+            !world.quarantine().is_empty()
+        }
+        release_helpers!(zero_step_on_request);
+    };
+    (v0_35) => {
+        fn set_softness(p: &mut IntegrationParameters, softness: SpringCoefficients<Real>) {
+            p.contact_softness = softness;
+            p.static_contact_softness = softness;
+        }
+        fn set_recycling(p: &mut IntegrationParameters, recycling: bool) {
+            p.contact_recycling = recycling;
+        }
+        fn quarantined(world: &PhysicsWorld) -> bool {
+            !world.quarantine().is_empty()
+        }
+        release_helpers!(collision_pipeline);
+        release_helpers!(zero_step_on_request);
+    };
+    (v0_34) => {
+        fn set_softness(p: &mut IntegrationParameters, softness: SpringCoefficients<Real>) {
+            p.contact_softness = softness;
+        }
+        fn set_recycling(_: &mut IntegrationParameters, _: bool) {}
+        fn quarantined(_: &PhysicsWorld) -> bool {
+            false
+        }
+        release_helpers!(collision_pipeline);
+        fn before_joints(world: &mut PhysicsWorld, _: &Run) -> Velocities {
+            zero_step(world)
+        }
+    };
+    (zero_step_on_request) => {
+        fn before_joints(world: &mut PhysicsWorld, run: &Run) -> Velocities {
+            if run.zero_step_first {
+                zero_step(world)
+            } else {
+                Vec::new()
+            }
+        }
+    };
+    (zero_step) => {
+        /// Step by a length of 0 with no collider in any group (see [`release_helpers`]);
+        /// the velocities to restore after the detection.
+        fn zero_step(world: &mut PhysicsWorld) -> Velocities {
+            let velocities: Velocities = world
+                .bodies
+                .iter()
+                .map(|(h, b)| (h, b.linvel(), b.angvel()))
+                .collect();
+            let handles: Vec<ColliderHandle> = world.colliders.iter().map(|(h, _)| h).collect();
+            let groups: Vec<InteractionGroups> = handles
+                .iter()
+                .map(|h| world.colliders[*h].collision_groups())
+                .collect();
+            for h in &handles {
+                world.colliders[*h].set_collision_groups(InteractionGroups::none());
+            }
+            let dt = world.integration_parameters.dt;
+            world.integration_parameters.dt = 0.0;
+            world.step();
+            world.integration_parameters.dt = dt;
+            for (h, g) in handles.iter().zip(groups) {
+                world.colliders[*h].set_collision_groups(g);
+            }
+            velocities
+        }
+    };
+    (collision_pipeline) => {
+        fn detect(world: &mut PhysicsWorld) {
+            rp::pipeline::CollisionPipeline::new().step(
+                world.integration_parameters.prediction_distance(),
+                &mut world.islands,
+                &mut world.broad_phase,
+                &mut world.narrow_phase,
+                &mut world.bodies,
+                &mut world.colliders,
+                &(),
+                &(),
+            );
+        }
+    };
+}
+
 macro_rules! backend {
-    ($module:ident, $krate:ident, $dim:tt) => {
+    ($module:ident, $krate:ident, $dim:tt, $release:tt) => {
         /// The backend on one rapier crate.
         pub mod $module {
             use super::{Record, Run, Trace};
@@ -181,6 +298,11 @@ macro_rules! backend {
             use $krate as rp;
 
             dimension_helpers!($dim);
+            release_helpers!($release);
+            release_helpers!(zero_step);
+
+            /// Each body's velocities, kept over a step of length 0.
+            type Velocities = Vec<(RigidBodyHandle, rp::math::Vector, rp::math::AngVector)>;
 
             /// rapier's lock of each world axis: translations x, y, z, rotations x, y, z.
             const LOCKS: [LockedAxes; 6] = [
@@ -249,15 +371,12 @@ macro_rules! backend {
                         m.contact_frequency as Real,
                         m.contact_damping_ratio as Real,
                     );
-                    p.contact_softness = softness;
-                    p.static_contact_softness = softness;
+                    set_softness(&mut p, softness);
                     p.normalized_allowed_linear_error = m.allowed_linear_error as Real;
                     p.normalized_prediction_distance = m.prediction_distance as Real;
-                    p.contact_recycling = m.contact_recycling;
+                    set_recycling(&mut p, m.contact_recycling);
                 } else if let Some(hz) = run.default_softness {
-                    let softness = SpringCoefficients::new(hz as Real, 1.0);
-                    p.contact_softness = softness;
-                    p.static_contact_softness = softness;
+                    set_softness(&mut p, SpringCoefficients::new(hz as Real, 1.0));
                 }
                 p
             }
@@ -352,6 +471,7 @@ macro_rules! backend {
                     })
                     .collect::<Result<_, EngineError>>()?;
 
+                let velocities = before_joints(&mut world, run);
                 for j in &plan.permanent {
                     let data = joint(j)?;
                     world
@@ -361,7 +481,12 @@ macro_rules! backend {
 
                 // Register the contact pairs before the first step: otherwise rapier only finds
                 // a new pair during step 1, and that step has no contact constraint.
-                world.detect_collisions(&(), &());
+                detect(&mut world);
+                for (h, v, w) in velocities {
+                    let rb = &mut world.bodies[h];
+                    rb.set_linvel(v, true);
+                    rb.set_angvel(w, true);
+                }
 
                 let read = |world: &PhysicsWorld| -> Vec<BodyState> {
                     handles.iter().map(|h| state(&world.bodies[*h])).collect()
@@ -464,6 +589,7 @@ macro_rules! backend {
                                     .narrow_phase
                                     .contact_pair(colliders[c.ball], colliders[c.slab])
                                     .map_or(0.0, |p| p.total_impulse_magnitude() as f64)
+                                    * run.impulse_scale
                                     / h
                             })
                             .collect();
@@ -472,7 +598,7 @@ macro_rules! backend {
                                 && s.linvel.iter().all(|x| x.is_finite())
                                 && s.angvel.iter().all(|x| x.is_finite())
                         }) && forces.iter().all(|f| f.is_finite());
-                        if !finite || !world.quarantine().is_empty() {
+                        if !finite || quarantined(&world) {
                             return Err(EngineError::Failed(format!(
                                 "rapier: the state became non-finite by t = {t:e} (dt = {dt:e})"
                             )));
@@ -496,7 +622,15 @@ macro_rules! backend {
     };
 }
 
-backend!(r2_f32, rapier2d, 2);
-backend!(r2_f64, rapier2d_f64, 2);
-backend!(r3_f32, rapier3d, 3);
-backend!(r3_f64, rapier3d_f64, 3);
+backend!(r2_f32, rapier2d, 2, current);
+backend!(r2_f64, rapier2d_f64, 2, current);
+backend!(r3_f32, rapier3d, 3, current);
+backend!(r3_f64, rapier3d_f64, 3, current);
+#[cfg(feature = "rapier-versions")]
+backend!(r2_f64_v0_34, rapier2d_f64_v0_34, 2, v0_34);
+#[cfg(feature = "rapier-versions")]
+backend!(r3_f64_v0_34, rapier3d_f64_v0_34, 3, v0_34);
+#[cfg(feature = "rapier-versions")]
+backend!(r2_f64_v0_35, rapier2d_f64_v0_35, 2, v0_35);
+#[cfg(feature = "rapier-versions")]
+backend!(r3_f64_v0_35, rapier3d_f64_v0_35, 3, v0_35);

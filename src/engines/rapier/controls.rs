@@ -1,6 +1,8 @@
 //! rapier's control experiments (`Engine::controls`): the same run with one suspected cause of
 //! a discrepancy varied, each something the exact solution does not depend on: f64 for f32, a
-//! stiffer contact softness, restitution 0 on pairs that start closed and never strike.
+//! stiffer contact softness (and a softer one on rapier 0.34, whose restitution depends on
+//! it), restitution 0 on pairs that start closed and never strike, the contact impulse read as
+//! n/(n + 1) of what rapier 0.34 reports.
 
 use super::{Configuration, MatchedSettings, Precision, RapierEngine};
 use crate::engines::{Control, ControlKind};
@@ -42,6 +44,25 @@ pub fn of(engine: &RapierEngine, scene: &Scene) -> Vec<Control> {
             })),
             scene: None,
         });
+        if engine.release.restitution_in_substeps() {
+            let softer = MatchedSettings {
+                contact_frequency: m.contact_frequency / 10.0,
+                ..m
+            };
+            out.push(Control {
+                kind: ControlKind::ContactSoftness,
+                change: format!(
+                    "`contact_softness` {:.0e} Hz instead of {:.0e} Hz",
+                    softer.contact_frequency, m.contact_frequency
+                ),
+                engine: Some(Box::new(RapierEngine {
+                    name: format!("{}_softer_contact", engine.name),
+                    configuration: Configuration::Matched(softer),
+                    ..engine.clone()
+                })),
+                scene: None,
+            });
+        }
     }
     if engine.configuration == Configuration::Default {
         let hz = MatchedSettings::chosen(engine.precision).contact_frequency;
@@ -54,6 +75,25 @@ pub fn of(engine: &RapierEngine, scene: &Scene) -> Vec<Control> {
             engine: Some(Box::new(RapierEngine {
                 name: format!("{}_matched_softness", engine.name),
                 default_softness: Some(hz),
+                ..engine.clone()
+            })),
+            scene: None,
+        });
+    }
+    if engine.release.reports_extra_substep_impulse() {
+        let n = match engine.configuration {
+            Configuration::Matched(m) => m.solver_iterations,
+            Configuration::Default => super::backend::DEFAULT_SOLVER_ITERATIONS,
+        };
+        out.push(Control {
+            kind: ControlKind::ImpulseReading,
+            change: format!(
+                "the contact impulse read as {n}/{} of what rapier reports (the motion unchanged)",
+                n + 1
+            ),
+            engine: Some(Box::new(RapierEngine {
+                name: format!("{}_impulse_per_step", engine.name),
+                impulse_scale: n as f64 / (n + 1) as f64,
                 ..engine.clone()
             })),
             scene: None,

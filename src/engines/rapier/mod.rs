@@ -79,6 +79,84 @@ pub enum Precision {
     F64,
 }
 
+/// The rapier release an engine runs on: 0.36 always, 0.34 and 0.35 (in f64) with the
+/// `rapier-versions` feature. The scene-to-rapier [`plan`] is one; only [`backend`]'s calls
+/// into rapier's API differ by release.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Release {
+    /// 0.34.0, the last release before 0.35 (no `static_contact_softness`, no contact
+    /// recycling, no quarantine).
+    #[cfg(feature = "rapier-versions")]
+    V0_34,
+    /// 0.35.3, the last 0.35.
+    #[cfg(feature = "rapier-versions")]
+    V0_35,
+    /// 0.36.1: the release the engines without a version in their name run.
+    Current,
+}
+
+impl Release {
+    /// Every release this build has, oldest first.
+    pub fn all() -> Vec<Release> {
+        vec![
+            #[cfg(feature = "rapier-versions")]
+            Release::V0_34,
+            #[cfg(feature = "rapier-versions")]
+            Release::V0_35,
+            Release::Current,
+        ]
+    }
+
+    /// The crate version it is built on.
+    pub fn version(self) -> &'static str {
+        match self {
+            #[cfg(feature = "rapier-versions")]
+            Release::V0_34 => "0.34.0",
+            #[cfg(feature = "rapier-versions")]
+            Release::V0_35 => "0.35.3",
+            Release::Current => "0.36.1",
+        }
+    }
+
+    /// Whether its reported contact impulse over a step counts one substep's impulse too many
+    /// (0.34: the previous step's warm-start impulse is added in; 0.35.2 made it the step's
+    /// own).
+    pub fn reports_extra_substep_impulse(self) -> bool {
+        match self {
+            #[cfg(feature = "rapier-versions")]
+            Release::V0_34 => true,
+            _ => false,
+        }
+    }
+
+    /// Whether restitution enters every substep's contact constraint (0.34; 0.35 applies it in
+    /// one pass after the substeps), so that the rebound depends on the contact softness and
+    /// the substeps: a softer contact is a control for it.
+    pub fn restitution_in_substeps(self) -> bool {
+        self.reports_extra_substep_impulse()
+    }
+
+    /// The release's minor version as the report labels it (`0.34`, `0.35`, `0.36`).
+    pub const fn label(self) -> &'static str {
+        match self.tag() {
+            Some(tag) => tag,
+            None => "0.36",
+        }
+    }
+
+    /// What an engine's name carries after its `@` (`None` for [`Release::Current`], whose
+    /// engines keep their plain names).
+    pub const fn tag(self) -> Option<&'static str> {
+        match self {
+            #[cfg(feature = "rapier-versions")]
+            Release::V0_34 => Some("0.34"),
+            #[cfg(feature = "rapier-versions")]
+            Release::V0_35 => Some("0.35"),
+            Release::Current => None,
+        }
+    }
+}
+
 /// How rapier is set up.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Configuration {
@@ -206,6 +284,12 @@ pub struct RapierEngine {
     default_softness: Option<f64>,
     /// How bodies held in every DOF are made ([`plan::Holding::Joints`]: a control experiment).
     holding: plan::Holding,
+    /// The rapier release it runs on.
+    release: Release,
+    /// Step by a length of 0 before the first detection (what 0.34 needs; a control elsewhere).
+    zero_step_first: bool,
+    /// What the reported contact impulses are multiplied by (1 but in a control experiment).
+    impulse_scale: f64,
 }
 
 impl RapierEngine {
@@ -239,7 +323,41 @@ impl RapierEngine {
             ccd: false,
             default_softness: None,
             holding: plan::Holding::Fixed,
+            release: Release::Current,
+            zero_step_first: false,
+            impulse_scale: 1.0,
         }
+    }
+
+    /// The same engine stepping the world by a length of 0 before its first collision
+    /// detection, as the backend on rapier 0.34 must (a control experiment: on 0.35 and 0.36 it
+    /// changes no history by a bit), named with a `_zero_step` suffix.
+    pub fn with_zero_step_first(mut self) -> Self {
+        self.zero_step_first = true;
+        self.name.push_str("_zero_step");
+        self
+    }
+
+    /// The same engine on another rapier release, named `<name>@<release>` (`rapier_f64@0.34`;
+    /// [`crate::contract::file_stem`] keeps its file names portable). Older releases are built
+    /// in f64 only: `None` for an f32 engine on one.
+    pub fn on_release(mut self, release: Release) -> Option<Self> {
+        if release == Release::Current {
+            return Some(self);
+        }
+        if self.precision != Precision::F64 {
+            return None;
+        }
+        self.release = release;
+        if let Some(tag) = release.tag() {
+            self.name = format!("{}@{tag}", self.name);
+        }
+        Some(self)
+    }
+
+    /// The rapier release it runs on.
+    pub fn release(&self) -> Release {
+        self.release
     }
 
     /// The same engine with rapier's continuous collision detection on every particle (the
@@ -281,19 +399,12 @@ impl RapierEngine {
             matched: solver,
             ccd: self.ccd,
             default_softness: self.default_softness,
+            zero_step_first: self.zero_step_first,
+            impulse_scale: self.impulse_scale,
         };
         let mut recorder = record::Recorder::new(scene, &plan);
         let mut sink = |r: backend::Record| recorder.push(r);
-        let trace = match (scene.dimension, self.precision) {
-            (Dimension::Two, Precision::F32) => backend::r2_f32::simulate(&plan, &run, &mut sink)?,
-            (Dimension::Two, Precision::F64) => backend::r2_f64::simulate(&plan, &run, &mut sink)?,
-            (Dimension::Three, Precision::F32) => {
-                backend::r3_f32::simulate(&plan, &run, &mut sink)?
-            }
-            (Dimension::Three, Precision::F64) => {
-                backend::r3_f64::simulate(&plan, &run, &mut sink)?
-            }
-        };
+        let trace = self.simulate(scene.dimension, &plan, &run, &mut sink)?;
         let (history, diagnostics) = recorder.finish()?;
         let wall_seconds = start.elapsed().as_secs_f64();
         let (iterations, pgs) = match solver {
@@ -330,6 +441,34 @@ impl RapierEngine {
     }
 }
 
+impl RapierEngine {
+    /// The backend of this engine's dimension, precision and release.
+    fn simulate(
+        &self,
+        dimension: Dimension,
+        plan: &plan::Plan,
+        run: &backend::Run,
+        sink: &mut dyn FnMut(backend::Record) -> Result<(), EngineError>,
+    ) -> Result<backend::Trace, EngineError> {
+        use Dimension::{Three, Two};
+        use Precision::{F32, F64};
+        match (self.release, dimension, self.precision) {
+            (Release::Current, Two, F32) => backend::r2_f32::simulate(plan, run, sink),
+            (Release::Current, Two, F64) => backend::r2_f64::simulate(plan, run, sink),
+            (Release::Current, Three, F32) => backend::r3_f32::simulate(plan, run, sink),
+            (Release::Current, Three, F64) => backend::r3_f64::simulate(plan, run, sink),
+            #[cfg(feature = "rapier-versions")]
+            (Release::V0_34, Two, _) => backend::r2_f64_v0_34::simulate(plan, run, sink),
+            #[cfg(feature = "rapier-versions")]
+            (Release::V0_34, Three, _) => backend::r3_f64_v0_34::simulate(plan, run, sink),
+            #[cfg(feature = "rapier-versions")]
+            (Release::V0_35, Two, _) => backend::r2_f64_v0_35::simulate(plan, run, sink),
+            #[cfg(feature = "rapier-versions")]
+            (Release::V0_35, Three, _) => backend::r3_f64_v0_35::simulate(plan, run, sink),
+        }
+    }
+}
+
 impl Engine for RapierEngine {
     fn name(&self) -> &str {
         &self.name
@@ -344,6 +483,11 @@ impl Engine for RapierEngine {
         }
     }
     fn stepping(&self) -> Option<Stepping> {
+        // An older release is compared case by case (the report's versions section), not
+        // swept or mapped again.
+        if self.release != Release::Current {
+            return None;
+        }
         let (coarsest, substeps) = match self.configuration {
             Configuration::Matched(m) => (Coarsest::OutputInterval, m.solver_iterations),
             Configuration::Default => (
@@ -540,7 +684,7 @@ pub fn default_increment(settings: &RunSettings) -> f64 {
     }
 }
 
-/// The four rapier engines in report order.
+/// The four rapier engines of the current release in report order.
 pub fn engines() -> Vec<RapierEngine> {
     vec![
         RapierEngine::matched(Precision::F64),
@@ -548,4 +692,21 @@ pub fn engines() -> Vec<RapierEngine> {
         RapierEngine::default_configuration(Precision::F64),
         RapierEngine::default_configuration(Precision::F32),
     ]
+}
+
+/// The f64 engines, matched then default, on each older release this build has (none without
+/// the `rapier-versions` feature), oldest first.
+pub fn older_releases() -> Vec<RapierEngine> {
+    Release::all()
+        .into_iter()
+        .filter(|r| *r != Release::Current)
+        .flat_map(|r| {
+            [
+                RapierEngine::matched(Precision::F64),
+                RapierEngine::default_configuration(Precision::F64),
+            ]
+            .into_iter()
+            .filter_map(move |e| e.on_release(r))
+        })
+        .collect()
 }

@@ -65,6 +65,12 @@ pub fn release_of(engine: &str) -> (&str, Option<&str>) {
     }
 }
 
+/// Whether an engine runs another release of a third-party code than the current one
+/// (`rapier_f64@0.34`): the report's versions section is where its cells are judged and shown.
+pub fn on_older_release(engine: &str) -> bool {
+    release_of(engine).1.is_some()
+}
+
 /// A time history: a header and rows, the first column `t`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct History {

@@ -106,7 +106,11 @@ fn cells<'a>(plan: &'a Plan, outcome: &'a Outcome) -> Vec<Cell<'a>> {
             .and_then(|h| super::against_own_model(outcome, scene, "explicit", h));
         let flag = match (judged_tolerance(scene, &job.engine), explicit) {
             (Some(t), _) if error > t => Flag::MissesTolerance(t),
-            (_, Some(x)) if job.engine.starts_with("rapier") && error > FLAG_RATIO * x => {
+            (_, Some(x))
+                if job.engine.starts_with("rapier")
+                    && !crate::contract::on_older_release(&job.engine)
+                    && error > FLAG_RATIO * x =>
+            {
                 Flag::OverExplicit(x)
             }
             _ => continue,

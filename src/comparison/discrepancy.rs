@@ -295,8 +295,9 @@ pub struct JobBudget {
     pub result: Result<(Budget, Option<Budget>), String>,
 }
 
-/// The budget of every successful job of `plan` whose engine steps in time (not the closed
-/// form or the reference), each from its own refinement ladder (`depth`; with
+/// The budget of every successful job of `plan` whose engine steps in time and is studied
+/// ([`Engine::stepping`](crate::run::Engine::stepping): not the closed form, the reference or
+/// an older release of rapier), each from its own refinement ladder (`depth`; with
 /// [`Depth::Extra`](crate::run::refinement::Depth::Extra) also the budget one level further).
 /// Ladders run in parallel and are dropped once their budget is taken, so memory stays at a
 /// few histories per thread. A progress bar on stderr, as for the jobs, when `progress` is set.
@@ -327,6 +328,8 @@ pub fn measure(
             }
             let scene = plan.cases.iter().find(|s| s.id == j.case)?;
             let engine = plan.engines.iter().find(|e| e.name() == j.engine)?;
+            // An engine the studies leave alone (an older release of rapier) has no budget.
+            engine.stepping()?;
             Some((j, scene, engine, baseline))
         })
         .collect();

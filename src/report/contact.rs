@@ -11,11 +11,13 @@ use std::fmt::Write;
 /// The exact solution the impacts are measured against.
 const REFERENCE: &str = "reference";
 
-/// The engines with impacts on a case, in report order, the reference first.
+/// The engines with impacts on a case, in report order, the reference first (an older
+/// release's are in the versions section).
 fn engines(c: &CaseSummary) -> Vec<&str> {
     c.runs
         .iter()
         .filter(|r| r.impacts.is_some())
+        .filter(|r| !crate::contract::on_older_release(&r.engine))
         .map(|r| r.engine.as_str())
         .collect()
 }

@@ -59,7 +59,7 @@ fn judged_engines(s: &Summary) -> Vec<&str> {
         .iter()
         .map(String::as_str)
         .filter(|e| !EXACT_SOLUTIONS.contains(e))
-        .filter(|e| crate::contract::release_of(e).1.is_none())
+        .filter(|e| !crate::contract::on_older_release(e))
         .filter(|e| s.cases.iter().any(|c| run(c, e).is_some()))
         .collect()
 }
@@ -254,6 +254,7 @@ fn conclusions(w: &mut String, s: &Summary, engines: &[&str]) {
                 .as_ref()
                 .is_some_and(|a| a.explaining().is_none())
         })
+        .filter(|(_, r)| !crate::contract::on_older_release(&r.engine))
         .map(|(c, r)| format!("{} / `{}`", c.id, r.engine))
         .collect();
     if !unexplained.is_empty() {

@@ -59,6 +59,20 @@ impl Provenance {
     }
 }
 
+/// Whether this build has the rapier release `version` (Cargo.lock lists the older ones
+/// whether or not the `rapier-versions` feature is on).
+#[cfg(feature = "rapier")]
+fn built(version: &str) -> bool {
+    crate::engines::rapier::Release::all()
+        .iter()
+        .any(|r| r.version() == version)
+}
+
+#[cfg(not(feature = "rapier"))]
+fn built(_: &str) -> bool {
+    false
+}
+
 fn rapier_versions() -> String {
     let mut found = Vec::new();
     let mut lines = CARGO_LOCK.lines();
@@ -71,6 +85,7 @@ fn rapier_versions() -> String {
                 l.strip_prefix("version = \"")
                     .and_then(|s| s.strip_suffix('"'))
             })
+            && built(v)
         {
             found.push(format!("{name} {v}"));
         }

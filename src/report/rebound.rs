@@ -31,7 +31,11 @@ pub fn points(s: &Summary) -> Vec<(String, f64, f64)> {
         else {
             continue;
         };
-        for r in &c.runs {
+        for r in c
+            .runs
+            .iter()
+            .filter(|r| !crate::contract::on_older_release(&r.engine))
+        {
             if let Some(rebound) = r.impacts.as_ref().and_then(|i| i.rebound) {
                 out.push((r.engine.clone(), e, rebound));
             }

@@ -406,7 +406,7 @@ impl Summary {
                 c.runs.iter().filter_map(move |r| {
                     // An engine on an older release is judged in the versions section.
                     if comparison::EXACT_SOLUTIONS.contains(&r.engine.as_str())
-                        || crate::contract::release_of(&r.engine).1.is_some()
+                        || crate::contract::on_older_release(&r.engine)
                     {
                         return None;
                     }

@@ -121,7 +121,7 @@ fn causes(w: &mut String, s: &Summary, checks: &[ToleranceCheck]) {
         .flat_map(|c| &c.runs)
         .filter_map(|r| Some((r.attribution.as_ref()?, r.baseline.as_deref()?)))
         .filter(|(a, _)| matches!(a.flag, Flag::OverExplicit(_)))
-        .filter(|(a, _)| crate::contract::release_of(&a.engine).1.is_none())
+        .filter(|(a, _)| !crate::contract::on_older_release(&a.engine))
         .map(|(a, baseline)| attribution_row(a, baseline))
         .collect();
     if misses.is_empty() && far.is_empty() {
@@ -158,6 +158,7 @@ fn causes(w: &mut String, s: &Summary, checks: &[ToleranceCheck]) {
         .cases
         .iter()
         .flat_map(|c| &c.runs)
+        .filter(|r| !crate::contract::on_older_release(&r.engine))
         .filter_map(|r| Some(r.attribution.as_ref()?.explaining()?.kind))
         .fold(Vec::new(), |mut v, k| {
             if !v.contains(&k) {
@@ -182,28 +183,7 @@ fn attribution_row(a: &Attribution, baseline: &str) -> String {
         }
         Flag::OverExplicit(x) => format!("`explicit`'s {}", sci(x)),
     };
-    let control = |c: &ControlRun| match (c.error, &c.failure) {
-        (Some(e), _) => format!("{}: {}", c.change, sci(e)),
-        (None, Some(f)) => format!("{}: failed ({f})", c.change),
-        (None, None) => format!("{}: –", c.change),
-    };
-    let (cause, shown) = match a.explaining() {
-        // A control that explains part of a miss: the rest is unexplained.
-        Some(c) if matches!(a.flag, Flag::MissesTolerance(t) if c.error.is_some_and(|e| e > t)) => {
-            (
-                format!(
-                    "**{}, in part** (the control still misses; the rest unexplained)",
-                    cause_label(c.kind, &a.engine)
-                ),
-                control(c),
-            )
-        }
-        Some(c) => (
-            format!("**{}**", cause_label(c.kind, &a.engine)),
-            control(c),
-        ),
-        None => ("**unexplained**".to_string(), "–".to_string()),
-    };
+    let (cause, shown) = cause_and_control(a);
     let others: Vec<String> = a
         .controls
         .iter()
@@ -222,6 +202,37 @@ fn attribution_row(a: &Attribution, baseline: &str) -> String {
             others.join("; ")
         }
     )
+}
+
+/// A control with its error (or why it failed).
+pub fn control(c: &ControlRun) -> String {
+    match (c.error, &c.failure) {
+        (Some(e), _) => format!("{}: {}", c.change, sci(e)),
+        (None, Some(f)) => format!("{}: failed ({f})", c.change),
+        (None, None) => format!("{}: –", c.change),
+    }
+}
+
+/// The cause a cell's controls name (bold; "in part" where the control still misses the
+/// tolerance; unexplained where none explains it), and the control that shows it.
+pub fn cause_and_control(a: &Attribution) -> (String, String) {
+    match a.explaining() {
+        // A control that explains part of a miss: the rest is unexplained.
+        Some(c) if matches!(a.flag, Flag::MissesTolerance(t) if c.error.is_some_and(|e| e > t)) => {
+            (
+                format!(
+                    "**{}, in part** (the control still misses; the rest unexplained)",
+                    cause_label(c.kind, &a.engine)
+                ),
+                control(c),
+            )
+        }
+        Some(c) => (
+            format!("**{}**", cause_label(c.kind, &a.engine)),
+            control(c),
+        ),
+        None => ("**unexplained**".to_string(), "–".to_string()),
+    }
 }
 
 /// The cause a control's kind names, short, with rapier's setting where it is rapier's.
@@ -266,7 +277,10 @@ pub fn cause_meaning(kind: ControlKind) -> &'static str {
              reflected, and the node hops along the face"
         }
         ControlKind::ImpulseReading => {
-            "the same motion, its contact impulse read as n/(n + 1) of what rapier 0.34 reports              (n substeps), is within reach: 0.34 adds the previous step's warm-start impulse, one              substep's worth, to the step's total (`total_impulse_magnitude`; rapier 0.35.2              changed it to the step's own)"
+            "the same motion, its contact impulse read as n/(n + 1) of what rapier 0.34 reports \
+             (n substeps), is within reach: 0.34 adds the previous step's warm-start impulse, one \
+             substep's worth, to the step's total (`total_impulse_magnitude`; rapier 0.35.2 \
+             changed it to the step's own)"
         }
     }
 }
@@ -305,6 +319,7 @@ fn matrix(w: &mut String, s: &Summary) {
         .engines
         .iter()
         .filter(|e| !EXACT_SOLUTIONS.contains(&e.as_str()))
+        .filter(|e| !crate::contract::on_older_release(e))
         .collect();
     let _ = writeln!(
         w,

@@ -8,7 +8,7 @@ use super::contact::{drop_cases, restitution_table};
 use super::format::sci;
 use super::regression::{self, Report};
 use super::summary::{CaseSummary, EngineSummary, Summary};
-use super::verdicts::cause_label;
+use super::verdicts::{cause_and_control, control};
 use crate::contract::release_of;
 use std::fmt::Write;
 use std::path::Path;
@@ -62,8 +62,10 @@ fn run<'a>(c: &'a CaseSummary, engine: &str) -> Option<&'a EngineSummary> {
 fn verdict(c: &CaseSummary, engine: &str, current: &str) -> Option<bool> {
     let tolerance = run(c, current)?.tolerance?;
     let r = run(c, engine)?;
-    if r.error.is_some() {
-        return Some(false);
+    match &r.error {
+        Some(e) if super::summary::not_applicable(e) => return None,
+        Some(_) => return Some(false),
+        None => {}
     }
     Some(r.against_baseline.as_ref()?.worst_max? <= tolerance)
 }
@@ -160,13 +162,19 @@ fn differing(w: &mut String, s: &Summary, lineages: &[Lineage]) {
                     continue;
                 }
                 let tolerance = run(c, &l.current).and_then(|r| r.tolerance);
+                // Where the older release meets the tolerance, it is the current one that
+                // misses: its cause.
+                let why = if then == Some(true) {
+                    format!("the current release misses: {}", cause(run(c, &l.current)))
+                } else {
+                    cause(run(c, e))
+                };
                 rows.push(format!(
-                    "| {} | `{e}` | {} | {} | {} | {} |",
+                    "| {} | `{e}` | {} | {} | {} | {why} |",
                     c.id,
                     worst(c, e),
                     worst(c, &l.current),
                     tolerance.map_or("–".into(), sci),
-                    cause(run(c, e))
                 ));
             }
         }
@@ -181,8 +189,10 @@ fn differing(w: &mut String, s: &Summary, lineages: &[Lineage]) {
     let _ = writeln!(
         w,
         "**Where a release's verdict differs from the current one's** ({}), with the cause its \
-         control experiments show (the same controls as for any cell, listed in \
-         [accuracy.md](accuracy.md); the control's error after the colon):\n\n\
+         control experiments show: the controls of any cell ([accuracy.md](accuracy.md)), and on \
+         0.34 two more, a contact softness ten times softer (its restitution depends on it) and \
+         the contact impulse read as n/(n + 1) of what it reports; the control and its error \
+         after the colon:\n\n\
          | case | engine | worst error | current release's | tolerance | cause |\n\
          |---|---|---:|---:|---:|---|",
         rows.len()
@@ -191,9 +201,36 @@ fn differing(w: &mut String, s: &Summary, lineages: &[Lineage]) {
         let _ = writeln!(w, "{r}");
     }
     let _ = writeln!(w);
+    meanings(w, s);
 }
 
-/// The cause a cell's controls show, with the control's error; what was tried where none does.
+/// What each cause an older release's controls named means.
+fn meanings(w: &mut String, s: &Summary) {
+    let mut named: Vec<(crate::run::controls::ControlKind, &str)> = Vec::new();
+    for r in s.cases.iter().flat_map(|c| &c.runs) {
+        if !crate::contract::on_older_release(&r.engine) {
+            continue;
+        }
+        let Some(c) = r.attribution.as_ref().and_then(|a| a.explaining()) else {
+            continue;
+        };
+        if !named.iter().any(|(k, _)| *k == c.kind) {
+            named.push((c.kind, &r.engine));
+        }
+    }
+    for (kind, engine) in named {
+        let _ = writeln!(
+            w,
+            "- **{}**: {}.",
+            super::verdicts::cause_label(kind, engine),
+            super::verdicts::cause_meaning(kind)
+        );
+    }
+    let _ = writeln!(w);
+}
+
+/// The cause a cell's controls show, with the control that shows it; what was tried where
+/// none does.
 fn cause(r: Option<&EngineSummary>) -> String {
     let Some(r) = r else {
         return "–".into();
@@ -204,20 +241,11 @@ fn cause(r: Option<&EngineSummary>) -> String {
     let Some(a) = &r.attribution else {
         return "no control was run".into();
     };
-    match a.explaining() {
-        Some(c) => format!(
-            "**{}**: {} ({})",
-            cause_label(c.kind, &a.engine),
-            c.error.map_or("–".into(), sci),
-            c.change
-        ),
-        None => {
-            let tried: Vec<String> = a
-                .controls
-                .iter()
-                .map(|c| format!("{}: {}", c.change, c.error.map_or("failed".into(), sci)))
-                .collect();
-            format!("unexplained (tried {})", tried.join("; "))
+    match cause_and_control(a) {
+        (cause, shown) if a.explaining().is_some() => format!("{cause}: {shown}"),
+        (cause, _) => {
+            let tried: Vec<String> = a.controls.iter().map(control).collect();
+            format!("{cause} (tried {})", tried.join("; "))
         }
     }
 }

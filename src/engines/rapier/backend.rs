@@ -1,5 +1,7 @@
 //! Build and step a rapier world from a [`Plan`](super::plan::Plan): written once as a macro, instantiated for
-//! `rapier2d`, `rapier2d-f64`, `rapier3d` and `rapier3d-f64`.
+//! `rapier2d`, `rapier2d-f64`, `rapier3d` and `rapier3d-f64` 0.36, and with the
+//! `rapier-versions` feature for `rapier2d-f64` and `rapier3d-f64` 0.34 and 0.35; what differs
+//! between the releases is in `release_helpers!`.
 //!
 //! Per step: every dynamic body's user forces are reset and each point load is added at its
 //! material point's current world position (constant direction, so the load moves with the
@@ -168,9 +170,10 @@ macro_rules! dimension_helpers {
 ///
 /// - 0.36 (`current`) registers the contact pairs before the first step with
 ///   `PhysicsWorld::detect_collisions` and reports a quarantine.
-/// - 0.35 has neither: its `CollisionPipeline` registers the pairs (the same broad and narrow
-///   phases), and a non-finite state is caught by the finiteness check alone.
-/// - 0.34 has no `static_contact_softness` (one softness for every contact; the matched
+/// - 0.35 has no `detect_collisions`: its `CollisionPipeline` registers the pairs (the same
+///   broad and narrow phases).
+/// - 0.34 has no quarantine (a non-finite state is caught by the finiteness check alone), no
+///   `static_contact_softness` (one softness for every contact; the matched
 ///   configuration sets both to one value anyway) and no contact recycling (the matched
 ///   configuration turns it off). Its `CollisionPipeline` takes the bodies' pending changes
 ///   without clearing their marks, so a body that is not yet in an island never gets one (and

@@ -70,7 +70,8 @@ pub fn of(engine: &RapierEngine, scene: &Scene) -> Vec<Control> {
             kind: ControlKind::ContactSoftness,
             change: format!(
                 "`contact_softness` {hz:.0e} Hz, damping ratio 1 (the matched configuration's) \
-                 instead of rapier's 30 Hz and 60 Hz, damping ratio 10"
+                 instead of rapier's {}",
+                engine.release.default_contact_softness()
             ),
             engine: Some(Box::new(RapierEngine {
                 name: format!("{}_matched_softness", engine.name),

@@ -1,11 +1,13 @@
-//! `rapier_*`: the scenes run through the rapier physics engine (0.36), as a third-party
-//! cross-check of our central-difference engine and as a measure of what a game-physics solver gives on
+//! `rapier_*`: the scenes run through the rapier physics engine (0.36; 0.34 and 0.35 beside it
+//! with the `rapier-versions` feature, [`Release`]), as a third-party cross-check of our
+//! central-difference engine and as a measure of what a game-physics solver gives on
 //! verification problems.
 //!
 //! One generic builder ([`plan`]) maps any scene onto rapier bodies, joints and colliders; one
 //! macro-generated backend ([`backend`]) per rapier crate builds and steps the world (2D scenes
-//! in `rapier2d`/`rapier2d-f64`, 3D ones in `rapier3d`/`rapier3d-f64`); one recorder
-//! ([`record`]) turns the stepped states into the output contract. See [`plan`] for the mapping.
+//! in `rapier2d`/`rapier2d-f64`, 3D ones in `rapier3d`/`rapier3d-f64`, and the older releases'
+//! f64 crates); one recorder ([`record`]) turns the stepped states into the output contract.
+//! See [`plan`] for the mapping.
 //!
 //! # Engines
 //!
@@ -15,6 +17,8 @@
 //! | `rapier_f32` | f32 | [`Configuration::Matched`] |
 //! | `rapier_f64_default` | f64 | [`Configuration::Default`] |
 //! | `rapier_f32_default` | f32 | [`Configuration::Default`] |
+//! | `rapier_f64@0.34`, `rapier_f64@0.35` | f64 | [`Configuration::Matched`], on that release |
+//! | `rapier_f64_default@0.34`, `rapier_f64_default@0.35` | f64 | [`Configuration::Default`], on that release |
 //!
 //! # How rapier integrates these scenes
 //!
@@ -134,6 +138,15 @@ impl Release {
     /// the substeps: a softer contact is a control for it.
     pub fn restitution_in_substeps(self) -> bool {
         self.reports_extra_substep_impulse()
+    }
+
+    /// Its default contact softness, in words.
+    pub fn default_contact_softness(self) -> &'static str {
+        if self.restitution_in_substeps() {
+            "30 Hz, damping ratio 5"
+        } else {
+            "30 Hz and 60 Hz, damping ratio 10"
+        }
     }
 
     /// The release's minor version as the report labels it (`0.34`, `0.35`, `0.36`).
@@ -512,6 +525,9 @@ impl Engine for RapierEngine {
         })
     }
     fn with_substeps(&self, substeps: usize) -> Option<Box<dyn Engine>> {
+        if self.release != Release::Current {
+            return None;
+        }
         match self.configuration {
             Configuration::Matched(m) => {
                 let mut engine = self.clone();

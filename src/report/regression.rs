@@ -381,6 +381,7 @@ impl Since {
         moved.sort_by(|a, b| b.0.total_cmp(&a.0));
         let mut drifted: Vec<&Change> = self.changes.iter().filter(|c| c.drift > DRIFT).collect();
         drifted.sort_by(|a, b| b.drift.total_cmp(&a.drift));
+        let steady = flipped.is_empty() && moved.is_empty() && drifted.is_empty();
         let mut parts = Vec::new();
         if !flipped.is_empty() {
             parts.push(format!(
@@ -437,6 +438,17 @@ impl Since {
                  history by more than {} of its peak.\n",
                 MOVED * 100.0,
                 sci(DRIFT)
+            );
+        }
+        if steady && !self.changes.is_empty() {
+            parts.insert(
+                0,
+                format!(
+                    "in the cells both hold, no verdict changed, no error moved by more than \
+                     {:.0} % and no history by more than {} of its peak",
+                    MOVED * 100.0,
+                    sci(DRIFT)
+                ),
             );
         }
         format!("{head} {}.\n", parts.join("; "))

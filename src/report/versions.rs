@@ -10,6 +10,7 @@ use super::regression::{self, Report};
 use super::summary::{CaseSummary, EngineSummary, Summary};
 use super::verdicts::{cause_and_control, control};
 use crate::contract::release_of;
+use crate::run::controls::ControlKind;
 use std::fmt::Write;
 use std::path::Path;
 
@@ -153,6 +154,8 @@ fn headline(w: &mut String, s: &Summary, lineages: &[Lineage]) {
 /// its controls show.
 fn differing(w: &mut String, s: &Summary, lineages: &[Lineage]) {
     let mut rows = Vec::new();
+    // The causes the rows name, each with an engine that names it.
+    let mut named: Vec<(ControlKind, String)> = Vec::new();
     for l in lineages {
         for c in &s.cases {
             let now = verdict(c, &l.current, &l.current);
@@ -164,11 +167,19 @@ fn differing(w: &mut String, s: &Summary, lineages: &[Lineage]) {
                 let tolerance = run(c, &l.current).and_then(|r| r.tolerance);
                 // Where the older release meets the tolerance, it is the current one that
                 // misses: its cause.
+                let shown = if then == Some(true) { &l.current } else { e };
+                let why = cause(run(c, shown));
                 let why = if then == Some(true) {
-                    format!("the current release misses: {}", cause(run(c, &l.current)))
+                    format!("the current release misses: {why}")
                 } else {
-                    cause(run(c, e))
+                    why
                 };
+                let explaining = run(c, shown)
+                    .and_then(|r| r.attribution.as_ref()?.explaining())
+                    .map(|k| k.kind);
+                if let Some(kind) = explaining.filter(|k| !named.iter().any(|(n, _)| n == k)) {
+                    named.push((kind, shown.clone()));
+                }
                 rows.push(format!(
                     "| {} | `{e}` | {} | {} | {} | {why} |",
                     c.id,
@@ -201,29 +212,20 @@ fn differing(w: &mut String, s: &Summary, lineages: &[Lineage]) {
         let _ = writeln!(w, "{r}");
     }
     let _ = writeln!(w);
-    meanings(w, s);
+    meanings(w, &named);
 }
 
-/// What each cause an older release's controls named means.
-fn meanings(w: &mut String, s: &Summary) {
-    let mut named: Vec<(crate::run::controls::ControlKind, &str)> = Vec::new();
-    for r in s.cases.iter().flat_map(|c| &c.runs) {
-        if !crate::contract::on_older_release(&r.engine) {
-            continue;
-        }
-        let Some(c) = r.attribution.as_ref().and_then(|a| a.explaining()) else {
-            continue;
-        };
-        if !named.iter().any(|(k, _)| *k == c.kind) {
-            named.push((c.kind, &r.engine));
-        }
+/// What each cause the table names means.
+fn meanings(w: &mut String, named: &[(ControlKind, String)]) {
+    if named.is_empty() {
+        return;
     }
     for (kind, engine) in named {
         let _ = writeln!(
             w,
             "- **{}**: {}.",
-            super::verdicts::cause_label(kind, engine),
-            super::verdicts::cause_meaning(kind)
+            super::verdicts::cause_label(*kind, engine),
+            super::verdicts::cause_meaning(*kind)
         );
     }
     let _ = writeln!(w);

@@ -473,9 +473,22 @@ fn case_section(w: &mut String, c: &CaseSummary) {
             );
             continue;
         }
-        let verdict = match (r.tolerance, r.meets_tolerance) {
-            (Some(t), Some(true)) => format!("meets its tolerance {}", sci(t)),
-            (Some(t), Some(false)) => format!("**does not meet** its tolerance {}", sci(t)),
+        // An older release is held to its current release's tolerance (the versions section).
+        let (current, release) = crate::contract::release_of(&r.engine);
+        let held = release
+            .and_then(|_| c.runs.iter().find(|x| x.engine == current)?.tolerance)
+            .map(|t| (t, max <= t));
+        let verdict = match (r.tolerance, r.meets_tolerance, held) {
+            (Some(t), Some(true), _) => format!("meets its tolerance {}", sci(t)),
+            (Some(t), Some(false), _) => format!("**does not meet** its tolerance {}", sci(t)),
+            (_, _, Some((t, true))) => format!(
+                "within `{current}`'s tolerance {} ([releases side by side](../REPORT.md#releases-side-by-side))",
+                sci(t)
+            ),
+            (_, _, Some((t, false))) => format!(
+                "**over** `{current}`'s tolerance {} ([releases side by side](../REPORT.md#releases-side-by-side))",
+                sci(t)
+            ),
             _ => "has no declared tolerance".into(),
         };
         let _ = writeln!(

@@ -121,32 +121,13 @@ fn a_zero_length_first_step_changes_no_history_on_0_35_and_0_36() {
 
 /// The rebound of each release on the drops e = 0.3, 0.6, 0.9, 1, matched and default
 /// configurations, as measured (`REPORT.md`'s versions section).
+#[rustfmt::skip]
 const FROZEN: [(&str, f64, [f64; 3], [f64; 3]); 4] = [
     // (case, e, matched 0.34 / 0.35 / 0.36, default 0.34 / 0.35 / 0.36)
-    (
-        "contact_drop_e03",
-        0.3,
-        [0.0900, 0.0900, 0.0900],
-        [0.0872, 0.0866, 0.0866],
-    ),
-    (
-        "contact_drop_e06",
-        0.6,
-        [0.3600, 0.3600, 0.3600],
-        [0.3575, 0.3520, 0.3520],
-    ),
-    (
-        "contact_drop_e09",
-        0.9,
-        [0.4967, 0.8100, 0.8100],
-        [0.8065, 0.7962, 0.7962],
-    ),
-    (
-        "contact_drop_e1",
-        1.0,
-        [0.4986, 0.9999, 0.9999],
-        [0.9962, 0.9840, 0.9840],
-    ),
+    ("contact_drop_e03", 0.3, [0.0900, 0.0900, 0.0900], [0.0872, 0.0866, 0.0866]),
+    ("contact_drop_e06", 0.6, [0.3600, 0.3600, 0.3600], [0.3575, 0.3520, 0.3520]),
+    ("contact_drop_e09", 0.9, [0.4967, 0.8100, 0.8100], [0.8065, 0.7962, 0.7962]),
+    ("contact_drop_e1", 1.0, [0.4986, 0.9999, 0.9999], [0.9962, 0.9840, 0.9840]),
 ];
 
 /// How far a rebound may move from its frozen value (rapier's own tests: ±0.05 of the drop).

@@ -184,13 +184,7 @@ macro_rules! dimension_helpers {
 ///   (`tests/versions.rs`).
 macro_rules! release_helpers {
     (current) => {
-        fn set_softness(p: &mut IntegrationParameters, softness: SpringCoefficients<Real>) {
-            p.contact_softness = softness;
-            p.static_contact_softness = softness;
-        }
-        fn set_recycling(p: &mut IntegrationParameters, recycling: bool) {
-            p.contact_recycling = recycling;
-        }
+        release_helpers!(static_softness);
         fn detect(world: &mut PhysicsWorld) {
             world.detect_collisions(&(), &());
         }
@@ -200,13 +194,7 @@ macro_rules! release_helpers {
         release_helpers!(zero_step_on_request);
     };
     (v0_35) => {
-        fn set_softness(p: &mut IntegrationParameters, softness: SpringCoefficients<Real>) {
-            p.contact_softness = softness;
-            p.static_contact_softness = softness;
-        }
-        fn set_recycling(p: &mut IntegrationParameters, recycling: bool) {
-            p.contact_recycling = recycling;
-        }
+        release_helpers!(static_softness);
         fn quarantined(world: &PhysicsWorld) -> bool {
             !world.quarantine().is_empty()
         }
@@ -224,6 +212,15 @@ macro_rules! release_helpers {
         release_helpers!(collision_pipeline);
         fn before_joints(world: &mut PhysicsWorld, _: &Run) -> Velocities {
             zero_step(world)
+        }
+    };
+    (static_softness) => {
+        fn set_softness(p: &mut IntegrationParameters, softness: SpringCoefficients<Real>) {
+            p.contact_softness = softness;
+            p.static_contact_softness = softness;
+        }
+        fn set_recycling(p: &mut IntegrationParameters, recycling: bool) {
+            p.contact_recycling = recycling;
         }
     };
     (zero_step_on_request) => {

@@ -27,41 +27,29 @@ pub fn of(engine: &RapierEngine, scene: &Scene) -> Vec<Control> {
         return out;
     }
     if let Configuration::Matched(m) = engine.configuration {
-        let stiffer = MatchedSettings {
-            contact_frequency: 10.0 * m.contact_frequency,
-            ..m
-        };
-        out.push(Control {
-            kind: ControlKind::ContactSoftness,
-            change: format!(
-                "`contact_softness` {:.0e} Hz instead of {:.0e} Hz",
-                stiffer.contact_frequency, m.contact_frequency
-            ),
-            engine: Some(Box::new(RapierEngine {
-                name: format!("{}_stiffer_contact", engine.name),
-                configuration: Configuration::Matched(stiffer),
-                ..engine.clone()
-            })),
-            scene: None,
-        });
-        if engine.release.restitution_in_substeps() {
-            let softer = MatchedSettings {
-                contact_frequency: m.contact_frequency / 10.0,
+        // The contact softness times `factor`, named with `suffix`.
+        let softness = |factor: f64, suffix: &str| {
+            let varied = MatchedSettings {
+                contact_frequency: factor * m.contact_frequency,
                 ..m
             };
-            out.push(Control {
+            Control {
                 kind: ControlKind::ContactSoftness,
                 change: format!(
                     "`contact_softness` {:.0e} Hz instead of {:.0e} Hz",
-                    softer.contact_frequency, m.contact_frequency
+                    varied.contact_frequency, m.contact_frequency
                 ),
                 engine: Some(Box::new(RapierEngine {
-                    name: format!("{}_softer_contact", engine.name),
-                    configuration: Configuration::Matched(softer),
+                    name: format!("{}_{suffix}", engine.name),
+                    configuration: Configuration::Matched(varied),
                     ..engine.clone()
                 })),
                 scene: None,
-            });
+            }
+        };
+        out.push(softness(10.0, "stiffer_contact"));
+        if engine.release.restitution_in_substeps() {
+            out.push(softness(0.1, "softer_contact"));
         }
     }
     if engine.configuration == Configuration::Default {

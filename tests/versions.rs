@@ -9,6 +9,8 @@
 //! - Contact impulses: rapier 0.34 reports a step's impulse plus the previous step's warm-start
 //!   impulse, one substep's worth; 0.35.2 made it the step's own (its changelog: "drop by
 //!   1/(num_solver_iterations + 1)").
+//! - Gyroscopic forces: off by default on a rapier 0.34 body, on from 0.35; a fast spin off a
+//!   principal axis shows it.
 //! - The construct the 0.34 backend needs (a step of length 0 before the first detection)
 //!   changes no history on the releases that do not need it.
 #![cfg(feature = "rapier-versions")]
@@ -342,6 +344,47 @@ fn rapier_0_35_3_and_0_36_1_agree_to_the_bit_on_every_case() {
                 (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string(), "{}", s.id),
                 (a, b) => panic!("{}: {:?} against {:?}", s.id, a.err(), b.err()),
             }
+        }
+    }
+}
+
+#[test]
+fn rapier_0_34_leaves_out_the_gyroscopic_torque_unless_asked() {
+    // A free body spinning at 1000 rad/s near its intermediate axis flips (Dzhanibekov) and
+    // near its minor axis precesses. 0.34 leaves a body's gyroscopic torque ω × Iω out by
+    // default (`gyroscopic_forces_enabled` false; 0.35 turned it on): its spin keeps ω, an
+    // error of the order of the motion (1.00 and 0.63 of the peak measured). The control turns
+    // them on, the only change: within the case's tolerance, as 0.36 is (7.0e-4 and 2.4e-3
+    // measured, against 1.75e-4 and 6.0e-4). On 0.35 and 0.36 turning them on changes no
+    // history: it is their default.
+    for id in ["stress_spin_intermediate", "stress_spin_minor"] {
+        let s = stress_scene(id);
+        let exact = engines::named("reference")
+            .unwrap()
+            .run(&s, &RunSettings::default())
+            .unwrap();
+        let error = |out: &RunOutput| {
+            comparison::compare(&s, &exact.history, &out.history)
+                .worst_max
+                .unwrap()
+        };
+        let tolerance = comparison::judged_tolerance(&s, "rapier_f64@0.34").unwrap();
+        let engine = matched(Release::V0_34, |_| {});
+        let off = error(&run(&s, &engine));
+        let on = error(&run(&s, &engine.clone().with_gyroscopic(true)));
+        assert!(off > 0.5 && on < tolerance, "{id}: {off:.3e} → {on:.3e}");
+        let offered = engine
+            .controls(&s)
+            .into_iter()
+            .any(|c| c.kind == ControlKind::Gyroscopic);
+        assert!(offered, "{id}: 0.34 offers the gyroscopic control");
+        for release in [Release::V0_35, Release::Current] {
+            let plain = matched(release, |_| {});
+            assert_eq!(
+                run(&s, &plain).history,
+                run(&s, &plain.clone().with_gyroscopic(true)).history,
+                "{id} / {release:?}"
+            );
         }
     }
 }

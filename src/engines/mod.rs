@@ -226,6 +226,8 @@ pub enum ControlKind {
     Restitution,
     /// How a reported contact impulse is read (the motion unchanged).
     ImpulseReading,
+    /// Whether a body's gyroscopic torque is integrated (an engine setting with a default).
+    Gyroscopic,
 }
 
 /// A control experiment an engine offers ([`Engine::controls`]): the same run with one thing

@@ -247,6 +247,7 @@ pub fn cause_label(kind: ControlKind, engine: &str) -> &'static str {
         ControlKind::ContactSoftness => "model: rapier's soft contact",
         ControlKind::Restitution => "model: rapier's restitution on a resting contact",
         ControlKind::ImpulseReading => "reading: rapier 0.34's reported contact impulse",
+        ControlKind::Gyroscopic => "setting: rapier 0.34's gyroscopic forces, off by default",
     }
 }
 
@@ -281,6 +282,13 @@ pub fn cause_meaning(kind: ControlKind) -> &'static str {
              (n substeps), is within reach: 0.34 adds the previous step's warm-start impulse, one \
              substep's worth, to the step's total (`total_impulse_magnitude`; rapier 0.35.2 \
              changed it to the step's own)"
+        }
+        ControlKind::Gyroscopic => {
+            "the same run with the bodies' gyroscopic torque integrated \
+             (`gyroscopic_forces_enabled`) is within reach: rapier 0.34 leaves it out unless a \
+             body asks for it, and 0.35 turned it on by default; without it a free body spinning \
+             off a principal axis keeps its angular velocity, where the exact one precesses or \
+             flips"
         }
     }
 }

@@ -201,9 +201,9 @@ fn differing(w: &mut String, s: &Summary, lineages: &[Lineage]) {
         w,
         "**Where a release's verdict differs from the current one's** ({}), with the cause its \
          control experiments show: the controls of any cell ([accuracy.md](accuracy.md)), and on \
-         0.34 two more, a contact softness ten times softer (its restitution depends on it) and \
-         the contact impulse read as n/(n + 1) of what it reports; the control and its error \
-         after the colon:\n\n\
+         0.34 three more, a contact softness ten times softer (its restitution depends on it), \
+         the contact impulse read as n/(n + 1) of what it reports, and gyroscopic forces on (3D); \
+         the control and its error after the colon:\n\n\
          | case | engine | worst error | current release's | tolerance | cause |\n\
          |---|---|---:|---:|---:|---|",
         rows.len()

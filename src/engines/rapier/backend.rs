@@ -38,6 +38,9 @@ pub struct Run {
     /// What the reported contact impulses are multiplied by (1, or a control experiment's
     /// reading of them).
     pub impulse_scale: f64,
+    /// Gyroscopic forces on every rigid body (`None`: the release's default, off on 0.34 and
+    /// on from 0.35; a control experiment sets it).
+    pub gyroscopic: Option<bool>,
 }
 
 /// The state after a step (or at the start of a dynamic step).
@@ -101,6 +104,10 @@ macro_rules! dimension_helpers {
         fn cuboid(half: &Vector3<f64>) -> ColliderBuilder {
             ColliderBuilder::cuboid(half.x as Real, half.y as Real)
         }
+        /// A plane body has no gyroscopic torque.
+        fn gyroscopic(b: RigidBodyBuilder, _: Option<bool>) -> RigidBodyBuilder {
+            b
+        }
         fn mass_properties(
             com: &Vector3<f64>,
             mass: f64,
@@ -144,6 +151,13 @@ macro_rules! dimension_helpers {
         }
         fn cuboid(half: &Vector3<f64>) -> ColliderBuilder {
             ColliderBuilder::cuboid(half.x as Real, half.y as Real, half.z as Real)
+        }
+        /// Gyroscopic forces as `on` says (`None`: the release's default).
+        fn gyroscopic(b: RigidBodyBuilder, on: Option<bool>) -> RigidBodyBuilder {
+            match on {
+                Some(on) => b.gyroscopic_forces_enabled(on),
+                None => b,
+            }
         }
         fn mass_properties(
             com: &Vector3<f64>,
@@ -408,14 +422,16 @@ macro_rules! backend {
                                 .linvel(vector(&b.linvel))
                                 .ccd_enabled(run.ccd)
                                 .can_sleep(false),
-                            BodyKind::Rigid => RigidBodyBuilder::dynamic()
-                                .pose(at)
-                                .additional_mass_properties(mass_properties(
-                                    &b.com, b.mass, &b.inertia,
-                                ))
-                                .linvel(vector(&b.linvel))
-                                .angvel(angular(&b.angvel))
-                                .can_sleep(false),
+                            BodyKind::Rigid => {
+                                gyroscopic(RigidBodyBuilder::dynamic(), run.gyroscopic)
+                                    .pose(at)
+                                    .additional_mass_properties(mass_properties(
+                                        &b.com, b.mass, &b.inertia,
+                                    ))
+                                    .linvel(vector(&b.linvel))
+                                    .angvel(angular(&b.angvel))
+                                    .can_sleep(false)
+                            }
                         };
                         world.insert_body(builder)
                     })

@@ -2,11 +2,12 @@
 //! a discrepancy varied, each something the exact solution does not depend on: f64 for f32, a
 //! stiffer contact softness (and a softer one on rapier 0.34, whose restitution depends on
 //! it), restitution 0 on pairs that start closed and never strike, the contact impulse read as
-//! n/(n + 1) of what rapier 0.34 reports.
+//! n/(n + 1) of what rapier 0.34 reports, gyroscopic forces on rapier 0.34 (off by default
+//! there).
 
 use super::{Configuration, MatchedSettings, Precision, RapierEngine};
 use crate::engines::{Control, ControlKind};
-use crate::scene::{ContactPair, ContactState, Scene};
+use crate::scene::{ContactPair, ContactState, Dimension, Scene};
 
 /// The control experiments of `engine` on `scene`.
 pub fn of(engine: &RapierEngine, scene: &Scene) -> Vec<Control> {
@@ -20,6 +21,15 @@ pub fn of(engine: &RapierEngine, scene: &Scene) -> Vec<Control> {
                 precision: Precision::F64,
                 ..engine.clone()
             })),
+            scene: None,
+        });
+    }
+    if engine.release.gyroscopic_off_by_default() && scene.dimension == Dimension::Three {
+        out.push(Control {
+            kind: ControlKind::Gyroscopic,
+            change: "gyroscopic forces on (`gyroscopic_forces_enabled`; off by default on 0.34)"
+                .into(),
+            engine: Some(Box::new(engine.clone().with_gyroscopic(true))),
             scene: None,
         });
     }

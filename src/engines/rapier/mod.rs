@@ -133,6 +133,12 @@ impl Release {
         }
     }
 
+    /// Whether its rigid bodies leave gyroscopic forces out unless asked (0.34; on by default
+    /// from 0.35): turning them on is a control for a spin.
+    pub fn gyroscopic_off_by_default(self) -> bool {
+        self.reports_extra_substep_impulse()
+    }
+
     /// Whether restitution enters every substep's contact constraint (0.34; 0.35 applies it in
     /// one pass after the substeps), so that the rebound depends on the contact softness and
     /// the substeps: a softer contact is a control for it.
@@ -303,6 +309,8 @@ pub struct RapierEngine {
     zero_step_first: bool,
     /// What the reported contact impulses are multiplied by (1 but in a control experiment).
     impulse_scale: f64,
+    /// Gyroscopic forces on the rigid bodies (`None`: the release's default).
+    gyroscopic: Option<bool>,
 }
 
 impl RapierEngine {
@@ -339,7 +347,18 @@ impl RapierEngine {
             release: Release::Current,
             zero_step_first: false,
             impulse_scale: 1.0,
+            gyroscopic: None,
         }
+    }
+
+    /// The same engine with gyroscopic forces on or off on every rigid body whatever its
+    /// release's default (off on 0.34, on from 0.35), named with a `_gyroscopic` suffix (a
+    /// control experiment).
+    pub fn with_gyroscopic(mut self, on: bool) -> Self {
+        self.gyroscopic = Some(on);
+        self.name
+            .push_str(if on { "_gyroscopic" } else { "_no_gyroscopic" });
+        self
     }
 
     /// The same engine stepping the world by a length of 0 before its first collision
@@ -414,6 +433,7 @@ impl RapierEngine {
             default_softness: self.default_softness,
             zero_step_first: self.zero_step_first,
             impulse_scale: self.impulse_scale,
+            gyroscopic: self.gyroscopic,
         };
         let mut recorder = record::Recorder::new(scene, &plan);
         let mut sink = |r: backend::Record| recorder.push(r);

@@ -142,7 +142,7 @@ pub fn restitution_table(w: &mut String, drops: &[&CaseSummary], names: &[&str])
     let _ = writeln!(w, "|---|---:|---:|{}", "---:|".repeat(names.len()));
     for c in drops {
         // The restitution the reference applied at the first impact: rebound over approach.
-        let e = c.runs.iter().find(|r| r.engine == REFERENCE).and_then(|r| {
+        let e = c.run(REFERENCE).and_then(|r| {
             Some(r.measures.get("impact_1_rebound")? / r.measures.get("impact_1_speed")?)
         });
         let cells: Vec<String> = names

@@ -60,12 +60,8 @@ fn judged_engines(s: &Summary) -> Vec<&str> {
         .map(String::as_str)
         .filter(|e| !EXACT_SOLUTIONS.contains(e))
         .filter(|e| !crate::contract::on_older_release(e))
-        .filter(|e| s.cases.iter().any(|c| run(c, e).is_some()))
+        .filter(|e| s.cases.iter().any(|c| c.run(e).is_some()))
         .collect()
-}
-
-fn run<'a>(c: &'a CaseSummary, engine: &str) -> Option<&'a EngineSummary> {
-    c.runs.iter().find(|r| r.engine == engine)
 }
 
 /// An engine's worst error against its own model on each case where it has one: (error, case).
@@ -74,7 +70,7 @@ fn errors<'a>(s: &'a Summary, engine: &str) -> Vec<(f64, &'a str)> {
         .cases
         .iter()
         .filter_map(|c| {
-            let a = run(c, engine)?.against_baseline.as_ref()?;
+            let a = c.run(engine)?.against_baseline.as_ref()?;
             Some((a.worst_max?, c.id.as_str()))
         })
         .collect();
@@ -102,8 +98,8 @@ fn cost_ratios<'a>(s: &'a Summary, engine: &str, target: f64) -> Vec<(f64, bool,
         .cases
         .iter()
         .filter_map(|c| {
-            let mine = cost(run(c, engine)?, target)?;
-            let base = cost(run(c, BASE)?, target)?;
+            let mine = cost(c.run(engine)?, target)?;
+            let base = cost(c.run(BASE)?, target)?;
             let ratio = mine.cpu_s_per_simulated_s? / base.cpu_s_per_simulated_s?;
             let extrapolated =
                 mine.reached == Reached::Extrapolated || base.reached == Reached::Extrapolated;
@@ -140,7 +136,7 @@ fn critical_ratios<'a>(s: &'a Summary, engine: &str) -> Vec<(f64, &'a str, bool)
         .cases
         .iter()
         .filter_map(|c| {
-            let k = run(c, engine)?.critical_increment.as_ref()?;
+            let k = c.run(engine)?.critical_increment.as_ref()?;
             Some((k.explicit_ratio, c.id.as_str(), k.bound == "at_least"))
         })
         .collect();
@@ -177,7 +173,7 @@ fn conclusions(w: &mut String, s: &Summary, engines: &[&str]) {
                 .iter()
                 .filter_map(|(_, _, id)| {
                     let c = s.cases.iter().find(|c| c.id == *id)?;
-                    let k = cost(run(c, rapier)?, target)?;
+                    let k = cost(c.run(rapier)?, target)?;
                     (k.reached == Reached::Extrapolated).then_some(k.order?)
                 })
                 .collect();
@@ -304,7 +300,7 @@ fn engine_table(w: &mut String, s: &Summary, engines: &[&str]) {
                 _ if *e == BASE => median_of(
                     s.cases
                         .iter()
-                        .filter_map(|c| cost(run(c, e)?, target)?.cpu_s_per_simulated_s)
+                        .filter_map(|c| cost(c.run(e)?, target)?.cpu_s_per_simulated_s)
                         .collect(),
                 )
                 .map_or("–".into(), |m| format!("{} s/s (median)", sci(m))),
@@ -367,7 +363,7 @@ fn engine_table(w: &mut String, s: &Summary, engines: &[&str]) {
 fn flags(s: &Summary, engine: &str) -> String {
     let mut counts: Vec<(String, usize)> = Vec::new();
     for c in &s.cases {
-        let Some(a) = run(c, engine).and_then(|r| r.attribution.as_ref()) else {
+        let Some(a) = c.run(engine).and_then(|r| r.attribution.as_ref()) else {
             continue;
         };
         let label = a.explaining().map_or("unexplained".to_string(), |k| {
@@ -401,10 +397,11 @@ fn representatives(s: &Summary) -> Vec<&CaseSummary> {
 
 /// A cost cell: `explicit`'s in CPU seconds per simulated second, another engine's over it.
 fn cost_cell(c: &CaseSummary, engine: &str, target: f64) -> String {
-    let Some(mine) = run(c, engine).and_then(|r| cost(r, target)) else {
+    let Some(mine) = c.run(engine).and_then(|r| cost(r, target)) else {
         return "–".into();
     };
-    let base = run(c, BASE)
+    let base = c
+        .run(BASE)
         .and_then(|r| cost(r, target))
         .and_then(|b| b.cpu_s_per_simulated_s);
     let approx = if mine.reached == Reached::Extrapolated {
@@ -475,7 +472,7 @@ fn critical_table(w: &mut String, cases: &[&CaseSummary], engines: &[&str]) {
         let cells: Vec<String> = engines
             .iter()
             .map(|e| {
-                run(c, e)
+                c.run(e)
                     .and_then(|r| r.critical_increment.as_ref())
                     .map_or("–".into(), |k| {
                         let prefix = match k.bound.as_str() {

@@ -278,7 +278,7 @@ fn error_of(c: &CaseSummary, engine: &str) -> Option<f64> {
 
 /// The worst error of a named engine's run against the closed form.
 fn total_of(c: &CaseSummary, engine: &str) -> Option<f64> {
-    c.runs.iter().find(|r| r.engine == engine).and_then(total)
+    c.run(engine).and_then(total)
 }
 
 /// rapier (matched, f64) and our explicit engine, each against the converged finite-rotation
@@ -476,7 +476,7 @@ fn case_section(w: &mut String, c: &CaseSummary) {
         // An older release is held to its current release's tolerance (the versions section).
         let (current, release) = crate::contract::release_of(&r.engine);
         let held = release
-            .and_then(|_| c.runs.iter().find(|x| x.engine == current)?.tolerance)
+            .and_then(|_| c.run(current)?.tolerance)
             .map(|t| (t, max <= t));
         let verdict = match (r.tolerance, r.meets_tolerance, held) {
             (Some(t), Some(true), _) => format!("meets its tolerance {}", sci(t)),

@@ -163,6 +163,13 @@ pub struct CriticalIncrement {
     pub bound: String,
 }
 
+impl CaseSummary {
+    /// The run of `engine` on this case, where it ran.
+    pub fn run(&self, engine: &str) -> Option<&EngineSummary> {
+        self.runs.iter().find(|r| r.engine == engine)
+    }
+}
+
 impl EngineSummary {
     /// The budget's worst column (largest total) and its dominant part (name, norm): the source
     /// that explains most of the discrepancy.

@@ -54,15 +54,11 @@ const CURRENT: &str = crate::engines::rapier::Release::Current.label();
 #[cfg(not(feature = "rapier"))]
 const CURRENT: &str = "current";
 
-fn run<'a>(c: &'a CaseSummary, engine: &str) -> Option<&'a EngineSummary> {
-    c.runs.iter().find(|r| r.engine == engine)
-}
-
 /// A cell's verdict against the current release's tolerance: `Some(true)` within it,
 /// `Some(false)` over it or failed, `None` not judged (no tolerance, no compared row).
 fn verdict(c: &CaseSummary, engine: &str, current: &str) -> Option<bool> {
-    let tolerance = run(c, current)?.tolerance?;
-    let r = run(c, engine)?;
+    let tolerance = c.run(current)?.tolerance?;
+    let r = c.run(engine)?;
     match &r.error {
         Some(e) if super::summary::not_applicable(e) => return None,
         Some(_) => return Some(false),
@@ -73,7 +69,7 @@ fn verdict(c: &CaseSummary, engine: &str, current: &str) -> Option<bool> {
 
 /// A cell's worst error, or `failed`.
 fn worst(c: &CaseSummary, engine: &str) -> String {
-    match run(c, engine) {
+    match c.run(engine) {
         Some(r) if r.error.is_some() => "failed".into(),
         Some(r) => r
             .against_baseline
@@ -164,17 +160,18 @@ fn differing(w: &mut String, s: &Summary, lineages: &[Lineage]) {
                 if then.is_none() || then == now {
                     continue;
                 }
-                let tolerance = run(c, &l.current).and_then(|r| r.tolerance);
+                let tolerance = c.run(&l.current).and_then(|r| r.tolerance);
                 // Where the older release meets the tolerance, it is the current one that
                 // misses: its cause.
                 let shown = if then == Some(true) { &l.current } else { e };
-                let why = cause(run(c, shown));
+                let why = cause(c.run(shown));
                 let why = if then == Some(true) {
                     format!("the current release misses: {why}")
                 } else {
                     why
                 };
-                let explaining = run(c, shown)
+                let explaining = c
+                    .run(shown)
                     .and_then(|r| r.attribution.as_ref()?.explaining())
                     .map(|k| k.kind);
                 if let Some(kind) = explaining.filter(|k| !named.iter().any(|(n, _)| n == k)) {

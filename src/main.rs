@@ -829,14 +829,18 @@ fn run_command(args: RunArgs, dir: &Path) -> ExitCode {
         on_request: args.on_request,
     };
     match pipeline::run(&plan, dir, &studies, staging, started, !args.quiet) {
-        Ok(finished) => print_run(&finished, &args.out),
+        Ok(finished) => print_run(&finished, &studies, &args.out),
         Err(e) => stopped("the report", e),
     }
 }
 
 /// What a finished run prints: the jobs' table, the tolerance count, the stage times; exit 1
 /// when a job failed.
-fn print_run(finished: &pipeline::Finished, out_dir: &Path) -> ExitCode {
+fn print_run(
+    finished: &pipeline::Finished,
+    studies: &pipeline::Studies,
+    out_dir: &Path,
+) -> ExitCode {
     let (outcome, t) = (&finished.outcome, &finished.times);
     let mut out = Stdout::default();
     out.print(&outcome.table());
@@ -849,14 +853,14 @@ fn print_run(finished: &pipeline::Finished, out_dir: &Path) -> ExitCode {
         checks.iter().filter(|c| c.met()).count(),
         checks.len()
     ));
+    let parts: Vec<String> = t
+        .parts(studies)
+        .iter()
+        .map(|(name, seconds)| format!("{name} {seconds:.2} s"))
+        .collect();
     out.print(&format!(
-        "time: load and check {:.2} s, jobs {:.2} s, budget {:.2} s, sweep {:.2} s, stability map {:.2} s, accuracy on request {:.2} s, report {:.2} s, swap {:.2} s; total {:.2} s\n",
-        t.loaded,
-        t.ran - t.loaded,
-        t.budgeted - t.ran,
-        t.swept - t.budgeted,
-        t.mapped - t.swept,
-        t.requested - t.mapped,
+        "time: {}, report {:.2} s, swap {:.2} s; total {:.2} s\n",
+        parts.join(", "),
         t.written - t.requested,
         t.swapped - t.written,
         t.swapped

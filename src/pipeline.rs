@@ -3,16 +3,16 @@
 //! swapped into place. The command line chooses what runs and prints what it returns; this
 //! module is the last in the flow (it uses the modules before it, and none of them uses it).
 
+use crate::comparison::stability::Map;
+use crate::comparison::summary::Summary;
 use crate::comparison::{self, discrepancy, work_precision};
 use crate::engines::{self, Engine, RunSettings};
 use crate::interrupt;
 use crate::report::data::DataError;
 use crate::report::staging::Staging;
-use crate::report::summary::Summary;
 use crate::report::{self, Study};
 use crate::run::on_request::Request;
 use crate::run::refinement::Depth;
-use crate::run::stability::Map;
 use crate::run::{self, Outcome, Plan, sweep};
 use crate::scene::Scene;
 use std::collections::BTreeMap;
@@ -39,8 +39,12 @@ pub struct StageTimes {
     pub ran: f64,
     /// The discrepancy budgets and the control experiments.
     pub budgeted: f64,
+    /// The invariance controls.
+    pub invariant: f64,
     /// The sweep.
     pub swept: f64,
+    /// The runs that check the sweep's extrapolated costs.
+    pub reached: f64,
     /// The stability map.
     pub mapped: f64,
     /// Accuracy on request.
@@ -101,12 +105,16 @@ pub fn run(
     let attributions = comparison::attribution::measure(plan, &outcome, progress);
     times.budgeted = seconds_since(started);
     stop_if_interrupted()?;
+    let invariances = comparison::invariance::measure(plan, &outcome, progress);
+    times.invariant = seconds_since(started);
+    stop_if_interrupted()?;
     let measured = measure(
         plan, &outcome, cases_dir, studies, progress, started, &mut times,
     )?;
     let study = Study {
         budgets: &budgets,
         attributions: &attributions,
+        invariances: &invariances,
         sweeps: &measured.sweeps,
         stability: &measured.maps,
         requests: &measured.requests,
@@ -152,17 +160,18 @@ fn measure(
     };
     let seed_plan = subplan(&is_seed);
     let sweep_plan = subplan(&|s: &Scene| is_seed(s) || s.sweep);
-    let sweeps = match studies.sweep {
-        Some(repeat) => {
-            let grid = sweep::Grid {
-                repeat,
-                ..sweep::Grid::default()
-            };
-            work_precision::measure(&sweep_plan, outcome, &engines, &grid, progress)
-        }
+    let grid = sweep::Grid {
+        repeat: studies.sweep.unwrap_or(1),
+        ..sweep::Grid::default()
+    };
+    let mut sweeps = match studies.sweep {
+        Some(_) => work_precision::measure(&sweep_plan, outcome, &engines, &grid, progress),
         None => Vec::new(),
     };
     times.swept = seconds_since(started);
+    stop_if_interrupted()?;
+    work_precision::reach(&sweep_plan, outcome, &engines, &mut sweeps, &grid, progress);
+    times.reached = seconds_since(started);
     stop_if_interrupted()?;
     let maps = if studies.stability {
         comparison::stability::measure(plan, outcome, &engines, progress)
@@ -188,17 +197,19 @@ fn measure(
 impl StageTimes {
     /// How long each part of the run took, seconds, in order, for the report: the parts that
     /// ran.
-    fn parts(&self, studies: &Studies) -> Vec<(&'static str, f64)> {
+    pub fn parts(&self, studies: &Studies) -> Vec<(&'static str, f64)> {
         let mut parts = vec![
             ("load and check", self.loaded),
             ("jobs", self.ran - self.loaded),
             ("discrepancy budget and controls", self.budgeted - self.ran),
+            ("invariance controls", self.invariant - self.budgeted),
         ];
         if studies.sweep.is_some() {
-            parts.push(("sweep", self.swept - self.budgeted));
+            parts.push(("sweep", self.swept - self.invariant));
+            parts.push(("time to accuracy checked", self.reached - self.swept));
         }
         if studies.stability {
-            parts.push(("stability map", self.mapped - self.swept));
+            parts.push(("stability map", self.mapped - self.reached));
         }
         if studies.on_request {
             parts.push(("accuracy on request", self.requested - self.mapped));
@@ -314,7 +325,7 @@ fn judge_inputs(
     let tolerance = match request.tolerance {
         Some(t) if t.is_finite() && t > 0.0 => t,
         Some(t) => return Err(format!("--tolerance {t}: not a positive number")),
-        None => comparison::judge::tightest_tolerance(&scene)
+        None => comparison::verdict::tightest(&scene)
             .ok_or_else(|| format!("{} declares no tolerance: give --tolerance", scene.id))?,
     };
     Ok((scene, mapping, tolerance))
@@ -346,7 +357,12 @@ pub fn judge(request: &JudgeRequest, dir: &Path) -> Result<(String, bool), Strin
         &comparison,
         tolerance,
     );
-    Ok((text, comparison.worst_max.is_some_and(|w| w <= tolerance)))
+    let pass = comparison::verdict::meets(
+        crate::run::Status::Ok,
+        comparison.worst_max,
+        Some(tolerance),
+    );
+    Ok((text, pass == Some(true)))
 }
 
 /// Compare the reports `base` and `new` ([`report::regression`]): the markdown to print and

@@ -14,7 +14,7 @@ fn explicit_small_meets_every_declared_tolerance() {
         let reference = run(&AnalyticEngine, &scene, RunSettings::default());
         let h = run(&ExplicitEngine::small(), &scene, RunSettings::default());
         let c = comparison::compare(&scene, &reference, &h);
-        let tol = comparison::tolerance(&scene, "explicit_small").expect("declared");
+        let tol = comparison::verdict::tolerance(&scene, "explicit_small").expect("declared");
         println!(
             "{}: {:.2e} (tolerance {tol:.0e})",
             scene.id,

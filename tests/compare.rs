@@ -1,6 +1,7 @@
 //! `crosscheck compare BASE NEW`: two runs of the same build compare clean; a history
 //! perturbed by 10 % is named as drift; a newly failing cell is a physics regression; JUnit XML
 //! parses; reports that cannot be compared are refused with exit 2 and the reason.
+use crosscheck::comparison::summary::SCHEMA_VERSION;
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -139,7 +140,11 @@ fn reports_that_cannot_be_compared_are_refused() {
     refused(&a, root.path(), "not a crosscheck report");
     let summary = b.join("summary.json");
     let text = std::fs::read_to_string(&summary).unwrap();
-    let newer = text.replacen("\"schema_version\": 1", "\"schema_version\": 99", 1);
+    let newer = text.replacen(
+        format!("\"schema_version\": {SCHEMA_VERSION}").as_str(),
+        "\"schema_version\": 99",
+        1,
+    );
     assert_ne!(text, newer, "summary.json names its schema version");
     std::fs::write(&summary, newer).unwrap();
     refused(&b, &b, "schema version 99");

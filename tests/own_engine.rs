@@ -7,10 +7,11 @@ mod common;
 #[path = "../examples/own_engine/engine.rs"]
 mod engine;
 
+use crosscheck::comparison::stability;
 use crosscheck::comparison::{self, work_precision};
 use crosscheck::engines::Engine;
 use crosscheck::pipeline::exact_solutions;
-use crosscheck::run::{stability, sweep};
+use crosscheck::run::sweep;
 
 /// Its history meets the output contract on every springs case at the case's own increment
 /// (the explicit engine's, as its `Needs` asks), 20,000 increments on the seed cases: every

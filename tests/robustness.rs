@@ -80,7 +80,10 @@ fn a_failed_case_does_not_stop_the_others() {
             .all(|r| r.error.as_deref().is_some_and(|e| e.contains("unstable")))
     );
     let md = std::fs::read_to_string(out.path().join("accuracy.md")).unwrap();
-    assert!(md.contains("Failed runs") && md.contains("rigid2d_pin_lumped / explicit"));
+    assert!(
+        md.contains("Runs that failed or went unstable")
+            && md.contains("rigid2d_pin_lumped / explicit")
+    );
 }
 
 /// Kill a run of the whole report mid-way (slow: a tiny increment) with `signal`; the previous

@@ -17,7 +17,8 @@
 mod common;
 
 use common::{scene, stress_scene};
-use crosscheck::comparison::attribution::{self, ControlRun, Flag};
+use crosscheck::comparison::attribution::ControlRun;
+use crosscheck::comparison::verdict::cause::{self, Flag};
 use crosscheck::comparison::{self, contact};
 use crosscheck::contract::{History, file_stem};
 use crosscheck::engines::rapier::{
@@ -234,22 +235,31 @@ fn rapier_0_34_loses_the_bounce_to_a_stiff_contact_and_0_35_does_not() {
             .unwrap()
     };
     let cell = error(&run(&s, &engine));
-    let tolerance = comparison::judged_tolerance(&s, "rapier_f64@0.34").unwrap();
+    let tolerance = comparison::verdict::tolerance(&s, "rapier_f64@0.34").unwrap();
     let controls: Vec<ControlRun> = engine
         .controls(&s)
         .into_iter()
         .map(|c| ControlRun {
             kind: c.kind,
             change: c.change.clone(),
+            increment: None,
+            penalty: None,
             error: Some(error(
                 &c.engine.unwrap().run(&s, &RunSettings::default()).unwrap(),
             )),
             failure: None,
+            combined: false,
         })
         .collect();
-    let cause = attribution::cause(cell, Flag::MissesTolerance(tolerance), &controls).unwrap();
-    assert!(controls[cause].change.contains("1e3 Hz"), "{controls:?}");
-    assert!(cell > tolerance && controls[cause].error.unwrap() < tolerance);
+    let own = cause::Run {
+        error: cell,
+        increment: s.duration(),
+        penalty: None,
+    };
+    let found = cause::explain(&own, Flag::MissesTolerance(tolerance), &controls).unwrap();
+    let shown = &controls[found.control];
+    assert!(shown.change.contains("1e3 Hz"), "{controls:?}");
+    assert!(cell > tolerance && shown.error.unwrap() < tolerance);
 
     // Restitution per substep: with a single substep 0.34 does not bounce at all (below 1e-3
     // of the drop measured), 0.35 still rebounds e².
@@ -280,7 +290,7 @@ fn rapier_0_34_reports_one_substep_of_contact_impulse_too_many() {
     // meets the tolerance the case declares for the current release (5e-2) that the reported
     // one misses (2.49e-1 measured), against the reference (the exact solution of rapier's
     // model, finite rotations).
-    let tolerance = comparison::judged_tolerance(&s, "rapier_f64@0.34").unwrap();
+    let tolerance = comparison::verdict::tolerance(&s, "rapier_f64@0.34").unwrap();
     let exact = engines::named("reference")
         .unwrap()
         .run(&s, &RunSettings::default())
@@ -368,7 +378,7 @@ fn rapier_0_34_leaves_out_the_gyroscopic_torque_unless_asked() {
                 .worst_max
                 .unwrap()
         };
-        let tolerance = comparison::judged_tolerance(&s, "rapier_f64@0.34").unwrap();
+        let tolerance = comparison::verdict::tolerance(&s, "rapier_f64@0.34").unwrap();
         let engine = matched(Release::V0_34, |_| {});
         let off = error(&run(&s, &engine));
         let on = error(&run(&s, &engine.clone().with_gyroscopic(true)));

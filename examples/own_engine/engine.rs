@@ -36,7 +36,6 @@ impl Engine for SemiImplicitEuler {
             substeps: None,
             budget_share: 1.0,
             precision: "f64",
-            energy_reading: staggered_energy_reading,
             on_request: false,
         })
     }
@@ -63,18 +62,6 @@ impl Engine for SemiImplicitEuler {
             history,
             info,
         })
-    }
-}
-
-/// What a stable run reads of its energy at `ratio` = h/(2/ω): its velocity is half an
-/// increment off its position, so the scheme conserves ½mv² + ½kx² − ½hkxv, which lies
-/// between (1 − ωh/2) and (1 + ωh/2) of the measured ½mv² + ½kx²; a run read against its
-/// start can show up to (1 + ratio)/(1 − ratio) of it.
-fn staggered_energy_reading(ratio: f64) -> f64 {
-    if ratio < 1.0 {
-        (1.0 + ratio) / (1.0 - ratio)
-    } else {
-        1.0
     }
 }
 

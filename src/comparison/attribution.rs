@@ -7,33 +7,20 @@
 //! left out where the exact solution strikes, since e enters it there), so the control's error
 //! is measured against the same exact solution as the cell's.
 //!
-//! The cause is the control with the smallest error, if that divides the cell's error by
-//! [`EXPLAINS`] or more, or meets the tolerance the cell misses; otherwise the cell is
-//! *unexplained*, and the controls tried are listed with their errors all the same.
+//! The rule that names the cause from what the controls show is the verdict module's
+//! ([`super::verdict::cause`]): a control that brings the cell under its line, or a time step
+//! ladder whose error falls along an order. Where no single control does, the penalty and the
+//! engine's own controls are run again at the ladder's finest increment (combined with the
+//! time step) before a cell is called *unexplained*; the controls tried are listed with their
+//! errors all the same.
 
-use super::{EXACT_SOLUTIONS, baseline, compare, judged_tolerance};
+use super::verdict::cause::{Cause, Flag, explain, flag};
+use super::{EXACT_SOLUTIONS, baseline, compare};
 use crate::contract::{History, IMPACTS_COLUMN};
 use crate::run::controls::{self, ControlKind, Planned};
 use crate::run::{JobSuccess, Outcome, Plan};
 use crate::scene::Scene;
 use serde::{Deserialize, Serialize};
-
-/// A rapier cell needs a cause when its error is over this many times `explicit`'s.
-pub const FLAG_RATIO: f64 = 10.0;
-
-/// A control explains a discrepancy when it divides the error by at least this much (or meets
-/// the tolerance the cell misses).
-pub const EXPLAINS: f64 = 2.0;
-
-/// Why a cell needs a cause.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case", tag = "kind", content = "value")]
-pub enum Flag {
-    /// It misses the case's tolerance (the tolerance).
-    MissesTolerance(f64),
-    /// A rapier error over [`FLAG_RATIO`] × `explicit`'s (the explicit engine's error).
-    OverExplicit(f64),
-}
 
 /// One control experiment of a cell, measured.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -42,11 +29,20 @@ pub struct ControlRun {
     pub kind: ControlKind,
     /// The variation in words.
     pub change: String,
+    /// The increment it ran at, seconds (a time step control's rung).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub increment: Option<f64>,
+    /// The penalty stiffness it set (a penalty control's rung).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub penalty: Option<f64>,
     /// Its worst error against the cell's exact solution (`None`: it failed, see `failure`).
     pub error: Option<f64>,
     /// Why it failed, where it did.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub failure: Option<String>,
+    /// Whether it is combined with the time step (run at the ladder's finest increment).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub combined: bool,
 }
 
 /// A cell that needs a cause, with its controls and the cause they show.
@@ -60,16 +56,21 @@ pub struct Attribution {
     pub error: f64,
     /// Why it needs a cause.
     pub flag: Flag,
+    /// The increment of the cell's own run, seconds.
+    pub increment: f64,
+    /// The penalty stiffness of the cell's own run, where it has one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub penalty: Option<f64>,
     /// The controls, in the order they were tried.
     pub controls: Vec<ControlRun>,
-    /// The control that explains the error (index into `controls`); `None`: unexplained.
-    pub cause: Option<usize>,
+    /// The control that explains the error and how; `None`: unexplained.
+    pub cause: Option<Cause>,
 }
 
 impl Attribution {
     /// The control that explains the cell, where one does.
     pub fn explaining(&self) -> Option<&ControlRun> {
-        self.controls.get(self.cause?)
+        self.controls.get(self.cause?.control)
     }
 }
 
@@ -104,16 +105,9 @@ fn cells<'a>(plan: &'a Plan, outcome: &'a Outcome) -> Vec<Cell<'a>> {
         let explicit = outcome
             .history(&scene.id, "explicit")
             .and_then(|h| super::against_own_model(outcome, scene, "explicit", h));
-        let flag = match (judged_tolerance(scene, &job.engine), explicit) {
-            (Some(t), _) if error > t => Flag::MissesTolerance(t),
-            (_, Some(x))
-                if job.engine.starts_with("rapier")
-                    && !crate::contract::on_older_release(&job.engine)
-                    && error > FLAG_RATIO * x =>
-            {
-                Flag::OverExplicit(x)
-            }
-            _ => continue,
+        let tolerance = super::verdict::tolerance(scene, &job.engine);
+        let Some(flag) = flag(&job.engine, error, tolerance, explicit) else {
+            continue;
         };
         out.push(Cell {
             scene,
@@ -144,55 +138,38 @@ fn controls_of<'a>(plan: &'a Plan, cell: &Cell<'a>) -> Vec<Planned<'a>> {
 }
 
 /// Run one control and measure it against the cell's exact solution.
-fn run_control(cell: &Cell, planned: &Planned) -> ControlRun {
-    let result = planned.run().and_then(|h| {
-        compare(cell.scene, cell.exact, &h)
-            .worst_max
-            .ok_or_else(|| "no column with a peak compared".to_string())
-    });
+fn run_control(cell: &Cell, planned: &Planned, combined: bool) -> ControlRun {
+    let result = if crate::interrupt::requested() {
+        Err("interrupted before it ran".to_string())
+    } else {
+        planned.run().and_then(|h| {
+            compare(cell.scene, cell.exact, &h)
+                .worst_max
+                .ok_or_else(|| "no column with a peak compared".to_string())
+        })
+    };
     ControlRun {
         kind: planned.kind(),
         change: planned.control.change.clone(),
+        increment: planned.increment(),
+        penalty: planned.penalty(),
         error: result.as_ref().ok().copied(),
         failure: result.err(),
+        combined,
     }
 }
 
-/// The index of the control that explains `error` (see the module doc).
-pub fn cause(error: f64, flag: Flag, controls: &[ControlRun]) -> Option<usize> {
-    let (k, best) = controls
-        .iter()
-        .enumerate()
-        .filter_map(|(k, c)| Some((k, c.error?)))
-        .min_by(|a, b| a.1.total_cmp(&b.1))?;
-    let within = matches!(flag, Flag::MissesTolerance(t) if best <= t);
-    (best * EXPLAINS <= error || within).then_some(k)
-}
-
-/// Attribute every cell of `outcome` that needs a cause (in outcome order), running the
-/// controls in parallel. A progress bar on stderr when `progress` is set.
-pub fn measure(plan: &Plan, outcome: &Outcome, progress: bool) -> Vec<Attribution> {
+/// Run every control of `work` (cell index, control) in parallel, ticking `bar`.
+fn run_all(
+    cells: &[Cell],
+    work: &[(usize, Planned)],
+    combined: bool,
+    bar: &indicatif::ProgressBar,
+) -> Vec<(usize, ControlRun)> {
     use rayon::prelude::*;
-    let cells = cells(plan, outcome);
-    let work: Vec<(usize, Planned)> = cells
-        .iter()
-        .enumerate()
-        .flat_map(|(i, c)| controls_of(plan, c).into_iter().map(move |k| (i, k)))
-        .collect();
-    let bar = crate::run::progress_bar(work.len(), progress);
-    let runs: Vec<(usize, ControlRun)> = work
-        .par_iter()
+    work.par_iter()
         .map(|(i, planned)| {
-            let run = if crate::interrupt::requested() {
-                ControlRun {
-                    kind: planned.kind(),
-                    change: planned.control.change.clone(),
-                    error: None,
-                    failure: Some("interrupted before it ran".into()),
-                }
-            } else {
-                run_control(&cells[*i], planned)
-            };
+            let run = run_control(&cells[*i], planned, combined);
             bar.set_message(format!(
                 "control {}/{}",
                 cells[*i].scene.id, cells[*i].engine
@@ -200,25 +177,100 @@ pub fn measure(plan: &Plan, outcome: &Outcome, progress: bool) -> Vec<Attributio
             bar.inc(1);
             (*i, run)
         })
+        .collect()
+}
+
+/// Attribute every cell of `outcome` that needs a cause (in outcome order), running the
+/// controls in parallel; then, for each cell no single control explains, the controls
+/// combined with the time step ladder's finest increment. A progress bar on stderr when
+/// `progress` is set.
+pub fn measure(plan: &Plan, outcome: &Outcome, progress: bool) -> Vec<Attribution> {
+    let cells = cells(plan, outcome);
+    let work: Vec<(usize, Planned)> = cells
+        .iter()
+        .enumerate()
+        .flat_map(|(i, c)| controls_of(plan, c).into_iter().map(move |k| (i, k)))
         .collect();
+    let bar = crate::run::progress_bar(work.len(), progress);
+    let mut runs = run_all(&cells, &work, false, &bar);
+    let controls_of_cell = |runs: &[(usize, ControlRun)], i: usize| -> Vec<ControlRun> {
+        runs.iter()
+            .filter(|(j, _)| *j == i)
+            .map(|(_, r)| r.clone())
+            .collect()
+    };
+    // Cells no single control explains: their controls at the ladder's finest increment.
+    let combined: Vec<(usize, Planned)> = cells
+        .iter()
+        .enumerate()
+        .filter(|(i, c)| {
+            let mine = controls_of_cell(&runs, *i);
+            !matches!(
+                explain(&own_run(c), c.flag, &mine),
+                Some(Cause {
+                    explanation: crate::comparison::verdict::cause::Explanation::Under
+                        | crate::comparison::verdict::cause::Explanation::AlongOrder { .. },
+                    ..
+                })
+            )
+        })
+        .flat_map(|(i, c)| {
+            combinations(plan, c, &controls_of_cell(&runs, i))
+                .into_iter()
+                .map(move |k| (i, k))
+        })
+        .collect();
+    bar.inc_length(combined.len() as u64);
+    runs.extend(run_all(&cells, &combined, true, &bar));
     bar.finish_and_clear();
     cells
         .iter()
         .enumerate()
         .map(|(i, c)| {
-            let controls: Vec<ControlRun> = runs
-                .iter()
-                .filter(|(j, _)| *j == i)
-                .map(|(_, r)| r.clone())
-                .collect();
+            let controls = controls_of_cell(&runs, i);
             Attribution {
                 case: c.scene.id.clone(),
                 engine: c.engine.to_string(),
                 error: c.error,
                 flag: c.flag,
-                cause: cause(c.error, c.flag, &controls),
+                increment: c.job.info.increment,
+                penalty: c.job.info.penalty_stiffness,
+                cause: explain(&own_run(c), c.flag, &controls),
                 controls,
             }
         })
+        .collect()
+}
+
+/// The cell's own run, as the first point of its ladders.
+fn own_run(cell: &Cell) -> crate::comparison::verdict::cause::Run {
+    crate::comparison::verdict::cause::Run {
+        error: cell.error,
+        increment: cell.job.info.increment,
+        penalty: cell.job.info.penalty_stiffness,
+    }
+}
+
+/// The combinations of a cell's controls with its time step ladder's finest increment (none
+/// where it has no ladder, or no control to combine).
+fn combinations<'a>(plan: &'a Plan, cell: &Cell<'a>, controls: &[ControlRun]) -> Vec<Planned<'a>> {
+    let finest = controls
+        .iter()
+        .filter(|c| c.kind == ControlKind::TimeStep)
+        .filter_map(|c| c.increment)
+        .reduce(f64::min);
+    let (Some(h), Some(engine)) = (
+        finest,
+        plan.engines.iter().find(|e| e.name() == cell.engine),
+    ) else {
+        return Vec::new();
+    };
+    let strikes = cell
+        .exact
+        .column(IMPACTS_COLUMN)
+        .is_some_and(|i| i.iter().any(|x| *x > 0.0));
+    controls::combined(cell.scene, engine.as_ref(), &plan.settings, cell.job, h)
+        .into_iter()
+        .filter(|c| !(c.kind() == ControlKind::Restitution && strikes))
         .collect()
 }

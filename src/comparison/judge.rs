@@ -304,8 +304,3 @@ pub fn resample(
         },
     ))
 }
-
-/// The tightest tolerance the case declares (any engine), the default of a judgement.
-pub fn tightest_tolerance(scene: &Scene) -> Option<f64> {
-    scene.tolerances.values().copied().reduce(f64::min)
-}

@@ -3,7 +3,8 @@
 //!
 //! One module owns the metrics, so the report and the tests compute them the same way. Per
 //! contract column, over the rows where the baseline is valid:
-//! - `max`: the largest absolute error divided by the peak of the baseline column;
+//! - `max`: the largest absolute error divided by the peak of the baseline column (a rotation
+//!   column: the orientation error over the smaller of its peak and π, [`orientation`]);
 //! - `rms`: the root-mean-square error divided by the same peak;
 //! - `end`: the error at the last valid row divided by the same peak.
 //!
@@ -24,9 +25,14 @@ pub mod attribution;
 pub mod contact;
 pub mod discrepancy;
 pub mod equivalence;
+pub mod invariance;
 pub mod judge;
 pub mod on_request;
+pub mod orientation;
+pub mod reach;
 pub mod stability;
+pub mod summary;
+pub mod verdict;
 pub mod work_precision;
 
 use crate::contract::{self, History, IMPACTS_COLUMN, VALID_COLUMN};
@@ -145,7 +151,8 @@ pub fn valid_rows(reference: &History) -> usize {
 }
 
 /// Measure `candidate` against `reference` (an exact solution, with its `valid` column) on the
-/// scene's contract columns.
+/// scene's contract columns; a rotation column as an orientation ([`orientation`]: from the
+/// body's points where the case has three).
 pub fn compare(scene: &Scene, reference: &History, candidate: &History) -> Comparison {
     let n = valid_rows(reference).min(candidate.rows.len());
     let mut initial_errors = BTreeMap::new();
@@ -173,15 +180,24 @@ pub fn compare(scene: &Scene, reference: &History, candidate: &History) -> Compa
             // An exact solution that is zero over the rows compared (a held DOF, a contact
             // force before the first impact) has no peak: compare in the column's unit.
             let relative = peak > 0.0;
-            let scale = if relative { peak } else { 1.0 };
+            let (errors, scale): (Vec<f64>, f64) = match rotated_body(scene, name) {
+                Some(body) => {
+                    let (errors, scale) =
+                        orientation::errors(scene, body, (reference, candidate), (a, b), first..n);
+                    (errors, if relative { scale } else { 1.0 })
+                }
+                None => (
+                    a[first..]
+                        .iter()
+                        .zip(&b[first..])
+                        .map(|(x, y)| (y - x).abs())
+                        .collect(),
+                    if relative { peak } else { 1.0 },
+                ),
+            };
             if first > 0 {
                 initial_errors.insert(name.to_string(), (b[0] - a[0]) / scale);
             }
-            let errors: Vec<f64> = a[first..]
-                .iter()
-                .zip(&b[first..])
-                .map(|(x, y)| (y - x).abs())
-                .collect();
             let max = errors.iter().fold(0.0f64, |m, e| m.max(*e));
             let rms =
                 (errors.iter().map(|e| e * e).sum::<f64>() / errors.len().max(1) as f64).sqrt();
@@ -208,6 +224,14 @@ pub fn compare(scene: &Scene, reference: &History, candidate: &History) -> Compa
         initial_errors,
         columns,
     }
+}
+
+/// The body whose rotation `column` measures, where it is a rotation column.
+fn rotated_body(scene: &Scene, column: &str) -> Option<crate::scene::BodyId> {
+    scene.columns.iter().find_map(|c| match c.probe {
+        Probe::Rotation { body, .. } if c.name == column => Some(body),
+        _ => None,
+    })
 }
 
 /// The unit of a contract column: what the scene's probe measures (m, m/s, rad, N; "" for an
@@ -253,17 +277,4 @@ pub fn contact_validity(reference: &History) -> Option<ContactValidity> {
         margin: if max > 0.0 { min / max } else { 0.0 },
         valid_until: (n < force.len()).then(|| t[n]),
     })
-}
-
-/// The tolerance a case declares for an engine: `[tolerances] <engine> = <max error / peak>`.
-pub fn tolerance(scene: &Scene, engine: &str) -> Option<f64> {
-    scene.tolerances.get(engine).copied()
-}
-
-/// The tolerance an engine is held to: the one declared for it, or, for an engine on another
-/// release of a third-party code (`rapier_f64@0.34`), the one declared for the same engine on
-/// the release the case files are written for (`rapier_f64`). An older release's cells are
-/// judged against it in the report's versions section, not counted among the verdicts.
-pub fn judged_tolerance(scene: &Scene, engine: &str) -> Option<f64> {
-    tolerance(scene, engine).or_else(|| tolerance(scene, crate::contract::release_of(engine).0))
 }

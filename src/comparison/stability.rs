@@ -1,32 +1,453 @@
-//! The stability map measured: each run of [`crate::run::stability`] judged against the exact
-//! solution of its engine's own model (`reference` or `analytic`, as in the tolerance table).
+//! The stability map: every engine that steps in time on every case with a stable increment,
+//! at increments that are ratios of the explicit engine's computed stable increment, each run
+//! judged by the growth rule ([`verdict::growth`]) and against the exact solution of its
+//! engine's own model; then each pair's critical increment, the largest at which it stays
+//! bounded, bisected.
+//!
+//! - **The grid**: [`RATIOS`], the same for every engine (0.25 … 4×).
+//! - **Its own step**: each engine also runs at the increment its job ran at (rapier's default
+//!   configuration: 1/60 s), so that the map and the verdicts speak of the same runs.
+//! - **Its operating range**: an engine bounded on the whole grid is run on, × [`LADDER`] at a
+//!   time, up to its *ceiling*: [`CEILING`] × the largest increment it runs at anywhere in the
+//!   report (its job, the coarsest point of its sweep; for an engine whose sweep starts at its
+//!   stable increment, the probe just above it, under twice it), and at least the grid's last
+//!   ratio × [`LADDER`]². A bound "at least X" is only ever as large as that ceiling.
+//! - **Below the grid**: an engine unstable at its smallest ratio is tried at [`BELOW`].
+//!
+//! Every run takes at least [`crate::run::stability::MIN_INCREMENTS`] increments (the case is
+//! continued in time where it is shorter); a run still growing at its end is confirmed on a
+//! horizon [`growth::CONFIRM`] times longer before it is called unstable.
 
-use crate::comparison::against_own_model;
-use crate::contract::History;
-use crate::run::Engine;
-use crate::run::stability::{self, Map};
-use crate::run::{Outcome, Plan};
+use super::against_own_model;
+use super::verdict::growth::{self, Growth, Outcome, Verdict};
+use super::verdict::tolerance;
+use crate::run::stability::{self as runs, MapRun};
+use crate::run::{Engine, Plan, Status};
 use crate::scene::Scene;
+use rayon::prelude::*;
+
+/// The grid's ratios.
+pub const RATIOS: [f64; 10] = [0.25, 0.5, 0.75, 0.9, 0.98, 1.02, 1.1, 1.5, 2.0, 4.0];
+
+/// Beyond the grid, each ratio tried is this many times the one before.
+pub const LADDER: f64 = 4.0;
+
+/// The map reaches this many times the largest increment an engine runs at in the report.
+pub const CEILING: f64 = 4.0;
+
+/// Ratios tried below the grid when an engine was unstable at its smallest ratio.
+pub const BELOW: [f64; 2] = [0.125, 0.0625];
+
+/// Bisection stops when the bracket's two ratios are within this factor of each other (1 %).
+pub const BISECTION_WIDTH: f64 = 1.01;
+
+/// Which search a run belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Search {
+    /// A ratio of [`RATIOS`].
+    Grid,
+    /// The increment the engine's job ran at.
+    OwnStep,
+    /// Beyond the grid, up to the ceiling.
+    Beyond,
+    /// Below the grid.
+    Below,
+    /// Between a bounded and an unstable run.
+    Bisection,
+}
+
+impl Search {
+    /// Every search, in the CSV's order.
+    pub const ALL: [Search; 5] = [
+        Search::Grid,
+        Search::OwnStep,
+        Search::Beyond,
+        Search::Below,
+        Search::Bisection,
+    ];
+
+    /// Name in the CSV.
+    pub fn name(self) -> &'static str {
+        match self {
+            Search::Grid => "grid",
+            Search::OwnStep => "own step",
+            Search::Beyond => "beyond",
+            Search::Below => "below",
+            Search::Bisection => "bisection",
+        }
+    }
+
+    /// From the CSV name.
+    pub fn parse(s: &str) -> Option<Search> {
+        Search::ALL.into_iter().find(|x| x.name() == s)
+    }
+}
+
+/// One run of the map, judged.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Point {
+    /// Case id.
+    pub case: String,
+    /// Engine name.
+    pub engine: String,
+    /// Which search it belongs to.
+    pub search: Search,
+    /// Ratio asked for (of the explicit engine's stable increment).
+    pub ratio: f64,
+    /// Increment used.
+    pub increment: Option<f64>,
+    /// How many times the case's duration it ran over (1: the case as it is).
+    pub continued: Option<usize>,
+    /// How it came out.
+    pub outcome: Outcome,
+    /// Largest error over the peak against the engine's own model's exact solution (over the
+    /// case's own rows).
+    pub error_max: Option<f64>,
+    /// Its growth: the verdict of the rule and the transient amplification (`None` for a run
+    /// that did not finish).
+    pub growth: Option<Growth>,
+    /// The engine's message, for a run that did not finish.
+    pub message: Option<String>,
+}
+
+/// How a critical increment was bounded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Bound {
+    /// Between a bounded and an unstable run within [`BISECTION_WIDTH`].
+    Bisected,
+    /// Bounded at every ratio tried, up to the engine's ceiling: at least this.
+    AtLeast,
+    /// Unstable at every ratio tried, down to the smallest ([`BELOW`]): less than this.
+    Below,
+}
+
+impl Bound {
+    /// Name in the CSV.
+    pub fn name(self) -> &'static str {
+        match self {
+            Bound::Bisected => "bisected",
+            Bound::AtLeast => "at_least",
+            Bound::Below => "below",
+        }
+    }
+    /// From the CSV name.
+    pub fn parse(s: &str) -> Option<Bound> {
+        [Bound::Bisected, Bound::AtLeast, Bound::Below]
+            .into_iter()
+            .find(|b| b.name() == s)
+    }
+}
+
+/// The largest increment at which an engine stays bounded on a case.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Critical {
+    /// Case id.
+    pub case: String,
+    /// Engine name.
+    pub engine: String,
+    /// The largest bounded run's increment, seconds (for [`Bound::Below`], the smallest
+    /// increment tried).
+    pub increment: f64,
+    /// The explicit engine's computed stable increment on the case, seconds.
+    pub explicit_stable: f64,
+    /// How it was bounded.
+    pub bound: Bound,
+    /// The largest increment the engine runs at anywhere in the report, seconds: a bound
+    /// "at least" below it says nothing of the engine's own runs.
+    pub own_step: f64,
+}
+
+impl Critical {
+    /// The critical increment over the explicit engine's computed stable increment.
+    pub fn explicit_ratio(&self) -> f64 {
+        self.increment / self.explicit_stable
+    }
+
+    /// Whether it answers the question for the engine's own runs: bisected, below, or at least
+    /// an increment no smaller than the largest the engine runs at.
+    pub fn covers_own_step(&self) -> bool {
+        self.bound != Bound::AtLeast || self.increment >= self.own_step * (1.0 - 1e-9)
+    }
+}
+
+/// A map: its runs and each (case, engine)'s critical increment.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Map {
+    /// Every run, in case, engine, search, ratio order.
+    pub points: Vec<Point>,
+    /// Per (case, engine), the largest increment that stays bounded.
+    pub critical: Vec<Critical>,
+}
+
+/// How a history's error against its own model's exact solution is measured.
+type ErrorOf<'a> = dyn Fn(&Scene, &str, &crate::contract::History) -> Option<f64> + Sync + 'a;
+
+/// Judge one run: its outcome from its typed status, its growth and its error.
+fn judge(
+    scene: &Scene,
+    engine: &str,
+    ratio: f64,
+    search: Search,
+    run: MapRun,
+    error_of: &ErrorOf,
+) -> Point {
+    let (growth, error_max) = match &run.output {
+        Some(out) => (
+            growth::judge(&out.history, out.info.steps as f64),
+            error_of(scene, engine, &out.history),
+        ),
+        None => (None, None),
+    };
+    let outcome = match (run.continued, run.status) {
+        (None, _) => Outcome::TooShort,
+        (_, status) => {
+            growth::outcome(status, growth.as_ref(), error_max, tolerance(scene, engine))
+        }
+    };
+    Point {
+        case: scene.id.clone(),
+        engine: engine.to_string(),
+        search,
+        ratio,
+        increment: run.increment,
+        continued: run.continued,
+        outcome,
+        error_max,
+        growth,
+        message: run.message,
+    }
+}
+
+/// Run and judge `engine` on `scene` at `ratio`; a run still growing at its end is run again
+/// on a horizon [`growth::CONFIRM`] times longer, whose growth decides (its accuracy stays the
+/// first run's: the case's own rows are the same).
+fn point(
+    scene: &Scene,
+    engine: &dyn Engine,
+    ratio: f64,
+    search: Search,
+    error_of: &ErrorOf,
+) -> Point {
+    let name = engine.name();
+    let first = judge(
+        scene,
+        name,
+        ratio,
+        search,
+        runs::run_at(scene, engine, ratio),
+        error_of,
+    );
+    if first.growth.is_none_or(|g| g.verdict != Verdict::Growing)
+        || first.outcome != Outcome::Unstable
+    {
+        return first;
+    }
+    let longer = runs::run_on(scene, engine, ratio, growth::CONFIRM as usize);
+    let confirmed = judge(scene, name, ratio, search, longer, error_of);
+    if confirmed.outcome == Outcome::Unstable {
+        return Point {
+            continued: confirmed.continued,
+            growth: confirmed.growth,
+            message: confirmed.message,
+            ..first
+        };
+    }
+    let outcome = growth::outcome(
+        Status::Ok,
+        confirmed.growth.as_ref(),
+        first.error_max,
+        tolerance(scene, name),
+    );
+    Point {
+        outcome,
+        continued: confirmed.continued,
+        growth: confirmed.growth,
+        ..first
+    }
+}
 
 /// Map every case of `plan` for the `engines` that step in time ([`Engine::stepping`]),
-/// measuring errors against the exact solutions in `outcome`, and bisect each pair's critical
-/// increment ([`stability::critical`]).
-pub fn measure(plan: &Plan, outcome: &Outcome, engines: &[&dyn Engine], progress: bool) -> Map {
-    let error_of =
-        |scene: &Scene, engine: &str, h: &History| against_own_model(outcome, scene, engine, h);
+/// measuring errors against the exact solutions in `outcome` (which also holds each job's
+/// increment), and bisect each pair's critical increment.
+pub fn measure(
+    plan: &Plan,
+    outcome: &crate::run::Outcome,
+    engines: &[&dyn Engine],
+    progress: bool,
+) -> Map {
+    let error_of = |scene: &Scene, engine: &str, h: &crate::contract::History| {
+        against_own_model(outcome, scene, engine, h)
+    };
     let chosen = crate::run::sweep::steppers(engines);
     let all: Vec<&Scene> = plan.cases.iter().collect();
-    let scenes = stability::mapped(&all);
-    let bar = crate::run::progress_bar(
-        stability::len(scenes.len(), chosen.len(), stability::RATIOS.len()),
-        progress,
-    );
+    let scenes = runs::mapped(&all);
+    let job_step = |case: &str, engine: &str| {
+        outcome
+            .jobs
+            .iter()
+            .find(|j| j.case == case && j.engine == engine)
+            .and_then(|j| j.result.as_ref().ok())
+            .map(|s| s.info.increment)
+    };
+    let pairs: Vec<Pair> = scenes
+        .iter()
+        .flat_map(|s| chosen.iter().map(move |e| (*s, *e)))
+        .filter_map(|(scene, engine)| {
+            let stable = runs::explicit_stable(scene)?;
+            let job = job_step(&scene.id, engine.name());
+            Some(Pair {
+                scene,
+                engine,
+                stable,
+                own: runs::largest_step(scene, engine, job, stable),
+                job,
+            })
+        })
+        .collect();
+    let bar = crate::run::progress_bar(pairs.len(), progress);
     bar.set_message("stability map");
-    let points = stability::run(&scenes, &chosen, &stability::RATIOS, &error_of, &|| {
-        bar.inc(1)
-    });
-    bar.set_message("critical increments");
-    let critical = stability::critical(&scenes, &chosen, &points, &error_of);
+    let maps: Vec<(Vec<Point>, Option<Critical>)> = pairs
+        .par_iter()
+        .map(|pair| {
+            let m = map_pair(pair, &error_of);
+            bar.inc(1);
+            m
+        })
+        .collect();
     bar.finish_and_clear();
-    Map { points, critical }
+    let mut map = Map::default();
+    for (points, critical) in maps {
+        map.points.extend(points);
+        map.critical.extend(critical);
+    }
+    map
+}
+
+/// One (case, engine) of the map, with what it needs to know.
+struct Pair<'a> {
+    scene: &'a Scene,
+    engine: &'a dyn Engine,
+    /// The explicit engine's stable increment on the case.
+    stable: f64,
+    /// The largest increment the engine runs at in the report.
+    own: f64,
+    /// The increment its job ran at.
+    job: Option<f64>,
+}
+
+/// One pair's runs (grid, own step, beyond, below, bisection, in the order run) and its
+/// critical increment.
+fn map_pair(pair: &Pair, error_of: &ErrorOf) -> (Vec<Point>, Option<Critical>) {
+    let Pair {
+        scene,
+        engine,
+        stable,
+        own,
+        job,
+    } = *pair;
+    let run = |r: f64, search: Search| point(scene, engine, r, search, error_of);
+    let mut points: Vec<Point> = RATIOS.iter().map(|r| run(*r, Search::Grid)).collect();
+    if let Some(h) = job {
+        points.push(run(h / stable, Search::OwnStep));
+    }
+    // A pair with a failed or inapplicable run has no critical increment.
+    if points
+        .iter()
+        .any(|p| matches!(p.outcome, Outcome::Failed | Outcome::NotApplicable))
+    {
+        return (points, None);
+    }
+    let ceiling = (CEILING * own / stable).max(RATIOS[RATIOS.len() - 1] * LADDER * LADDER);
+    let critical = search(pair, ceiling, &mut points, &run);
+    (points, critical)
+}
+
+/// The critical increment of a pair from its runs so far, running the ones it needs.
+fn search(
+    pair: &Pair,
+    ceiling: f64,
+    points: &mut Vec<Point>,
+    run: &dyn Fn(f64, Search) -> Point,
+) -> Option<Critical> {
+    let sorted = |points: &[Point]| -> Vec<Point> {
+        let mut v: Vec<Point> = points
+            .iter()
+            .filter(|p| matches!(p.search, Search::Grid | Search::OwnStep))
+            .cloned()
+            .collect();
+        v.sort_by(|a, b| a.ratio.total_cmp(&b.ratio));
+        v
+    };
+    let grid = sorted(points);
+    let first_unstable = grid.iter().position(|p| p.outcome == Outcome::Unstable);
+    let (mut low, mut high): (Option<Point>, Option<Point>) = match first_unstable {
+        Some(0) => (None, Some(grid[0].clone())),
+        Some(i) => (
+            grid[..i]
+                .iter()
+                .rev()
+                .find(|p| p.outcome.bounded())
+                .cloned(),
+            Some(grid[i].clone()),
+        ),
+        None => (
+            grid.iter().rev().find(|p| p.outcome.bounded()).cloned(),
+            None,
+        ),
+    };
+    if high.is_none() {
+        let mut r = grid.last().map_or(1.0, |p| p.ratio);
+        while r < ceiling * (1.0 - 1e-9) {
+            r = (r * LADDER).min(ceiling);
+            let p = run(r, Search::Beyond);
+            points.push(p.clone());
+            match p.outcome {
+                o if o.bounded() => low = Some(p),
+                Outcome::Unstable => {
+                    high = Some(p);
+                    break;
+                }
+                _ => break,
+            }
+        }
+    }
+    if low.is_none() {
+        for r in BELOW {
+            let p = run(r, Search::Below);
+            points.push(p.clone());
+            match p.outcome {
+                o if o.bounded() => {
+                    low = Some(p);
+                    break;
+                }
+                Outcome::Unstable => high = Some(p),
+                _ => break,
+            }
+        }
+    }
+    let bound = match (&low, &high) {
+        (Some(_), Some(_)) => Bound::Bisected,
+        (Some(_), None) => Bound::AtLeast,
+        (None, _) => Bound::Below,
+    };
+    if let (Some(l), Some(h)) = (&mut low, &mut high) {
+        while h.ratio / l.ratio > BISECTION_WIDTH {
+            let p = run((l.ratio * h.ratio).sqrt(), Search::Bisection);
+            points.push(p.clone());
+            match p.outcome {
+                o if o.bounded() => *l = p,
+                Outcome::Unstable => *h = p,
+                _ => break,
+            }
+        }
+    }
+    let at = low.or(high)?;
+    Some(Critical {
+        case: pair.scene.id.clone(),
+        engine: pair.engine.name().to_string(),
+        increment: at.increment?,
+        explicit_stable: pair.stable,
+        bound,
+        own_step: pair.own,
+    })
 }

@@ -20,10 +20,11 @@
 //!   same path, f64 round-off below 1e-10, and otherwise the engine's solver (rapier's contact
 //!   softness and projected Gauss–Seidel sweeps).
 
+use super::verdict::growth::{self, Verdict};
 use super::{baseline, compare};
 use crate::contract::History;
 use crate::run::Engine;
-use crate::run::sweep::{self, Grid, PathKind, Status, SweepPath};
+use crate::run::sweep::{self, Grid, Measured, PathKind, Status, SweepPath};
 use crate::run::{Outcome, Plan};
 use crate::scene::Scene;
 use serde::{Deserialize, Serialize};
@@ -87,6 +88,8 @@ pub struct CaseSweep {
     pub paths: Vec<SweepPath>,
     /// Per engine swept.
     pub fits: Vec<EngineFit>,
+    /// The extrapolated costs checked by runs toward their accuracy ([`super::reach`]).
+    pub checks: Vec<super::reach::Check>,
 }
 
 /// One point as the sweep CSV writes it.
@@ -171,7 +174,7 @@ fn row(case: &str, path: &SweepPath, p: &sweep::Point, duration: f64) -> Row {
         engine: path.engine.clone(),
         path: path.label(),
         varied: match path.kind {
-            PathKind::Increment { .. } => "h",
+            PathKind::Increment { .. } | PathKind::Reach { .. } => "h",
             PathKind::Substeps { .. } => "substeps",
         }
         .to_string(),
@@ -200,15 +203,8 @@ pub fn measure(
     progress: bool,
 ) -> Vec<CaseSweep> {
     let history = |case: &str, engine: &str| outcome.history(case, engine);
-    let error_of = |scene: &Scene, engine: &str, h: &History| {
-        let own = history(&scene.id, baseline(engine)?)?;
-        let c = compare(scene, own, h);
-        let rms = c
-            .columns
-            .iter()
-            .filter(|c| c.relative)
-            .fold(0.0f64, |m, c| m.max(c.rms));
-        Some((c.worst_max?, rms))
+    let error_of = |scene: &Scene, engine: &str, h: &History, steps: u64| {
+        measured(outcome, scene, engine, h, steps)
     };
     // Per case, the engines asked for whose own model's exact solution ran.
     let scenes: Vec<(&Scene, Vec<&dyn Engine>)> = plan
@@ -246,16 +242,75 @@ pub fn measure(
                 duration: scene.duration(),
                 paths,
                 fits,
+                checks: Vec::new(),
             }
         })
         .collect()
 }
 
-/// The ok points of a path as (increment, error), coarse to fine.
+/// A sweep point's run measured: its error (max and RMS over the peak, worst column) against
+/// its engine's own model's exact solution in `outcome`, and whether its growth makes it
+/// unstable ([`growth`]).
+fn measured(outcome: &Outcome, scene: &Scene, engine: &str, h: &History, steps: u64) -> Measured {
+    let error = || {
+        let own = outcome.history(&scene.id, baseline(engine)?)?;
+        let c = compare(scene, own, h);
+        let rms = c
+            .columns
+            .iter()
+            .filter(|c| c.relative)
+            .fold(0.0f64, |m, c| m.max(c.rms));
+        Some((c.worst_max?, rms))
+    };
+    Measured {
+        error: error(),
+        growing: growth::judge(h, steps as f64).is_some_and(|g| g.verdict == Verdict::Growing),
+    }
+}
+
+/// Check the extrapolated costs of `sweeps` by runs toward their accuracy ([`super::reach`]),
+/// measured as the sweep's points are.
+pub fn reach(
+    plan: &Plan,
+    outcome: &Outcome,
+    engines: &[&dyn Engine],
+    sweeps: &mut [CaseSweep],
+    grid: &Grid,
+    progress: bool,
+) {
+    let error_of = |scene: &Scene, engine: &str, h: &History, steps: u64| {
+        measured(outcome, scene, engine, h, steps)
+    };
+    // A case equivalent to another (the same closed form) is checked on that one only.
+    let closed = |case: &str, engine: &str| outcome.history(case, engine).cloned();
+    let twins: Vec<String> = super::equivalence::measure(&plan.cases, &[], closed)
+        .into_iter()
+        .map(|e| e.case)
+        .collect();
+    let cases = Plan {
+        cases: plan
+            .cases
+            .iter()
+            .filter(|s| !twins.contains(&s.id))
+            .cloned()
+            .collect(),
+        engines: Vec::new(),
+        settings: plan.settings,
+    };
+    super::reach::measure(&cases, engines, sweeps, grid, &error_of, progress);
+}
+
+/// The ok points of a path as (increment, error), coarse to fine: those at or below the
+/// engine's stable increment, where it has one (a bounded run above it, the probe, is not on
+/// the refinement path).
 fn ok_points(path: &SweepPath) -> Vec<(f64, f64)> {
     path.points
         .iter()
         .filter(|p| p.status == Status::Ok)
+        .filter(|p| {
+            p.stable_increment
+                .is_none_or(|s| p.increment <= s * (1.0 + 1e-9))
+        })
         .filter_map(|p| Some((p.increment, p.error?.0)))
         .collect()
 }
@@ -382,7 +437,7 @@ fn floor_cause(path: &SweepPath, value: f64, twin: Option<&SweepPath>, contact: 
 }
 
 /// One engine's order and floor on a case (`contact`: the scene has contact pairs).
-fn fit(engine: &str, paths: &[SweepPath], contact: bool) -> EngineFit {
+pub(crate) fn fit(engine: &str, paths: &[SweepPath], contact: bool) -> EngineFit {
     let own: Vec<&SweepPath> = paths.iter().filter(|p| p.engine == engine).collect();
     let penalty = own.iter().any(|p| {
         matches!(
@@ -440,32 +495,6 @@ fn fit(engine: &str, paths: &[SweepPath], contact: bool) -> EngineFit {
     }
 }
 
-/// How an engine fares against an accuracy target.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Reach<'a> {
-    /// The cheapest ok point (least minimum CPU time) whose error is within the target.
-    Reached(&'a Row),
-    /// Not reached; the smallest error the engine attains (None: no ok point).
-    NotReached(Option<f64>),
-}
-
-/// The cheapest row of `engine` within `target`.
-pub fn cheapest<'a>(rows: &'a [Row], engine: &str, target: f64) -> Reach<'a> {
-    let own = rows
-        .iter()
-        .filter(|r| r.engine == engine && r.status == "ok");
-    let mut best: Option<&Row> = None;
-    let mut smallest: Option<f64> = None;
-    for r in own {
-        let Some(e) = r.error_max else { continue };
-        smallest = Some(smallest.map_or(e, |s: f64| s.min(e)));
-        if e <= target && best.is_none_or(|b| r.cpu_s_min < b.cpu_s_min) {
-            best = Some(r);
-        }
-    }
-    best.map_or(Reach::NotReached(smallest), Reach::Reached)
-}
-
 /// Indices of the rows on the Pareto front (ok rows no other ok row beats in both error and
 /// minimum CPU time), cheapest first.
 pub fn pareto(rows: &[Row]) -> Vec<usize> {
@@ -490,107 +519,6 @@ pub fn pareto(rows: &[Row]) -> Vec<usize> {
         }
     }
     front
-}
-
-/// How a time to accuracy was found.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Reached {
-    /// A swept point within the target: the cheapest such.
-    Measured,
-    /// Beyond the sweep, along the observed order from its most accurate point.
-    Extrapolated,
-    /// Refinement stopped paying above the target (the floor is named).
-    Floor,
-    /// Neither reached nor extrapolable (no asymptotic range).
-    NotReached,
-}
-
-/// What reaching an accuracy costs an engine on a case.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct CostToAccuracy {
-    /// The accuracy asked for: largest error over the peak, worst column.
-    pub target: f64,
-    /// How it was found.
-    pub reached: Reached,
-    /// CPU seconds per simulated second (measured or extrapolated).
-    pub cpu_s_per_simulated_s: Option<f64>,
-    /// The order it was extrapolated along (error ∝ hᵖ, CPU time ∝ 1/h).
-    pub order: Option<f64>,
-    /// The error of the point it was measured at or extrapolated from; for a floor, the floor.
-    pub error: Option<f64>,
-    /// For a floor, what limits it.
-    pub cause: Option<String>,
-}
-
-/// What each of [`TARGETS`] costs `fit`'s engine on `sweep`'s case: the cheapest swept point
-/// within it; else, where a floor above the target stopped the sweep, that floor; else, along
-/// the observed order p from the engine's most accurate point on the path the order was fitted
-/// on (CPU time × (error / target)^(1/p): CPU time ∝ 1/h, error ∝ hᵖ); else not reached.
-pub fn costs(sweep: &CaseSweep, fit: &EngineFit) -> Vec<CostToAccuracy> {
-    let rows: Vec<Row> = sweep
-        .paths
-        .iter()
-        .filter(|p| p.engine == fit.engine)
-        .flat_map(|p| sweep.path_rows(p))
-        .collect();
-    // The points to extrapolate from: the fitted path's (every path of the engine for the
-    // penalty diagonal, which is not one path).
-    let along: Vec<Row> = match &fit.observed_order {
-        Some(o) => {
-            let path: Vec<Row> = sweep
-                .paths
-                .iter()
-                .filter(|p| p.engine == fit.engine && p.label() == o.path)
-                .flat_map(|p| sweep.path_rows(p))
-                .collect();
-            if path.is_empty() { rows.clone() } else { path }
-        }
-        None => Vec::new(),
-    };
-    let best = along
-        .iter()
-        .filter(|r| r.status == "ok")
-        .filter_map(|r| Some((r.error_max?, r.cpu_s_min)))
-        .min_by(|a, b| a.0.total_cmp(&b.0));
-    TARGETS
-        .iter()
-        .map(|&target| {
-            let mut cost = CostToAccuracy {
-                target,
-                reached: Reached::NotReached,
-                cpu_s_per_simulated_s: None,
-                order: None,
-                error: None,
-                cause: None,
-            };
-            match cheapest(&rows, &fit.engine, target) {
-                Reach::Reached(r) => {
-                    cost.reached = Reached::Measured;
-                    cost.cpu_s_per_simulated_s = Some(r.cpu_s_min);
-                    cost.error = r.error_max;
-                }
-                Reach::NotReached(smallest) => {
-                    let order = fit.observed_order.as_ref().map(|o| o.value);
-                    match (&fit.floor, order, best) {
-                        (Some(f), _, _) if f.value > target => {
-                            cost.reached = Reached::Floor;
-                            cost.error = Some(f.value);
-                            cost.cause = Some(f.cause.clone());
-                        }
-                        (_, Some(p), Some((e, cpu))) if p >= MIN_EXTRAPOLATED_ORDER => {
-                            cost.reached = Reached::Extrapolated;
-                            cost.cpu_s_per_simulated_s = Some(cpu * (e / target).powf(1.0 / p));
-                            cost.order = Some(p);
-                            cost.error = Some(e);
-                        }
-                        _ => cost.error = smallest,
-                    }
-                }
-            }
-            cost
-        })
-        .collect()
 }
 
 /// An f32 engine's floor where its f64 twin is at least twice as accurate at the most refined
@@ -630,72 +558,4 @@ fn round_off(paths: &[SweepPath], engine: &str) -> Option<Floor> {
         cause: "f32 round-off".into(),
         path: held.0,
     })
-}
-
-/// Below this observed order a time to accuracy is not extrapolated (a slope that shallow is
-/// not an asymptotic range).
-pub const MIN_EXTRAPOLATED_ORDER: f64 = 0.5;
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A first-order engine whose CPU time per simulated second is 1/h: error h, so the time to
-    /// an error ε is 1/ε, measured or not.
-    fn first_order(finest: i32) -> CaseSweep {
-        let points = (0..=finest)
-            .map(|k| {
-                let h = 10f64.powi(-k);
-                sweep::Point {
-                    increment: h,
-                    penalty_stiffness: None,
-                    iterations: None,
-                    steps: (1.0 / h) as u64,
-                    stable_increment: None,
-                    error: Some((h, h)),
-                    cpu_seconds: vec![1.0 / h],
-                    status: Status::Ok,
-                    message: None,
-                }
-            })
-            .collect();
-        let path = SweepPath {
-            engine: "rapier_f64".into(),
-            precision: "f64",
-            kind: PathKind::Increment {
-                penalty_ratio: None,
-            },
-            points,
-            ended: "budget",
-        };
-        let fits = vec![fit("rapier_f64", std::slice::from_ref(&path), false)];
-        CaseSweep {
-            case: "synthetic".into(),
-            duration: 1.0,
-            paths: vec![path],
-            fits,
-        }
-    }
-
-    #[test]
-    fn a_cost_beyond_the_sweep_is_extrapolated_along_the_observed_order() {
-        let sweep = first_order(2); // errors 1, 0.1, 0.01
-        let found = costs(&sweep, &sweep.fits[0]);
-        let at = |t: f64| found.iter().find(|c| c.target == t).unwrap();
-        assert_eq!(at(1e-2).reached, Reached::Measured);
-        assert_eq!(at(1e-2).cpu_s_per_simulated_s, Some(100.0));
-        // 1e-4 and 1e-6: along order 1 from the finest point, 1/ε (to round-off).
-        for t in [1e-4, 1e-6] {
-            let c = at(t);
-            assert_eq!(c.reached, Reached::Extrapolated);
-            assert!((c.order.unwrap() - 1.0).abs() < 1e-12);
-            let cpu = c.cpu_s_per_simulated_s.unwrap();
-            assert!((cpu * t - 1.0).abs() < 1e-9, "{t}: {cpu}");
-        }
-        // Swept further, the same figure is measured.
-        let further = first_order(4);
-        let measured = costs(&further, &further.fits[0]);
-        assert_eq!(measured[1].reached, Reached::Measured);
-        assert!((measured[1].cpu_s_per_simulated_s.unwrap() * 1e-4 - 1.0).abs() < 1e-9);
-    }
 }

@@ -79,7 +79,12 @@ pub enum EngineError {
     /// The scene asks for something this engine does not do.
     #[error("{0}")]
     Unsupported(String),
-    /// The run diverged or failed to converge.
+    /// The run grew without bound: its state turned non-finite, or the engine's own guard
+    /// stopped it as growing. The message is the evidence: what grew, by when, at which
+    /// increment.
+    #[error("{0}")]
+    Unstable(String),
+    /// The run failed for another reason (a solve that did not converge, an interruption).
     #[error("{0}")]
     Failed(String),
 }
@@ -171,11 +176,6 @@ pub struct Stepping {
     pub budget_share: f64,
     /// `f64` or `f32`: the arithmetic of its state (the figures draw f32 dashed).
     pub precision: &'static str,
-    /// How far a stable run's kinetic plus elastic energy may read above its conserved energy
-    /// at an increment of `ratio` × the explicit engine's stable increment (the stability
-    /// map's allowance before it calls a run unstable): what the engine's scheme reads at the
-    /// turns of a stable oscillation. Central differences: [`central_difference_energy_reading`].
-    pub energy_reading: fn(f64) -> f64,
     /// The accuracy-on-request study asks it ([`IncrementRule::Tolerance`]): it chooses its
     /// own increment for a tolerance, cheaply enough for the default run.
     pub on_request: bool,
@@ -186,7 +186,7 @@ pub struct Stepping {
 /// entered with velocity only (an impact) reads up to 1/(1 − (ω·h/2)²) of its energy at the
 /// turns of its discrete oscillation (25× at 0.98; checked to round-off on one mass at
 /// ω·h = 0.5 … 1.96), and falls back, bounded. 1 at and above the limit, where nothing is
-/// bounded. What [`Stepping::energy_reading`] is for the explicit engines.
+/// bounded. The explicit engine's energy guard allows for it.
 pub fn central_difference_energy_reading(ratio: f64) -> f64 {
     if ratio < 1.0 {
         1.0 / (1.0 - ratio * ratio)
@@ -228,6 +228,14 @@ pub enum ControlKind {
     ImpulseReading,
     /// Whether a body's gyroscopic torque is integrated (an engine setting with a default).
     Gyroscopic,
+}
+
+impl ControlKind {
+    /// Whether it refines a setting the harness varies on any engine that steps (the
+    /// increment, the penalty stiffness), rather than being an engine's own control.
+    pub fn refines(self) -> bool {
+        matches!(self, ControlKind::TimeStep | ControlKind::Penalty)
+    }
 }
 
 /// A control experiment an engine offers ([`Engine::controls`]): the same run with one thing

@@ -4,7 +4,7 @@
 //! in. Rendered from the summary's `impacts` entries ([`crate::comparison::contact`]).
 
 use super::format::sci;
-use super::summary::{CaseSummary, Summary};
+use crate::comparison::summary::{CaseSummary, Summary};
 use crate::contract::IMPACTS_REPORTED;
 use std::fmt::Write;
 

@@ -54,6 +54,20 @@ pub fn csv_finite(x: f64) -> String {
     }
 }
 
+/// A ratio as tables print it: two significant digits below 10, whole numbers to 1000, then
+/// scientific (0.25, 1.5, 21, 376, 1.5e3).
+pub fn ratio(x: f64) -> String {
+    if x < 0.1 {
+        format!("{x:.1e}")
+    } else if x < 10.0 {
+        format!("{}", (x * 100.0).round() / 100.0)
+    } else if x < 1e3 {
+        format!("{x:.0}")
+    } else {
+        format!("{x:.1e}")
+    }
+}
+
 /// A figure's markdown image link, followed by a blank line; nothing in a build without the
 /// figures (the cargo feature `figures`), which writes none.
 pub fn figure(alt: &str, path: &str) -> String {

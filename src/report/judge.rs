@@ -1,8 +1,8 @@
 //! What `crosscheck judge` prints: where their rows fell, and per column the error against the
 //! exact solution with the verdict, as markdown.
 
-use crate::comparison::Comparison;
 use crate::comparison::judge::{External, Resampling};
+use crate::comparison::{Comparison, verdict};
 use crate::report::format::sci;
 
 /// The judgement as markdown: a line on the resampling, a table per column (their column, the
@@ -35,7 +35,11 @@ pub fn render(
             .find(|x| x.0 == c.column)
             .map_or(("–".to_string(), 1.0), |x| (x.1.clone(), x.2));
         let (max, rms, verdict) = if c.relative {
-            let ok = if c.max <= tolerance { "yes" } else { "**no**" };
+            let ok = if verdict::within(c.max, tolerance) {
+                "yes"
+            } else {
+                "**no**"
+            };
             (sci(c.max), sci(c.rms), ok.to_string())
         } else {
             // The exact column is zero over the rows compared: the error is absolute.
@@ -48,7 +52,7 @@ pub fn render(
         );
     }
     s += &match comparison.worst_max {
-        Some(w) if w <= tolerance => format!(
+        Some(w) if verdict::within(w, tolerance) => format!(
             "\nPASS: the largest error is {} of the peak, within {}.\n",
             sci(w),
             sci(tolerance)

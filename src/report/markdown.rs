@@ -3,10 +3,11 @@
 use super::Timings;
 use super::format::{figure, sci, sci_or_dash};
 use super::provenance::Provenance;
-use super::summary::{CaseSummary, EngineSummary, Summary, not_applicable};
 use super::verdicts::engine_table_header;
 use super::work_precision::{self, SweepRows};
 use crate::comparison::discrepancy::Order;
+use crate::comparison::summary::{CaseSummary, EngineSummary, Summary};
+use crate::run::Status;
 use std::fmt::Write;
 
 /// The worst column of an engine's comparison against its baseline (the exact solution of its
@@ -52,7 +53,7 @@ pub struct Inputs<'a> {
     /// Each case's sweep rows (the cost of accuracy).
     pub sweeps: &'a SweepRows,
     /// The stability map.
-    pub maps: &'a crate::run::stability::Map,
+    pub maps: &'a crate::comparison::stability::Map,
     /// Accuracy on request's runs.
     pub requests: &'a [crate::run::on_request::Request],
     /// How long each part of the run took, seconds, in order (empty: not said).
@@ -183,7 +184,10 @@ fn accuracy(s: &Summary, inputs: &Inputs) -> String {
          engine's own model.\n"
     );
 
-    for (title, applicable) in [("Failed runs", true), ("Engines that do not apply", false)] {
+    for (title, applicable) in [
+        ("Runs that failed or went unstable", true),
+        ("Engines that do not apply", false),
+    ] {
         let listed: Vec<String> = s
             .cases
             .iter()
@@ -191,7 +195,7 @@ fn accuracy(s: &Summary, inputs: &Inputs) -> String {
                 c.runs.iter().filter_map(move |r| {
                     r.error
                         .as_ref()
-                        .filter(|e| not_applicable(e) != applicable)
+                        .filter(|_| r.status.applicable() == applicable)
                         .map(|e| format!("- {} / {}: {e}", c.id, r.engine))
                 })
             })
@@ -230,10 +234,8 @@ fn accuracy(s: &Summary, inputs: &Inputs) -> String {
                     )
                 }
                 Some((col, max, rms, end)) => (format!("{} ({col})", sci(max)), sci(rms), sci(end)),
-                None if r.error.as_deref().is_some_and(not_applicable) => {
-                    ("n/a".into(), "–".into(), "–".into())
-                }
-                None if r.error.is_some() => ("failed".into(), "–".into(), "–".into()),
+                None if r.status == Status::NotApplicable => ("n/a".into(), "–".into(), "–".into()),
+                None if r.status != Status::Ok => (r.status.name().into(), "–".into(), "–".into()),
                 None => match &r.against_baseline {
                     Some(a) if a.rows == 0 => ("no rows compared".into(), "–".into(), "–".into()),
                     Some(_) => ("no column with a peak".into(), "–".into(), "–".into()),

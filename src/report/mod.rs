@@ -2,8 +2,8 @@
 //! returned ([`crate::run::Outcome`]); it never drives a run.
 //!
 //! - [`data`]: the time histories, one CSV per case and engine (the spec's output contract);
-//! - [`summary`]: `summary.json`, every metric per case and engine (deterministic: the same
-//!   inputs give the same bytes);
+//! - `summary.json`: every metric and verdict per case and engine, as the comparison judged
+//!   them ([`crate::comparison::summary`]; deterministic: the same inputs give the same bytes);
 //! - `timings.json`: wall-clock seconds per case and engine (the one thing that varies);
 //! - [`figures`]: `figures/<case>.svg`, each case's histories drawn, and its errors over time;
 //! - [`sketch`]: `figures/<case>.sketch.svg`, each scene drawn from the `Scene` itself;
@@ -38,18 +38,17 @@ pub mod scaling;
 pub mod sketch;
 pub mod stability;
 pub mod staging;
-pub mod summary;
 pub mod verdicts;
 pub mod versions;
 pub mod work_precision;
 
 use crate::comparison::discrepancy::JobBudget;
+use crate::comparison::summary::Summary;
 use crate::comparison::work_precision::CaseSweep;
 use crate::run::{Outcome, Plan};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use summary::Summary;
 
 /// The report's own entries in its directory; nothing else there is the report's.
 pub const ENTRIES: [&str; 14] = [
@@ -76,10 +75,12 @@ pub struct Study<'a> {
     pub budgets: &'a [JobBudget],
     /// The cells that needed a cause, with their controls.
     pub attributions: &'a [crate::comparison::attribution::Attribution],
+    /// The invariance controls: parameters the exact solution ignores, at both values.
+    pub invariances: &'a [crate::comparison::invariance::Invariance],
     /// Each case's sweep (what accuracy costs).
     pub sweeps: &'a [CaseSweep],
     /// The stability map (empty when it did not run).
-    pub stability: &'a crate::run::stability::Map,
+    pub stability: &'a crate::comparison::stability::Map,
     /// Accuracy on request's runs (empty when it did not run).
     pub requests: &'a [crate::run::on_request::Request],
     /// How long each part of the run took (name, wall seconds), in order.
@@ -87,7 +88,7 @@ pub struct Study<'a> {
 }
 
 /// A map that did not run.
-static NO_MAP: crate::run::stability::Map = crate::run::stability::Map {
+static NO_MAP: crate::comparison::stability::Map = crate::comparison::stability::Map {
     points: Vec::new(),
     critical: Vec::new(),
 };
@@ -97,6 +98,7 @@ impl Default for Study<'_> {
         Study {
             budgets: &[],
             attributions: &[],
+            invariances: &[],
             sweeps: &[],
             stability: &NO_MAP,
             requests: &[],
@@ -127,11 +129,14 @@ pub fn write(
     stability::write(out, study.stability)?;
     on_request::write(out, study.requests)?;
     checkpoint("summary")?;
-    let mut summary = Summary::build(plan, outcome, out);
+    let earlier =
+        |case: &str, engine: &str| data::read_history(&data::csv_path(out, case, engine)).ok();
+    let mut summary = Summary::build(plan, outcome, &earlier);
     summary.attach_budgets(study.budgets);
     summary.attach_attributions(study.attributions);
+    summary.invariances = study.invariances.to_vec();
     summary.attach_sweeps(study.sweeps);
-    summary.attach_critical(&study.stability.critical);
+    summary.attach_critical(study.stability);
     let mut timings: Timings = read_json(&timings_path(previous)).unwrap_or_default();
     let old = read_json::<Summary>(&summary_path(previous));
     if let Some(old) = &old {

@@ -103,7 +103,7 @@ pub fn overview(w: &mut String, requests: &[Request]) {
         .iter()
         .filter(|r| {
             r.achieved
-                .is_some_and(|a| a <= r.requested && a >= r.requested / 10.0)
+                .is_some_and(|a| crate::comparison::verdict::in_band(a, r.requested))
         })
         .count();
     let _ = writeln!(

@@ -3,7 +3,7 @@
 
 use super::format::tick;
 use super::palette;
-use super::summary::Summary;
+use crate::comparison::summary::Summary;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 

@@ -4,9 +4,9 @@
 //! histories themselves (`data/<case>/<engine>.csv`) compared row by row (the largest
 //! difference over the column's peak; above a threshold it is drift, even where both pass).
 
+use crate::comparison::summary::SCHEMA_VERSION;
 use crate::report::data::read_history;
 use crate::report::format::sci;
-use crate::report::summary::SCHEMA_VERSION;
 use std::collections::BTreeMap;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -384,10 +384,16 @@ impl Since {
         let steady = flipped.is_empty() && moved.is_empty() && drifted.is_empty();
         let mut parts = Vec::new();
         if !flipped.is_empty() {
+            let shown: Vec<&str> = flipped.iter().take(3).map(String::as_str).collect();
+            let rest = if flipped.len() > 3 {
+                "; the rest: `crosscheck compare`"
+            } else {
+                ""
+            };
             parts.push(format!(
-                "{} verdicts changed ({})",
+                "{} verdicts changed ({}{rest})",
                 flipped.len(),
-                flipped.join("; ")
+                shown.join("; ")
             ));
         }
         if !moved.is_empty() {

@@ -3,7 +3,8 @@
 //! column's peak, the rows compared and the case's tolerance. Read with any CSV tool; the
 //! columns and units are documented in the report directory's `README.md`.
 
-use super::summary::Summary;
+use crate::comparison::summary::Summary;
+use crate::comparison::verdict;
 use crate::report::format::csv_finite as number;
 use std::path::{Path, PathBuf};
 
@@ -58,7 +59,13 @@ pub fn csv(s: &Summary) -> String {
                     },
                     &a.rows.to_string(),
                     &tolerance.map_or(String::new(), number),
-                    tolerance.map_or("", |t| if col.max <= t { "true" } else { "false" }),
+                    tolerance.map_or("", |t| {
+                        if verdict::within(col.max, t) {
+                            "true"
+                        } else {
+                            "false"
+                        }
+                    }),
                 ]);
             }
         }

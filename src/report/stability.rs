@@ -1,31 +1,43 @@
-//! The stability map's files: `stability.csv` ([`COLUMNS`], one row per run: case, engine
-//! and ratio, with each pair's critical increment), `figures/stability-<engine>.svg` (cases ×
-//! ratio, outcome as colour, the critical increment marked), and the report section that says
-//! in words where each engine stays stable and accurate.
+//! The stability map's files: `stability.csv` ([`COLUMNS`], one row per run: case, engine,
+//! search and ratio, with its growth and each pair's critical increment),
+//! `figures/stability-<engine>.svg` (cases × ratio, outcome as colour, the critical increment
+//! marked), and the report section that says in words where each engine stays stable. Every
+//! outcome and bound is the comparison's ([`crate::comparison::stability`]); this module writes
+//! them.
 
-use crate::report::format::csv_finite as number;
-use crate::run::stability::{
-    BISECTION_WIDTH, Bound, Critical, ENERGY_GROWTH_LIMIT, Map, Outcome, Point, RATIOS,
+use crate::comparison::stability::{
+    BELOW, BISECTION_WIDTH, Bound, CEILING, Critical, LADDER, Map, Point, RATIOS, Search,
 };
+use crate::comparison::verdict::growth::{
+    self as growth_rule, CONFIRM, GROWTH, Growth, Outcome, Verdict,
+};
+use crate::report::format::{csv_finite as number, sci};
 #[cfg(feature = "figures")]
 use plotters::prelude::*;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
-/// The CSV header. Units: `increment_s` and `critical_increment_s` in seconds; `ratio` of the
-/// map's stable increment; `critical_ratio` of the explicit engine's computed one.
-pub const COLUMNS: [&str; 11] = [
+/// The CSV header. Units: `increment_s`, `energy_peak_t_s`, `critical_increment_s` and
+/// `own_step_s` in seconds; `ratio` and `critical_ratio` of the explicit engine's computed
+/// stable increment; `continued` in case durations; energies as levels (kinetic + elastic
+/// energy over the initial energy plus the work of the loads).
+pub const COLUMNS: [&str; 16] = [
     "case",
     "engine",
     "search",
     "ratio",
     "increment_s",
+    "continued",
     "outcome",
     "error_max",
-    "energy_growth",
+    "energy_peak",
+    "energy_peak_t_s",
+    "energy_end",
+    "growth_second_half",
     "critical_increment_s",
     "critical_ratio",
     "critical_bound",
+    "own_step_s",
 ];
 
 /// `out/stability.csv`.
@@ -43,48 +55,43 @@ fn optional(x: Option<f64>) -> String {
     x.filter(|v| v.is_finite()).map_or_else(String::new, number)
 }
 
-/// A map as CSV text: every grid run (`search` = `grid`), then each pair's runs beyond the
-/// grid (`bisection`); every row carries its pair's critical increment (empty where it has
-/// none). An absent or non-finite value is an empty field.
+/// A map as CSV text: every run in the map's order; every row carries its pair's critical
+/// increment (empty where it has none). An absent or non-finite value is an empty field.
 pub fn csv(map: &Map) -> String {
-    let mut s = COLUMNS.join(",") + "\n";
-    let critical_of = |case: &str, engine: &str| {
-        map.critical
+    let mut writer = csv::Writer::from_writer(Vec::new());
+    let _ = writer.write_record(COLUMNS);
+    for p in &map.points {
+        let c = map
+            .critical
             .iter()
-            .find(|c| c.case == case && c.engine == engine)
-    };
-    let probes = map.critical.iter().flat_map(|c| c.probes.iter());
-    let rows = map
-        .points
-        .iter()
-        .map(|p| ("grid", p))
-        .chain(probes.map(|p| ("bisection", p)));
-    for (search, p) in rows {
-        let c = critical_of(&p.case, &p.engine);
-        let fields = [
+            .find(|c| c.case == p.case && c.engine == p.engine);
+        let g = p.growth.as_ref();
+        let _ = writer.write_record([
             p.case.clone(),
             p.engine.clone(),
-            search.to_string(),
+            p.search.name().to_string(),
             number(p.ratio),
             optional(p.increment),
+            p.continued.map_or(String::new(), |k| k.to_string()),
             p.outcome.name().to_string(),
             optional(p.error_max),
-            optional(p.energy_growth),
+            optional(g.map(|g| g.peak)),
+            optional(g.map(|g| g.peak_time)),
+            optional(g.map(|g| g.end)),
+            optional(g.map(|g| g.second_half)),
             optional(c.map(|c| c.increment)),
             optional(c.map(Critical::explicit_ratio)),
             c.map_or(String::new(), |c| c.bound.name().to_string()),
-        ];
-        s += &(fields.join(",") + "\n");
+            optional(c.map(|c| c.own_step)),
+        ]);
     }
-    s
+    String::from_utf8(writer.into_inner().unwrap_or_default()).unwrap_or_default()
 }
 
-/// Read `stability.csv` back (None if missing or not one): the grid runs, and each pair's
-/// critical increment (without its probes).
+/// Read `stability.csv` back (None if missing or not one of this layout).
 pub fn read(path: &Path) -> Option<Map> {
-    let text = std::fs::read_to_string(path).ok()?;
-    let mut lines = text.lines();
-    if lines.next()? != COLUMNS.join(",") {
+    let mut reader = csv::Reader::from_path(path).ok()?;
+    if reader.headers().ok()?.iter().ne(COLUMNS) {
         return None;
     }
     let num = |s: &str| -> Option<Option<f64>> {
@@ -95,18 +102,18 @@ pub fn read(path: &Path) -> Option<Map> {
         }
     };
     let mut map = Map::default();
-    for l in lines {
-        let f: Vec<&str> = l.split(',').collect();
-        if f.len() != COLUMNS.len() {
-            return None;
-        }
+    for record in reader.records() {
+        let f = record.ok()?;
         let (case, engine) = (f[0].to_string(), f[1].to_string());
-        if let (Some(increment), Some(ratio), Some(bound)) =
-            (num(f[8])?, num(f[9])?, Bound::parse(f[10]))
-            && !map
-                .critical
-                .iter()
-                .any(|c| c.case == case && c.engine == engine)
+        if let (Some(increment), Some(ratio), Some(bound), Some(own_step)) = (
+            num(&f[12])?,
+            num(&f[13])?,
+            Bound::parse(&f[14]),
+            num(&f[15])?,
+        ) && !map
+            .critical
+            .iter()
+            .any(|c| c.case == case && c.engine == engine)
         {
             map.critical.push(Critical {
                 case: case.clone(),
@@ -114,21 +121,35 @@ pub fn read(path: &Path) -> Option<Map> {
                 increment,
                 explicit_stable: increment / ratio,
                 bound,
-                probes: Vec::new(),
+                own_step,
             });
         }
-        if f[2] == "grid" {
-            map.points.push(Point {
-                case,
-                engine,
-                ratio: f[3].parse().ok()?,
-                increment: num(f[4])?,
-                outcome: Outcome::parse(f[5])?,
-                error_max: num(f[6])?,
-                energy_growth: num(f[7])?,
-                message: None,
-            });
-        }
+        let growth = match (num(&f[8])?, num(&f[9])?, num(&f[10])?, num(&f[11])?) {
+            (Some(peak), Some(peak_time), Some(end), Some(second_half)) => Some(Growth {
+                verdict: if f[6] == *"unstable" {
+                    Verdict::Growing
+                } else {
+                    Verdict::Bounded
+                },
+                peak,
+                peak_time,
+                end,
+                second_half,
+            }),
+            _ => None,
+        };
+        map.points.push(Point {
+            case,
+            engine,
+            search: Search::parse(&f[2])?,
+            ratio: f[3].parse().ok()?,
+            increment: num(&f[4])?,
+            continued: f[5].parse().ok(),
+            outcome: Outcome::parse(&f[6])?,
+            error_max: num(&f[7])?,
+            growth,
+            message: None,
+        });
     }
     Some(map)
 }
@@ -139,8 +160,12 @@ pub fn read_all(out: &Path) -> Map {
 }
 
 /// The critical increment as the report prints it: seconds, with `≥` or `<` where the search
-/// did not bracket it.
+/// did not bracket it; where a bound "at least" stops short of the engine's own step (its case
+/// too short to continue), it says so instead of giving a number.
 pub fn critical_cell(c: &Critical) -> String {
+    if !c.covers_own_step() {
+        return format!("too short past {:.3e}", c.increment);
+    }
     let prefix = match c.bound {
         Bound::Bisected => "",
         Bound::AtLeast => "≥ ",
@@ -152,54 +177,83 @@ pub fn critical_cell(c: &Critical) -> String {
 #[cfg(feature = "figures")]
 fn colour(o: Outcome) -> RGBColor {
     match o {
-        // Okabe–Ito blue, yellow and vermillion: apart in lightness as well as hue.
+        // Okabe–Ito blue, sky blue, yellow and vermillion: apart in lightness as well as hue.
         Outcome::Accurate => RGBColor(0, 114, 178),
+        Outcome::Bounded => RGBColor(86, 180, 233),
         Outcome::Inaccurate => RGBColor(240, 228, 66),
         Outcome::Unstable => RGBColor(213, 94, 0),
+        Outcome::TooShort => RGBColor(204, 204, 204),
         Outcome::Failed => RGBColor(120, 120, 120),
         Outcome::NotApplicable => RGBColor(236, 239, 241),
     }
 }
 
+/// The legend's words for an outcome.
+fn legend(o: Outcome) -> &'static str {
+    match o {
+        Outcome::Accurate => "accurate (bounded, within the case's tolerance)",
+        Outcome::Inaccurate => "inaccurate (bounded)",
+        Outcome::Bounded => "bounded (no tolerance declared)",
+        Outcome::Unstable => "unstable (energy still growing by a decade at the end)",
+        Outcome::TooShort => "too short to tell",
+        Outcome::Failed => "failed",
+        Outcome::NotApplicable => "not applicable",
+    }
+}
+
 #[cfg(feature = "figures")]
-/// Where a ratio falls on the map's columns: log-linear between the centres of the two grid
+/// Where a ratio falls on the grid's columns: log-linear between the centres of the two grid
 /// ratios around it, clamped to the first and last centres.
-fn column_x(ratios: &[f64], r: f64, left: u32, width: u32) -> i32 {
+fn column_x(r: f64, left: u32, width: u32) -> i32 {
     let centre = |j: usize| (left + width * j as u32 + width / 2) as f64;
-    let j = ratios.iter().rposition(|x| *x <= r).unwrap_or(0);
-    let x = match ratios.get(j + 1) {
-        Some(next) if r >= ratios[j] => {
-            centre(j) + (r / ratios[j]).ln() / (next / ratios[j]).ln() * width as f64
+    let j = RATIOS.iter().rposition(|x| *x <= r).unwrap_or(0);
+    let x = match RATIOS.get(j + 1) {
+        Some(next) if r >= RATIOS[j] => {
+            centre(j) + (r / RATIOS[j]).ln() / (next / RATIOS[j]).ln() * width as f64
         }
         _ => centre(j),
     };
     x.round() as i32
 }
 
+/// A figure's columns: the grid's ratios, then the engine's own step and the largest ratio
+/// tried beyond the grid (each case's own, printed in its cell).
 #[cfg(feature = "figures")]
-/// One engine's map: a row per case, a column per ratio, the outcome as colour; each row's
-/// critical increment (bisected) marked and printed in seconds at its right.
+#[derive(Clone, Copy, PartialEq)]
+enum FigureColumn {
+    Grid(f64),
+    OwnStep,
+    Beyond,
+}
+
+#[cfg(feature = "figures")]
+/// One engine's map: a row per case, a column per grid ratio, then its own step and the
+/// furthest run beyond the grid (ratio printed in the cell); the outcome as colour; each row's
+/// critical increment marked where it falls on the grid and printed in seconds at its right.
 pub fn render(engine: &str, points: &[&Point], critical: &[&Critical]) -> Option<String> {
     let mut cases: Vec<&str> = points.iter().map(|p| p.case.as_str()).collect();
     cases.dedup();
-    let mut ratios: Vec<f64> = points.iter().map(|p| p.ratio).collect();
-    ratios.sort_by(f64::total_cmp);
-    ratios.dedup();
-    if cases.is_empty() || ratios.is_empty() {
+    if cases.is_empty() {
         return None;
     }
+    let columns: Vec<FigureColumn> = RATIOS
+        .iter()
+        .map(|r| FigureColumn::Grid(*r))
+        .chain([FigureColumn::OwnStep, FigureColumn::Beyond])
+        .collect();
     let cell = (64u32, 22u32);
     let left = 200u32;
     let top = 60u32;
-    let legend_height = 70u32;
-    let right = 150u32;
-    let width = left + cell.0 * ratios.len() as u32 + right;
+    let legend_height = 110u32;
+    let right = 190u32;
+    let width = left + cell.0 * columns.len() as u32 + right;
     let height = top + cell.1 * cases.len() as u32 + legend_height;
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (width, height)).into_drawing_area();
         root.fill(&WHITE).ok()?;
         let font = ("sans-serif", 13).into_font();
+        let small = ("sans-serif", 11).into_font();
         let title = ("sans-serif", 16).into_font();
         root.draw(&Text::new(
             format!("Stability map: {engine} (increment = ratio × the explicit stable increment)"),
@@ -207,42 +261,69 @@ pub fn render(engine: &str, points: &[&Point], critical: &[&Critical]) -> Option
             title,
         ))
         .ok()?;
-        for (j, r) in ratios.iter().enumerate() {
+        for (j, c) in columns.iter().enumerate() {
             let x = (left + cell.0 * j as u32) as i32;
-            root.draw(&Text::new(
-                format!("{r}×"),
-                (x + 16, top as i32 - 20),
-                font.clone(),
-            ))
-            .ok()?;
+            let label = match c {
+                FigureColumn::Grid(r) => format!("{r}×"),
+                FigureColumn::OwnStep => "own step".into(),
+                FigureColumn::Beyond => "furthest".into(),
+            };
+            root.draw(&Text::new(label, (x + 8, top as i32 - 20), font.clone()))
+                .ok()?;
         }
         for (i, case) in cases.iter().enumerate() {
             let y = (top + cell.1 * i as u32) as i32;
             root.draw(&Text::new(case.to_string(), (8, y + 4), font.clone()))
                 .ok()?;
-            for (j, r) in ratios.iter().enumerate() {
+            let mine: Vec<&&Point> = points.iter().filter(|p| p.case == *case).collect();
+            for (j, c) in columns.iter().enumerate() {
                 let x = (left + cell.0 * j as u32) as i32;
-                let outcome = points
-                    .iter()
-                    .find(|p| p.case == *case && p.ratio == *r)
-                    .map(|p| p.outcome);
-                let fill = outcome.map_or(WHITE, colour);
+                let p = match c {
+                    FigureColumn::Grid(r) => mine
+                        .iter()
+                        .find(|p| p.search == Search::Grid && p.ratio == *r)
+                        .copied(),
+                    FigureColumn::OwnStep => {
+                        mine.iter().find(|p| p.search == Search::OwnStep).copied()
+                    }
+                    FigureColumn::Beyond => mine
+                        .iter()
+                        .filter(|p| p.search == Search::Beyond)
+                        .max_by(|a, b| a.ratio.total_cmp(&b.ratio))
+                        .copied(),
+                };
+                let fill = p.map_or(WHITE, |p| colour(p.outcome));
                 root.draw(&Rectangle::new(
                     [(x, y), (x + cell.0 as i32 - 2, y + cell.1 as i32 - 2)],
                     fill.filled(),
                 ))
                 .ok()?;
+                if let (Some(p), FigureColumn::OwnStep | FigureColumn::Beyond) = (p, c) {
+                    let ink = if p.outcome == Outcome::Accurate {
+                        WHITE
+                    } else {
+                        BLACK
+                    };
+                    root.draw(&Text::new(
+                        format!("{}×", crate::report::format::ratio(p.ratio)),
+                        (x + 6, y + 5),
+                        small.clone().color(&ink),
+                    ))
+                    .ok()?;
+                }
             }
             if let Some(c) = critical.iter().find(|c| c.case == *case) {
-                let x = column_x(&ratios, c.explicit_ratio(), left, cell.0);
-                let (y0, y1) = (y + 2, y + cell.1 as i32 - 4);
-                root.draw(&Polygon::new(
-                    vec![(x - 5, y0), (x + 5, y0), (x, y1)],
-                    BLACK.filled(),
-                ))
-                .ok()?;
+                if c.explicit_ratio() <= RATIOS[RATIOS.len() - 1] {
+                    let x = column_x(c.explicit_ratio(), left, cell.0);
+                    let (y0, y1) = (y + 2, y + cell.1 as i32 - 4);
+                    root.draw(&Polygon::new(
+                        vec![(x - 5, y0), (x + 5, y0), (x, y1)],
+                        BLACK.filled(),
+                    ))
+                    .ok()?;
+                }
                 let text = format!("{} s", critical_cell(c));
-                let at = (left + cell.0 * ratios.len() as u32 + 8) as i32;
+                let at = (left + cell.0 * columns.len() as u32 + 8) as i32;
                 root.draw(&Text::new(text, (at, y + 4), font.clone()))
                     .ok()?;
             }
@@ -250,14 +331,14 @@ pub fn render(engine: &str, points: &[&Point], critical: &[&Critical]) -> Option
         root.draw(&Text::new(
             "critical increment",
             (
-                (left + cell.0 * ratios.len() as u32 + 8) as i32,
+                (left + cell.0 * columns.len() as u32 + 8) as i32,
                 top as i32 - 20,
             ),
             font.clone(),
         ))
         .ok()?;
         // The stable increment: a line between the last ratio ≤ 1 and the first above.
-        if let Some(j) = ratios.iter().position(|r| *r > 1.0) {
+        if let Some(j) = RATIOS.iter().position(|r| *r > 1.0) {
             let x = (left + cell.0 * j as u32) as i32 - 1;
             root.draw(&PathElement::new(
                 vec![
@@ -268,40 +349,31 @@ pub fn render(engine: &str, points: &[&Point], critical: &[&Critical]) -> Option
             ))
             .ok()?;
         }
-        let y = (top + cell.1 * cases.len() as u32 + 24) as i32;
+        let mut y = (top + cell.1 * cases.len() as u32 + 16) as i32;
         let mut x = 10;
-        for o in [
-            Outcome::Accurate,
-            Outcome::Inaccurate,
-            Outcome::Unstable,
-            Outcome::Failed,
-            Outcome::NotApplicable,
-        ] {
+        for o in Outcome::ALL {
+            let label = legend(o);
+            let w = 30 + 7 * label.chars().count() as i32;
+            if x + w > width as i32 {
+                x = 10;
+                y += 22;
+            }
             root.draw(&Rectangle::new(
                 [(x, y), (x + 16, y + 14)],
                 colour(o).filled(),
             ))
             .ok()?;
-            let label = match o {
-                Outcome::Accurate => "accurate (within the case's tolerance)".to_string(),
-                Outcome::Inaccurate => "inaccurate (bounded)".to_string(),
-                Outcome::Unstable => {
-                    format!("unstable (energy > {ENERGY_GROWTH_LIMIT}× a stable run's reading)")
-                }
-                Outcome::Failed => "failed".to_string(),
-                Outcome::NotApplicable => "not applicable".to_string(),
-            };
-            root.draw(&Text::new(label.clone(), (x + 22, y + 1), font.clone()))
+            root.draw(&Text::new(label, (x + 22, y + 1), font.clone()))
                 .ok()?;
-            x += 30 + 7 * label.chars().count() as i32;
+            x += w;
         }
         root.draw(&Text::new(
             format!(
                 "black line: the explicit stable increment (ratio 1); ▼: the largest bounded \
-                 increment, bisected to {:.0} %",
+                 increment, bisected to {:.0} %, where it falls on the grid",
                 (BISECTION_WIDTH - 1.0) * 100.0
             ),
-            (10, y + 26),
+            (10, y + 28),
             font,
         ))
         .ok()?;
@@ -348,19 +420,10 @@ pub fn write(out: &Path, map: &Map) -> Result<(), crate::report::data::DataError
 }
 
 /// The map's runs per engine, in the map's order.
-fn by_engine(map: &Map) -> Vec<(&str, Vec<Point>)> {
+fn by_engine(map: &Map) -> Vec<(&str, Vec<&Point>)> {
     crate::report::in_order_met(map.points.iter().map(|p| p.engine.as_str()))
         .into_iter()
-        .map(|e| {
-            let mine: Vec<Point> = map
-                .points
-                .iter()
-                .filter(|p| p.engine == e)
-                .cloned()
-                .collect();
-            (e, mine)
-        })
-        .filter(|(_, p)| !p.is_empty())
+        .map(|e| (e, map.points.iter().filter(|p| p.engine == e).collect()))
         .collect()
 }
 
@@ -376,16 +439,15 @@ pub fn critical_table(w: &mut String, map: &Map) {
     cases.dedup();
     let _ = writeln!(
         w,
-        "\n### The critical increment\n\nPer case and engine, the largest increment at which the run \
-         stays bounded, in seconds, and in brackets its ratio to the explicit engine's computed stable \
-         increment: between the map's last bounded and first unstable ratio, bisected until the two are \
-         within {:.0} % (`search` = `bisection` in `stability.csv`). Where the engine stayed bounded up \
-         to {}× it is at least that (≥); where it was unstable down to {}×, less than that (<). A \
-         critical increment below 1 for an explicit engine would mean a run went unstable below \
-         its computed stable increment.\n",
+        "\n### The critical increment\n\nPer case and engine, the largest increment at which the \
+         run stays bounded, in seconds, and in brackets its ratio to the explicit engine's \
+         computed stable increment: between the last bounded and the first unstable run, \
+         bisected until the two are within {:.0} % (`search` = `bisection` in `stability.csv`). \
+         Where the engine stayed bounded up to its ceiling ({CEILING}× the largest increment it \
+         runs at in this report) it is at least that (≥); where it was unstable down to {}×, \
+         less than that (<).\n",
         (BISECTION_WIDTH - 1.0) * 100.0,
-        crate::run::stability::BEYOND.last().copied().unwrap_or(4.0),
-        crate::run::stability::BELOW.last().copied().unwrap_or(0.25),
+        BELOW[BELOW.len() - 1],
     );
     let names: Vec<String> = engines.iter().map(|e| format!("`{e}`")).collect();
     let _ = writeln!(w, "| case | {} |", names.join(" | "));
@@ -406,8 +468,8 @@ pub fn critical_table(w: &mut String, map: &Map) {
     }
 }
 
-/// The report section: per engine, the map and a sentence on where it stays stable; then the
-/// critical increments.
+/// The report section: how runs are judged, per engine a summary row, the critical
+/// increments, then each engine's map with the runs that came back bounded after a transient.
 pub fn overview(w: &mut String, map: &Map) {
     let maps = by_engine(map);
     if maps.is_empty() {
@@ -415,72 +477,45 @@ pub fn overview(w: &mut String, map: &Map) {
     }
     let _ = writeln!(
         w,
-        "\n## Where each engine stays stable\n\nEvery stepping engine ran every case at increments of \
-         {} × the explicit engine's computed stable increment (`crosscheck stability`; the explicit \
-         engines at that ratio of their own, rapier, which has no stable increment, at that ratio of \
-         the explicit one's), each increment exactly. A run is *unstable* when the engine stopped it \
-         as such or its kinetic plus elastic energy rose above {ENERGY_GROWTH_LIMIT}× what it may hold \
-         (its initial energy plus the work of the loads) times what a stable run of the engine's \
-         scheme reads at that ratio (central differences: 1/(1 − r²) below 1), *accurate* when its largest error against \
-         its own model's exact solution is within the case's tolerance for it (a rapier engine \
-         without one takes the case's `rapier_f64` tolerance, any other the tightest the case \
-         declares), *inaccurate* when bounded but outside it. Cases without a stable increment \
-         (the free spins) are not mapped; a case an engine does not model is *not applicable* \
-         (not counted as failed). Data: `stability.csv`.\n",
+        "\n## Where each engine stays stable\n\n\
+         Every stepping engine ran every case that has a stable increment at {} × the explicit \
+         engine's computed stable increment (the explicit engines at that ratio of their own, \
+         rapier at that ratio of the explicit one's), each increment exactly; at the increment \
+         its own job ran at (*own step*); and, where it stayed bounded, on × {LADDER} at a time \
+         up to {CEILING}× the largest increment it runs at anywhere in this report (rapier's \
+         default configuration: past 1/60 s). A case shorter than {} increments at an \
+         increment is continued in time (its last step lengthened, its own rows unchanged).\n",
         RATIOS
             .iter()
             .map(|r| r.to_string())
             .collect::<Vec<_>>()
-            .join(", ")
+            .join(", "),
+        crate::run::stability::MIN_INCREMENTS,
     );
     let _ = writeln!(
         w,
-        "| engine | cases | accurate at 0.25× | accurate at 0.98× | first unstable ratio (cases) | unstable at 1.02× | unstable at 4× | failed |\n|---|---:|---:|---:|---|---:|---:|---:|"
+        "A run is *unstable* when the engine stopped it as such (its state turned non-finite, or \
+         its own guard named a growing mode), or when its energy is still growing at the end: \
+         cut into {} windows, its largest energy level (kinetic + elastic over the initial \
+         energy plus the work of the loads) is in the last one, at least {GROWTH}× the level of \
+         the window that ends halfway. Such a run is confirmed on a horizon {CONFIRM}× longer \
+         before it is called unstable. A transient that peaks and decays is *bounded*; its peak \
+         is reported beside (`energy_peak` in `stability.csv`). A bounded run is *accurate* \
+         when its largest error against its own model's exact solution, on the case's own \
+         rows, is within the case's tolerance for the engine. A case an engine does not model \
+         is *not applicable*; the free spins have no stable increment and are not mapped.\n",
+        growth_rule::WINDOWS,
+    );
+    let _ = writeln!(
+        w,
+        "| engine | cases | accurate at own step | unstable on the grid (first ratio) | bounded to its ceiling | largest transient of a bounded run | failed |\n|---|---:|---:|---|---:|---|---:|"
     );
     for (engine, points) in &maps {
-        let cases = {
-            let mut c: Vec<&str> = points.iter().map(|p| p.case.as_str()).collect();
-            c.sort();
-            c.dedup();
-            c.len()
-        };
-        let count = |r: f64, o: Outcome| {
-            points
-                .iter()
-                .filter(|p| p.ratio == r && p.outcome == o)
-                .count()
-        };
-        let first_unstable = points
-            .iter()
-            .filter(|p| p.outcome == Outcome::Unstable)
-            .map(|p| p.ratio)
-            .reduce(f64::min);
-        let _ = writeln!(
-            w,
-            "| `{engine}` | {cases} | {} | {} | {} | {} | {} | {} |",
-            count(0.25, Outcome::Accurate),
-            count(0.98, Outcome::Accurate),
-            first_unstable.map_or("not up to 4×".to_string(), |r| format!(
-                "{r}× ({})",
-                count(r, Outcome::Unstable)
-            )),
-            count(1.02, Outcome::Unstable),
-            count(4.0, Outcome::Unstable),
-            points
-                .iter()
-                .filter(|p| p.outcome == Outcome::Failed)
-                .count(),
-        );
+        let _ = writeln!(w, "{}", summary_row(engine, points, map));
     }
     critical_table(w, map);
     let _ = writeln!(w);
-    for (engine, points) in &maps {
-        let _ = writeln!(
-            w,
-            "**`{engine}`.** {}{}\n",
-            words(engine, points),
-            beyond_the_grid(map, engine)
-        );
+    for (engine, _) in &maps {
         let _ = write!(
             w,
             "{}",
@@ -495,134 +530,57 @@ pub fn overview(w: &mut String, map: &Map) {
     }
 }
 
-/// Where an engine bounded on the whole grid went unstable beyond it, with the matched
-/// configuration at the same increments as the control (a default configuration differs from
-/// it in its solver settings only).
-fn beyond_the_grid(map: &Map, engine: &str) -> String {
-    let last = RATIOS.last().copied().unwrap_or(4.0);
-    let above: Vec<&Critical> = map
-        .critical
+/// One engine's row of the overview table.
+fn summary_row(engine: &str, points: &[&Point], map: &Map) -> String {
+    let mut cases: Vec<&str> = points.iter().map(|p| p.case.as_str()).collect();
+    cases.dedup();
+    let own: Vec<&&Point> = points
         .iter()
-        .filter(|c| c.engine == engine && c.bound == Bound::Bisected)
-        .filter(|c| c.explicit_ratio() > last)
+        .filter(|p| p.search == Search::OwnStep)
         .collect();
-    if above.is_empty() {
-        return String::new();
-    }
-    let cases: Vec<String> = above
+    let accurate_own = own
         .iter()
-        .map(|c| format!("{} ({:.1}×)", c.case, c.explicit_ratio()))
+        .filter(|p| p.outcome == Outcome::Accurate)
+        .count();
+    let grid_unstable: Vec<&&Point> = points
+        .iter()
+        .filter(|p| p.search == Search::Grid && p.outcome == Outcome::Unstable)
         .collect();
-    let matched = engine.replace("_default", "");
-    let control = if matched != engine
-        && above.iter().all(|c| {
-            map.critical
-                .iter()
-                .any(|m| m.engine == matched && m.case == c.case && m.bound == Bound::AtLeast)
-        }) {
-        format!(
-            " At the same increments `{matched}` (the matched configuration: the same engine \
-             with converged solver settings) stays bounded up to {}× on every one of them, so \
-             what goes unstable is rapier's default solver configuration at that increment, \
-             not the scene.",
-            crate::run::stability::BEYOND
-                .last()
-                .copied()
-                .unwrap_or(last)
-        )
-    } else {
-        String::new()
-    };
+    let first = grid_unstable
+        .iter()
+        .map(|p| p.ratio)
+        .reduce(f64::min)
+        .map_or("none".to_string(), |r| {
+            let mut at: Vec<&str> = grid_unstable.iter().map(|p| p.case.as_str()).collect();
+            at.dedup();
+            format!("{} cases (from {r}×)", at.len())
+        });
+    let mine: Vec<&Critical> = map.critical.iter().filter(|c| c.engine == engine).collect();
+    let ceiling = mine
+        .iter()
+        .filter(|c| c.bound == Bound::AtLeast && c.covers_own_step())
+        .count();
+    let transient = points
+        .iter()
+        .filter(|p| p.outcome.bounded())
+        .filter_map(|p| Some((p.growth?.peak, *p)))
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .map_or("–".to_string(), |(peak, p)| {
+            format!(
+                "{} ({}, {}×)",
+                sci(peak),
+                p.case,
+                crate::report::format::ratio(p.ratio)
+            )
+        });
+    let failed = points
+        .iter()
+        .filter(|p| p.outcome == Outcome::Failed)
+        .count();
     format!(
-        " Beyond the grid it goes unstable on {} of its cases, at these critical increments \
-         (over the explicit stable increment): {}.{control}",
-        above.len(),
-        cases.join(", ")
+        "| `{engine}` | {} | {accurate_own} of {} | {first} | {ceiling} of {} | {transient} | {failed} |",
+        cases.len(),
+        own.len(),
+        mine.len(),
     )
-}
-
-/// The map in plain words.
-fn words(engine: &str, points: &[Point]) -> String {
-    let at = |r: f64| -> Vec<&Point> { points.iter().filter(|p| p.ratio == r).collect() };
-    let share = |r: f64, o: Outcome| {
-        let all = at(r);
-        format!(
-            "{} of {}",
-            all.iter().filter(|p| p.outcome == o).count(),
-            all.len()
-        )
-    };
-    let below: Vec<&Point> = points
-        .iter()
-        .filter(|p| p.ratio < 1.0 && p.outcome == Outcome::Unstable)
-        .collect();
-    let stable_below = below.len();
-    let mut below_cases: Vec<&str> = below.iter().map(|p| p.case.as_str()).collect();
-    below_cases.dedup();
-
-    let explicit = engine.starts_with("explicit");
-    let mut s = String::new();
-    let mut refused: Vec<&str> = points
-        .iter()
-        .filter(|p| p.outcome == Outcome::NotApplicable)
-        .map(|p| p.case.as_str())
-        .collect();
-    refused.dedup();
-    if explicit {
-        let _ = write!(
-            s,
-            "Below its stable increment it ran {} unstable runs{}; at 0.98× {} cases were accurate; at \
-             1.02× {} were unstable (stopped with the growing mode named), at 1.1× {}.",
-            stable_below,
-            if below.is_empty() {
-                String::new()
-            } else {
-                format!(
-                    " ({}): no mode grows below the limit; what stops these runs is a penalty \
-                     impact (each run's message names it: `crosscheck run CASE \
-                     --increment-ratio R`): a contact mode with ω·h above √2 resolves an impact \
-                     in about one increment and can send the node back faster than it struck \
-                     (up to ((ω·h)² − 1) times), which the energy criterion counts as unstable",
-                    below_cases.join(", ")
-                )
-            },
-            share(0.98, Outcome::Accurate),
-            share(1.02, Outcome::Unstable),
-            share(1.1, Outcome::Unstable),
-        );
-        let inaccurate: Vec<&str> = at(0.98)
-            .iter()
-            .filter(|p| p.outcome == Outcome::Inaccurate)
-            .map(|p| p.case.as_str())
-            .collect();
-        if !inaccurate.is_empty() {
-            let _ = write!(
-                s,
-                " Bounded but outside tolerance at 0.98×: {}.",
-                inaccurate.join(", ")
-            );
-        }
-    } else {
-        let _ = write!(
-            s,
-            "Accurate at 0.25× on {}, at 1.02× on {}, at 4× on {}; unstable at 4× on {}; failed at 4× on {}.",
-            share(0.25, Outcome::Accurate),
-            share(1.02, Outcome::Accurate),
-            share(4.0, Outcome::Accurate),
-            share(4.0, Outcome::Unstable),
-            share(4.0, Outcome::Failed),
-        );
-        if points.iter().all(|p| p.outcome != Outcome::Unstable) {
-            s += " It never went unstable on the grid: its springs are implicit, so past the explicit limit it \
-                  loses accuracy (energy, amplitude) instead of blowing up.";
-        }
-    }
-    if !refused.is_empty() {
-        let _ = write!(
-            s,
-            " Not applicable (the engine does not model it, and says why): {}.",
-            refused.join(", ")
-        );
-    }
-    s
 }

@@ -4,10 +4,12 @@
 //! is held to, and why.
 
 use super::format::sci;
-use super::summary::{EngineSummary, Summary, ToleranceCheck, not_applicable};
-use crate::comparison::attribution::{Attribution, ControlRun, EXPLAINS, FLAG_RATIO, Flag};
+use crate::comparison::attribution::{Attribution, ControlRun};
+use crate::comparison::summary::{EngineSummary, Summary, ToleranceCheck};
+use crate::comparison::verdict::cause::{Explanation, FLAG_RATIO, Flag, MIN_ORDER};
 use crate::comparison::{CLOSED_FORM, EXACT_SOLUTIONS, FINITE_ROTATION_REFERENCE};
 use crate::engines::ControlKind;
+use crate::run::Status;
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
@@ -43,6 +45,7 @@ pub fn section(w: &mut String, s: &Summary) {
     headline(w, &checks);
     matrix(w, s);
     causes(w, s, &checks);
+    invariances(w, s);
     model_form(w, s);
     policy(w, s);
 }
@@ -98,9 +101,10 @@ fn causes(w: &mut String, s: &Summary, checks: &[ToleranceCheck]) {
             let r = run(c.case, c.engine)?;
             Some(match (&r.error, &r.attribution) {
                 (Some(e), _) => format!(
-                    "| {} | {} | failed | tolerance {} | the run failed: {e} | – | – |",
+                    "| {} | {} | {} | tolerance {} | the run did not finish: {e} | – | – |",
                     c.case,
                     c.engine,
+                    r.status.name(),
                     c.tolerance.map_or("–".into(), sci)
                 ),
                 (None, Some(a)) => attribution_row(a, c.baseline),
@@ -130,12 +134,18 @@ fn causes(w: &mut String, s: &Summary, checks: &[ToleranceCheck]) {
     let _ = writeln!(
         w,
         "Each cell below was rerun with one suspected cause varied, something the exact solution \
-         does not depend on: the increment / 4 (and / 16, / 64 for rapier's 1/60 s); the penalty \
-         stiffness × 16 with the increment / 4; f64 for f32; a contact softness ten times \
-         stiffer (the matched configuration's, for rapier's defaults); restitution 0 on contact \
-         pairs that start closed and never strike. Each control is measured against the same exact solution. The cause is the \
-         control that divides the error by {EXPLAINS} or more, or meets the missed tolerance (the \
-         one with the smallest error where several do); otherwise the cell is unexplained.\n"
+         does not depend on: the increment, on a ladder of quarters down to the matched \
+         increment (the explicit engine's); the penalty stiffness × 16 with the increment / 4; \
+         f64 for f32; a contact softness ten times stiffer (the matched configuration's, for \
+         rapier's defaults); restitution 0 on contact pairs that start closed and never strike. \
+         Where none alone explains it, the others are run again at the ladder's finest \
+         increment (combined with the time step). Each is measured against the same exact \
+         solution. A cell's *line* is the one it crossed: its tolerance, or {FLAG_RATIO} × \
+         `explicit`'s error. The cause is the control that brings the cell under its line (the \
+         one with the smallest error; a single control before a combination), or the time step \
+         where the ladder's error falls along an order of at least {MIN_ORDER} (with the \
+         increment that would reach the line along it); *in part* where the ladder falls and then \
+         levels. Otherwise the cell is unexplained, and every control is listed.\n"
     );
     let header = "| case | engine | error (against) | listed for | cause | the control that shows it | other controls |\n|---|---|---:|---|---|---|---|";
     for (title, rows) in [
@@ -173,6 +183,67 @@ fn causes(w: &mut String, s: &Summary, checks: &[ToleranceCheck]) {
     let _ = writeln!(w);
 }
 
+/// The invariance controls: per case and parameter the exact solution ignores, the engines
+/// whose verdict depends on it, with their errors at both values.
+fn invariances(w: &mut String, s: &Summary) {
+    if s.invariances.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        w,
+        "### Parameters the exact solution ignores
+
+Where a case's exact solution does not          depend on a parameter (the restitution of a contact that never strikes; the penalty of          a contact that never closes), every judged cell was run again at both of its natural          values, against the same exact solution. An engine whose verdict changes with it is          named: its verdict on the case rests on a value the physics leaves free, and the case          states the physically natural one. *Exact change*: how far the exact solution itself          moved between the two values, over its peak (round-off where the parameter is truly          ignored).
+"
+    );
+    let _ = writeln!(
+        w,
+        "| case | parameter | values | exact change | engines whose verdict depends on it (error at each value) | verdict the same |
+|---|---|---|---:|---|---|"
+    );
+    for i in &s.invariances {
+        let depends: Vec<String> = i
+            .engines
+            .iter()
+            .filter(|p| p.depends())
+            .map(|p| {
+                let e = |k: usize| p.errors[k].map_or("failed".to_string(), sci);
+                let mark = |k: usize| if p.met[k] == Some(true) { "✓" } else { "✗" };
+                format!(
+                    "`{}` ({} {}, {} {})",
+                    p.engine,
+                    mark(0),
+                    e(0),
+                    mark(1),
+                    e(1)
+                )
+            })
+            .collect();
+        let same: Vec<String> = i
+            .engines
+            .iter()
+            .filter(|p| !p.depends())
+            .map(|p| format!("`{}`", p.engine))
+            .collect();
+        let _ = writeln!(
+            w,
+            "| {} | {} | {} / {} | {} | {} | {} |",
+            i.case,
+            i.parameter,
+            i.values[0],
+            i.values[1],
+            i.exact_change.map_or("–".into(), sci),
+            if depends.is_empty() {
+                "none".to_string()
+            } else {
+                depends.join("; ")
+            },
+            same.join(", ")
+        );
+    }
+    let _ = writeln!(w);
+}
+
 /// One attributed cell as a table row: its error, why it is listed, the cause and every
 /// control.
 fn attribution_row(a: &Attribution, baseline: &str) -> String {
@@ -188,7 +259,7 @@ fn attribution_row(a: &Attribution, baseline: &str) -> String {
         .controls
         .iter()
         .enumerate()
-        .filter(|(k, _)| Some(*k) != a.cause)
+        .filter(|(k, _)| Some(*k) != a.cause.map(|c| c.control))
         .map(|(_, c)| control(c))
         .collect();
     format!(
@@ -213,26 +284,56 @@ pub fn control(c: &ControlRun) -> String {
     }
 }
 
-/// The cause a cell's controls name (bold; "in part" where the control still misses the
-/// tolerance; unexplained where none explains it), and the control that shows it.
+/// The cause a cell's controls name (bold; unexplained where none explains it), and the
+/// control that shows it with how.
 pub fn cause_and_control(a: &Attribution) -> (String, String) {
-    match a.explaining() {
-        // A control that explains part of a miss: the rest is unexplained.
-        Some(c) if matches!(a.flag, Flag::MissesTolerance(t) if c.error.is_some_and(|e| e > t)) => {
-            (
-                format!(
-                    "**{}, in part** (the control still misses; the rest unexplained)",
-                    cause_label(c.kind, &a.engine)
-                ),
+    let (Some(cause), Some(c)) = (a.cause, a.explaining()) else {
+        return ("**unexplained**".to_string(), "–".to_string());
+    };
+    let name = cause_name(a).unwrap_or_default();
+    match cause.explanation {
+        Explanation::Under => (format!("**{name}**"), control(c)),
+        Explanation::AlongOrder { order, needed } if c.kind == ControlKind::Penalty => (
+            format!("**{name}**"),
+            format!(
+                "{}; the error falls as (1/k_p)^{order:.2}, under the line at k_p ≈ {}",
                 control(c),
-            )
-        }
-        Some(c) => (
-            format!("**{}**", cause_label(c.kind, &a.engine)),
-            control(c),
+                sci(needed)
+            ),
         ),
-        None => ("**unexplained**".to_string(), "–".to_string()),
+        Explanation::AlongOrder { order, needed } => (
+            format!("**{name}**"),
+            format!(
+                "{}; the error falls as h^{order:.2}, under the line at h ≈ {} s",
+                control(c),
+                sci(needed)
+            ),
+        ),
+        Explanation::InPart { order, level } => (
+            format!("**{name}** (the rest unexplained)"),
+            format!(
+                "{}; the error falls as h^{order:.2} and levels at {}",
+                control(c),
+                sci(level)
+            ),
+        ),
     }
+}
+
+/// The cause a cell's controls name, short ("time step (rapier's 1/60 s) and model: rapier's
+/// soft contact", "time step, in part"); `None`: unexplained.
+pub fn cause_name(a: &Attribution) -> Option<String> {
+    let cause = a.cause?;
+    let c = a.explaining()?;
+    let label = cause_label(c.kind, &a.engine);
+    Some(match cause.explanation {
+        _ if c.combined => format!(
+            "{} and {label}",
+            cause_label(ControlKind::TimeStep, &a.engine)
+        ),
+        Explanation::InPart { .. } => format!("{label}, in part"),
+        _ => label.to_string(),
+    })
 }
 
 /// The cause a control's kind names, short, with rapier's setting where it is rapier's.
@@ -295,13 +396,11 @@ pub fn cause_meaning(kind: ControlKind) -> &'static str {
 
 /// A verdict matrix cell: ✓/✗ and the worst error against the engine's own model.
 pub fn verdict_cell(r: &EngineSummary) -> String {
-    if let Some(e) = &r.error {
-        return match (not_applicable(e), r.tolerance) {
-            (true, _) => "n/a",
-            (false, Some(_)) => "✗ failed",
-            (false, None) => "failed (no tolerance)",
-        }
-        .into();
+    match (r.status, r.tolerance) {
+        (Status::Ok, _) => {}
+        (Status::NotApplicable, _) => return "n/a".into(),
+        (status, Some(_)) => return format!("✗ {}", status.name()),
+        (status, None) => return format!("{} (no tolerance)", status.name()),
     }
     let Some(a) = &r.against_baseline else {
         return "–".into();

@@ -7,8 +7,8 @@
 use super::contact::{drop_cases, restitution_table};
 use super::format::sci;
 use super::regression::{self, Report};
-use super::summary::{CaseSummary, EngineSummary, Summary};
 use super::verdicts::{cause_and_control, control};
+use crate::comparison::summary::{CaseSummary, EngineSummary, Summary};
 use crate::contract::release_of;
 use crate::run::controls::ControlKind;
 use std::fmt::Write;
@@ -54,17 +54,11 @@ const CURRENT: &str = crate::engines::rapier::Release::Current.label();
 #[cfg(not(feature = "rapier"))]
 const CURRENT: &str = "current";
 
-/// A cell's verdict against the current release's tolerance: `Some(true)` within it,
-/// `Some(false)` over it or failed, `None` not judged (no tolerance, no compared row).
-fn verdict(c: &CaseSummary, engine: &str, current: &str) -> Option<bool> {
-    let tolerance = c.run(current)?.tolerance?;
-    let r = c.run(engine)?;
-    match &r.error {
-        Some(e) if super::summary::not_applicable(e) => return None,
-        Some(_) => return Some(false),
-        None => {}
-    }
-    Some(r.against_baseline.as_ref()?.worst_max? <= tolerance)
+/// A cell's verdict against the current release's tolerance (the one rule,
+/// [`crate::comparison::verdict::tolerance`]): `Some(true)` within it, `Some(false)` over it or
+/// failed, `None` not judged (no tolerance, no compared row).
+fn verdict(c: &CaseSummary, engine: &str) -> Option<bool> {
+    c.run(engine)?.meets_tolerance
 }
 
 /// A cell's worst error, or `failed`.
@@ -127,11 +121,7 @@ fn headline(w: &mut String, s: &Summary, lineages: &[Lineage]) {
             .releases
             .iter()
             .map(|e| {
-                let judged: Vec<bool> = s
-                    .cases
-                    .iter()
-                    .filter_map(|c| verdict(c, e, &l.current))
-                    .collect();
+                let judged: Vec<bool> = s.cases.iter().filter_map(|c| verdict(c, e)).collect();
                 let met = judged.iter().filter(|v| **v).count();
                 format!("{} {met} of {}", label(e), judged.len())
             })
@@ -154,9 +144,9 @@ fn differing(w: &mut String, s: &Summary, lineages: &[Lineage]) {
     let mut named: Vec<(ControlKind, String)> = Vec::new();
     for l in lineages {
         for c in &s.cases {
-            let now = verdict(c, &l.current, &l.current);
+            let now = verdict(c, &l.current);
             for e in l.releases.iter().filter(|e| **e != l.current) {
-                let then = verdict(c, e, &l.current);
+                let then = verdict(c, e);
                 if then.is_none() || then == now {
                     continue;
                 }

@@ -3,6 +3,8 @@
 //! and setting family, the Pareto front, unstable points at the edge, timing whiskers, the
 //! case's tolerances).
 
+use crate::comparison::reach::Ended;
+use crate::comparison::verdict::cost::{self, CostToAccuracy, Reached};
 use crate::comparison::work_precision::{self, COLUMNS, CaseSweep, Row};
 #[cfg(feature = "figures")]
 use crate::report::format::tick;
@@ -374,11 +376,11 @@ pub fn text(sweeps: &[CaseSweep]) -> String {
             });
             let reach: Vec<String> = work_precision::TARGETS
                 .iter()
-                .map(|t| match work_precision::cheapest(&rows, &f.engine, *t) {
-                    work_precision::Reach::Reached(r) => {
+                .map(|t| match cost::cheapest(&rows, &f.engine, *t) {
+                    cost::Reach::Reached(r) => {
                         format!("{t:.0e}: {:.2e} s/s", r.cpu_s_min)
                     }
-                    work_precision::Reach::NotReached(best) => format!(
+                    cost::Reach::NotReached(best) => format!(
                         "{t:.0e}: not reached{}",
                         best.map_or(String::new(), |b| format!(" (best {b:.2e})"))
                     ),
@@ -415,8 +417,8 @@ pub fn short_cause(cause: &str) -> &str {
 /// A time-to-accuracy cell: CPU seconds per simulated second and the setting, or "not
 /// reached" with the smallest error attained.
 pub fn reach_cell(rows: &[Row], engine: &str, target: f64, setting: bool) -> String {
-    match work_precision::cheapest(rows, engine, target) {
-        work_precision::Reach::Reached(r) if setting => {
+    match cost::cheapest(rows, engine, target) {
+        cost::Reach::Reached(r) if setting => {
             let mut s = format!("{} (h {}", sci(r.cpu_s_min), sci(r.increment));
             if let Some(k) = r.penalty_stiffness {
                 s += &format!(", k_p {}", sci(k));
@@ -426,9 +428,9 @@ pub fn reach_cell(rows: &[Row], engine: &str, target: f64, setting: bool) -> Str
             }
             s + ")"
         }
-        work_precision::Reach::Reached(r) => sci(r.cpu_s_min),
-        work_precision::Reach::NotReached(Some(best)) => format!("not reached ({})", sci(best)),
-        work_precision::Reach::NotReached(None) => "–".into(),
+        cost::Reach::Reached(r) => sci(r.cpu_s_min),
+        cost::Reach::NotReached(Some(best)) => format!("not reached ({})", sci(best)),
+        cost::Reach::NotReached(None) => "–".into(),
     }
 }
 
@@ -472,7 +474,7 @@ fn engines_of<'a>(rows: impl Iterator<Item = &'a Row>) -> Vec<&'a str> {
 
 /// The report's section on what accuracy costs: how the sweep works, then per case and engine
 /// the observed order and floor, and the CPU time to 1e-4 of the peak.
-pub fn overview(w: &mut String, s: &crate::report::summary::Summary, sweeps: &SweepRows) {
+pub fn overview(w: &mut String, s: &crate::comparison::summary::Summary, sweeps: &SweepRows) {
     use std::fmt::Write;
     let engines = engines_of(sweeps.values().flatten());
     if engines.is_empty() {
@@ -529,26 +531,117 @@ pub fn overview(w: &mut String, s: &crate::report::summary::Summary, sweeps: &Sw
             .collect();
         let _ = writeln!(w, "| {} | {} |", c.id, cells.join(" | "));
     }
+    for target in crate::comparison::work_precision::TARGETS {
+        let _ = writeln!(
+            w,
+            "\n**CPU seconds per simulated second to reach {target:.0e} of the peak**: the \
+             cheapest run within it (the sweep's, or a run toward it); ≈: extrapolated along the \
+             observed order p from the most accurate point, where no run could check it within \
+             its budget; floor: where refinement stops paying above it, never extrapolated \
+             across; not reached: the smallest error attained.\n"
+        );
+        let _ = writeln!(w, "| case | {} |", header.join(" | "));
+        let _ = writeln!(w, "|---|{}", "---:|".repeat(engines.len()));
+        for c in s.cases.iter().filter(|c| sweeps.contains_key(&c.id)) {
+            let cells: Vec<String> = engines
+                .iter()
+                .map(|e| {
+                    c.run(e)
+                        .and_then(|r| r.cost_to_accuracy.iter().find(|k| k.target == target))
+                        .map_or("–".into(), cost_cell)
+                })
+                .collect();
+            let _ = writeln!(w, "| {} | {} |", c.id, cells.join(" | "));
+        }
+    }
+    checks(w, s);
+    let _ = writeln!(w);
+}
+
+/// A cost to an accuracy as cost.md prints it: CPU seconds per simulated second, measured or
+/// (≈) extrapolated, or the floor or smallest error that stops it.
+fn cost_cell(c: &CostToAccuracy) -> String {
+    match (c.reached, c.cpu_s_per_simulated_s) {
+        (Reached::Measured, Some(v)) => sci(v),
+        (Reached::Extrapolated, Some(v)) => {
+            format!("≈ {} (p {:.2})", sci(v), c.order.unwrap_or(f64::NAN))
+        }
+        (Reached::AtLeast, Some(v)) => format!(
+            "> {} (runs at it: {})",
+            sci(v),
+            c.error.map_or("–".into(), sci)
+        ),
+        (Reached::Floor, _) => format!(
+            "floor {} ({})",
+            c.error.map_or("–".into(), sci),
+            short_cause(c.cause.as_deref().unwrap_or(""))
+        ),
+        _ => c.error.map_or("not reached".into(), |e| {
+            format!("not reached ({})", sci(e))
+        }),
+    }
+}
+
+/// The extrapolations checked by runs: predicted against measured.
+fn checks(w: &mut String, s: &crate::comparison::summary::Summary) {
+    use std::fmt::Write;
+    if s.checks.is_empty() {
+        return;
+    }
     let _ = writeln!(
         w,
-        "\n**CPU seconds per simulated second to reach 1e-4 of the peak** (the cheapest point of \
-         the sweep within it; \"not reached\" gives the smallest error attained):\n"
+        "\n**Extrapolations checked.** Every cost the sweep left to an extrapolation, where a run \
+         at the increment it predicts takes at most {}× the sweep's budget of increments for one \
+         run (about a minute of CPU for rapier), was run there; then, where that missed, at {} of \
+         the accuracy along the local order of the last two points, up to {} runs, stopping where \
+         the local order fell below half the fitted one (the error levels: a floor). A case \
+         equivalent to another is checked on that one only. CPU: seconds per simulated second.\n",
+        crate::comparison::reach::BUDGET,
+        crate::comparison::reach::AIM,
+        crate::comparison::reach::RUNS,
     );
-    let _ = writeln!(w, "| case | {} |", header.join(" | "));
-    let _ = writeln!(w, "|---|{}", "---:|".repeat(engines.len()));
-    for (case, rows) in sweeps {
-        let cells: Vec<String> = engines
+    let _ = writeln!(
+        w,
+        "| case | engine | to | predicted: increment, CPU (order) | measured at it: error, CPU | further runs: increment, error | outcome |\n|---|---|---:|---|---|---|---|"
+    );
+    for c in &s.checks {
+        let first = c.runs.first();
+        let measured = first.map_or("–".into(), |r| {
+            format!("{}, {}", r.1.map_or("failed".into(), sci), sci(r.2))
+        });
+        let further: Vec<String> = c
+            .runs
             .iter()
-            .map(|e| reach_cell(rows, e, 1e-4, false))
+            .skip(1)
+            .map(|r| format!("{} s: {}", sci(r.0), r.1.map_or("failed".into(), sci)))
             .collect();
-        let _ = writeln!(w, "| {case} | {} |", cells.join(" | "));
+        let _ = writeln!(
+            w,
+            "| {} | `{}` | {:.0e} | {} s, {} (p {:.2}) | {measured} | {} | {} |",
+            c.case,
+            c.engine,
+            c.target,
+            sci(c.predicted_increment),
+            sci(c.predicted_cpu),
+            c.order,
+            if further.is_empty() {
+                "–".to_string()
+            } else {
+                further.join("; ")
+            },
+            match c.ended {
+                Ended::Reached => "reached",
+                Ended::Levelled => "levels off: a floor",
+                Ended::Budget => "over budget: extrapolated",
+                Ended::Failed => "a run failed",
+            }
+        );
     }
-    let _ = writeln!(w);
 }
 
 /// A case section's part on what accuracy costs: the diagram, then per engine the order, the
 /// floor, the CPU time to each target and the cheapest setting within the case's tolerance.
-pub fn case_part(w: &mut String, c: &crate::report::summary::CaseSummary, rows: &[Row]) {
+pub fn case_part(w: &mut String, c: &crate::comparison::summary::CaseSummary, rows: &[Row]) {
     use std::fmt::Write;
     let _ = write!(
         w,

@@ -1,15 +1,20 @@
 //! Control experiments: one job rerun with one suspected cause of its discrepancy varied.
 //!
-//! - **time step**: the increment divided by 4 (and by 16 and 64 for an engine that steps more
-//!   coarsely than the output rows, rapier's default 1/60 s);
-//! - **penalty**: the penalty stiffness × [`PENALTY_FACTOR`] with the increment divided by its
-//!   square root (ω_p·h unchanged), for an engine that reports a penalty stiffness;
+//! - **time step**: a ladder of increments, each a quarter of the one before, from a quarter of
+//!   the job's down to the matched increment (the explicit engine's on the scene; the ladder
+//!   ends on it exactly): one rung for an engine that already steps there, down to it from
+//!   rapier's default 1/60 s;
+//! - **penalty**: a ladder of two: the penalty stiffness × [`PENALTY_FACTOR`] and × its square,
+//!   each with the increment divided by the factor's square root (ω_p·h unchanged), for an
+//!   engine that reports a penalty stiffness;
 //! - the engine's own ([`Engine::controls`]): for rapier, f64 for f32, a stiffer contact
 //!   softness, restitution 0 on pairs that start closed.
 //!
 //! Each varies something the exact solution of the case does not depend on (the comparison
 //! leaves out a restitution control where the exact solution strikes, since e enters it
-//! there). This module only runs them; the comparison measures them and names the cause.
+//! there). Where no single one explains a cell, the comparison combines them: the penalty and
+//! the engine's own controls run again at the ladder's finest increment ([`combined`]). This
+//! module only runs them; the comparison measures them and names the cause.
 
 use super::{JobSuccess, matching};
 use crate::contract::{self, History};
@@ -39,6 +44,24 @@ impl Planned<'_> {
         self.control.kind
     }
 
+    /// The penalty stiffness it sets, where it sets one.
+    pub fn penalty(&self) -> Option<f64> {
+        match self.settings.penalty {
+            Some(PenaltyRule::Stiffness(k)) => Some(k),
+            _ => None,
+        }
+    }
+
+    /// The increment it is forced to, where it is.
+    pub fn increment(&self) -> Option<f64> {
+        match self.settings.increment {
+            Some(IncrementRule::Forced(h) | IncrementRule::Given(h) | IncrementRule::Exact(h)) => {
+                Some(h)
+            }
+            _ => None,
+        }
+    }
+
     /// Run it: its history (checked against the output contract), or why there is none.
     pub fn run(&self) -> Result<History, String> {
         let engine = self.control.engine.as_deref().unwrap_or(self.engine);
@@ -55,7 +78,8 @@ impl Planned<'_> {
 }
 
 /// The control experiments of a successful job of `engine` on `scene` under the run's
-/// `settings`: the time step and penalty on any engine that steps, then the engine's own.
+/// `settings`: the time step ladder and the penalty on any engine that steps, then the
+/// engine's own.
 pub fn plan<'a>(
     scene: &'a Scene,
     engine: &'a dyn Engine,
@@ -64,10 +88,86 @@ pub fn plan<'a>(
 ) -> Vec<Planned<'a>> {
     let base = matching::job_settings(engine, scene, settings);
     let (h, steps) = (job.info.increment, job.info.steps);
-    let forced = |h: f64| Some(IncrementRule::Forced(h));
-    let same = |kind, change: String, settings| Planned {
+    let mut out = Vec::new();
+    if h > 0.0 && steps > 0 {
+        for rung in ladder(h, matching::matched_increment(scene, settings)) {
+            let change = format!(
+                "increment h/{} = {rung:.2e} s instead of {h:.2e} s",
+                divisor(h / rung)
+            );
+            let varied = RunSettings {
+                increment: Some(IncrementRule::Forced(rung)),
+                ..base
+            };
+            out.push(Planned {
+                control: Control {
+                    kind: ControlKind::TimeStep,
+                    change,
+                    engine: None,
+                    scene: None,
+                },
+                engine,
+                scene,
+                settings: varied,
+            });
+        }
+        if let Some(k) = job.info.penalty_stiffness {
+            for factor in [PENALTY_FACTOR, PENALTY_FACTOR * PENALTY_FACTOR] {
+                out.push(penalty(
+                    scene,
+                    engine,
+                    &base,
+                    h / factor.sqrt(),
+                    (k, factor),
+                ));
+            }
+        }
+    }
+    out.extend(own(scene, engine, settings, None));
+    out
+}
+
+/// The increments of the time step ladder below `h`: each a quarter of the one before, down
+/// to `matched` (the last rung is `matched` itself where the quarters pass it); one rung, h/4,
+/// where `h` is already at or below it.
+pub fn ladder(h: f64, matched: f64) -> Vec<f64> {
+    let mut rungs = vec![h / 4.0];
+    while rungs[rungs.len() - 1] > matched * (1.0 + 1e-9) {
+        let next = rungs[rungs.len() - 1] / 4.0;
+        rungs.push(next.max(matched));
+    }
+    rungs
+}
+
+/// A ratio of increments as a divisor: whole where it is one (4, 16), to three digits else.
+fn divisor(x: f64) -> String {
+    if (x - x.round()).abs() < 1e-6 * x {
+        format!("{x:.0}")
+    } else {
+        format!("{x:.3}")
+    }
+}
+
+/// A penalty control: the job's stiffness `k` × `factor` at `increment`.
+fn penalty<'a>(
+    scene: &'a Scene,
+    engine: &'a dyn Engine,
+    base: &RunSettings,
+    increment: f64,
+    (k, factor): (f64, f64),
+) -> Planned<'a> {
+    let settings = RunSettings {
+        increment: Some(IncrementRule::Forced(increment)),
+        penalty: Some(PenaltyRule::Stiffness(factor * k)),
+        ..*base
+    };
+    let change = format!(
+        "penalty stiffness {:.2e} instead of {k:.2e}, increment {increment:.2e} s",
+        factor * k,
+    );
+    Planned {
         control: Control {
-            kind,
+            kind: ControlKind::Penalty,
             change,
             engine: None,
             scene: None,
@@ -75,47 +175,57 @@ pub fn plan<'a>(
         engine,
         scene,
         settings,
-    };
-    let mut out = Vec::new();
-    if h > 0.0 && steps > 0 {
-        let interval = scene.duration() / (scene.output_rows - 1) as f64;
-        let divisors: &[f64] = if h > interval {
-            &[4.0, 16.0, 64.0]
-        } else {
-            &[4.0]
-        };
-        for d in divisors {
-            let settings = RunSettings {
-                increment: forced(h / d),
-                ..base
-            };
-            let change = format!("increment h/{d} = {:.2e} s instead of {h:.2e} s", h / d);
-            out.push(same(ControlKind::TimeStep, change, settings));
-        }
-        if let Some(k) = job.info.penalty_stiffness {
-            let settings = RunSettings {
-                increment: forced(h / PENALTY_FACTOR.sqrt()),
-                penalty: Some(PenaltyRule::Stiffness(PENALTY_FACTOR * k)),
-                ..base
-            };
-            let change = format!(
-                "penalty stiffness {:.2e} instead of {k:.2e}, increment h/{}",
-                PENALTY_FACTOR * k,
-                PENALTY_FACTOR.sqrt()
-            );
-            out.push(same(ControlKind::Penalty, change, settings));
-        }
     }
-    for control in engine.controls(scene) {
-        let runner = control.engine.as_deref().unwrap_or(engine);
-        let varied = control.scene.as_ref().unwrap_or(scene);
-        let settings = matching::job_settings(runner, varied, settings);
-        out.push(Planned {
-            control,
-            engine,
-            scene,
-            settings,
-        });
-    }
+}
+
+/// The engine's own controls ([`Engine::controls`]), each with the settings its job would
+/// have, forced to `increment` where one is given.
+fn own<'a>(
+    scene: &'a Scene,
+    engine: &'a dyn Engine,
+    settings: &RunSettings,
+    increment: Option<f64>,
+) -> Vec<Planned<'a>> {
+    engine
+        .controls(scene)
+        .into_iter()
+        .map(|mut control| {
+            let runner = control.engine.as_deref().unwrap_or(engine);
+            let varied = control.scene.as_ref().unwrap_or(scene);
+            let mut settings = matching::job_settings(runner, varied, settings);
+            if let Some(h) = increment {
+                settings.increment = Some(IncrementRule::Forced(h));
+                control.change = format!("{}, at increment {h:.2e} s", control.change);
+            }
+            Planned {
+                control,
+                engine,
+                scene,
+                settings,
+            }
+        })
+        .collect()
+}
+
+/// The controls combined with the time step: the penalty (where the job reports one) and the
+/// engine's own controls, each run at `increment`, the time step ladder's finest.
+pub fn combined<'a>(
+    scene: &'a Scene,
+    engine: &'a dyn Engine,
+    settings: &RunSettings,
+    job: &JobSuccess,
+    increment: f64,
+) -> Vec<Planned<'a>> {
+    let base = matching::job_settings(engine, scene, settings);
+    // The penalty control already runs at a quarter of the job's increment.
+    let finer = increment < job.info.increment / PENALTY_FACTOR.sqrt() * (1.0 - 1e-9);
+    let mut out: Vec<Planned> = job
+        .info
+        .penalty_stiffness
+        .filter(|_| finer)
+        .map(|k| penalty(scene, engine, &base, increment, (k, PENALTY_FACTOR)))
+        .into_iter()
+        .collect();
+    out.extend(own(scene, engine, settings, Some(increment)));
     out
 }

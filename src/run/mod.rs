@@ -32,7 +32,7 @@ pub mod controls;
 
 /// The engine trait, as the studies take engines: the comparison reaches engines only through
 /// this layer.
-pub use crate::engines::Engine;
+pub use crate::engines::{Engine, RunSettings};
 pub mod element_cost;
 pub mod floor;
 pub mod load;
@@ -49,7 +49,7 @@ pub use load::{
 };
 
 use crate::contract::{self, History};
-use crate::engines::{EngineError, RunInfo, RunSettings};
+use crate::engines::{EngineError, RunInfo, RunOutput};
 use crate::scene::{IncrementRule, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
@@ -94,17 +94,64 @@ pub struct JobResult {
     /// Wall-clock seconds of the whole job as the harness measured it (settings, engine run,
     /// contract check; available for failed jobs too).
     pub elapsed: f64,
-    /// The run, or why there is none.
+    /// The run, or why there is none (the engine's words: the reason it does not apply, the
+    /// evidence of its instability, or its failure).
     pub result: Result<JobSuccess, String>,
-    /// False where the engine does not do what the scene asks for (its refusal, with the
-    /// reason, is in `result`): not a failure, and not counted as one.
-    pub applicable: bool,
+    /// How the run came out, typed: what every verdict reads (never the message).
+    pub status: Status,
+}
+
+/// How a run came out, as the engine or the harness established it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Status {
+    /// It produced a finite history that meets the output contract.
+    Ok,
+    /// The engine does not model what the scene asks for ([`EngineError::Unsupported`]): not
+    /// a failure, and not counted as one.
+    NotApplicable,
+    /// Its state grew without bound: the engine stopped it as unstable
+    /// ([`EngineError::Unstable`]), or its history holds a non-finite value.
+    Unstable,
+    /// Any other failure: an error mid-run, a panic, a history that breaks the contract.
+    Failed,
+}
+
+impl Status {
+    /// The status of an engine's error.
+    pub fn of_error(e: &EngineError) -> Status {
+        match e {
+            EngineError::Unsupported(_) => Status::NotApplicable,
+            EngineError::Unstable(_) => Status::Unstable,
+            EngineError::UnstableIncrement { .. } | EngineError::Failed(_) => Status::Failed,
+        }
+    }
+
+    /// Its name in the report's files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Status::Ok => "ok",
+            Status::NotApplicable => "not applicable",
+            Status::Unstable => "unstable",
+            Status::Failed => "failed",
+        }
+    }
+
+    /// Whether the engine applies to the scene (it ran, or tried to).
+    pub fn applicable(self) -> bool {
+        self != Status::NotApplicable
+    }
 }
 
 impl JobResult {
     /// Whether the job produced its history.
     pub fn is_ok(&self) -> bool {
         self.result.is_ok()
+    }
+
+    /// Whether the engine applies to the scene (its refusal is not a failure).
+    pub fn applicable(&self) -> bool {
+        self.status.applicable()
     }
 }
 
@@ -131,7 +178,7 @@ impl Outcome {
     pub fn failures(&self) -> usize {
         self.jobs
             .iter()
-            .filter(|j| !j.is_ok() && j.applicable)
+            .filter(|j| !j.is_ok() && j.applicable())
             .count()
     }
 
@@ -160,10 +207,10 @@ impl Outcome {
                     "-".to_string(),
                     "-".to_string(),
                     format!("{:.3} s", j.elapsed),
-                    if j.applicable {
-                        format!("FAILED: {e}")
-                    } else {
-                        e.clone()
+                    match j.status {
+                        Status::NotApplicable => format!("not applicable: {e}"),
+                        Status::Unstable => format!("UNSTABLE: {e}"),
+                        _ => format!("FAILED: {e}"),
                     },
                 ],
             };
@@ -299,43 +346,50 @@ fn run_job(scene: &Scene, engine: &dyn Engine, settings: &RunSettings) -> JobRes
             engine: name,
             elapsed: 0.0,
             result: Err("interrupted before it ran".to_string()),
-            applicable: true,
+            status: Status::Failed,
         };
     }
     let result = panic::catch_unwind(AssertUnwindSafe(|| {
         let settings = matching::job_settings(engine, scene, settings);
         engine.run(scene, &settings)
-    }))
-    .map_err(|payload| format!("engine panicked: {}", panic_message(payload.as_ref())));
-    let applicable = !matches!(result, Ok(Err(EngineError::Unsupported(_))));
-    let result = result
-        .and_then(|r| r.map_err(|e| e.to_string()))
-        .and_then(|output| {
-            contract::check(scene, &output.history)
-                .map_err(|e| format!("history breaks the output contract: {e}"))?;
-            contract::check_finite(&output.history)?;
-            Ok(JobSuccess {
-                info: output.info,
-                history: output.history,
-            })
-        });
+    }));
+    let (result, status) = checked_run(scene, result);
     JobResult {
         case: scene.id.clone(),
         engine: name,
         elapsed: start.elapsed().as_secs_f64(),
-        result: result.map_err(|e| {
-            if applicable {
-                e
-            } else {
-                format!("{NOT_APPLICABLE}{e}")
-            }
-        }),
-        applicable,
+        result,
+        status,
     }
 }
 
-/// How the error of a job whose engine does not apply to the scene begins.
-pub const NOT_APPLICABLE: &str = "not applicable: ";
+/// An engine's run (or its panic) as a job's result and typed status: the history checked
+/// against the output contract (a non-finite value is instability, another breach a failure).
+pub fn checked_run(
+    scene: &Scene,
+    run: std::thread::Result<Result<RunOutput, EngineError>>,
+) -> (Result<JobSuccess, String>, Status) {
+    let output = match run {
+        Err(payload) => {
+            let message = format!("engine panicked: {}", panic_message(payload.as_ref()));
+            return (Err(message), Status::Failed);
+        }
+        Ok(Err(e)) => return (Err(e.to_string()), Status::of_error(&e)),
+        Ok(Ok(output)) => output,
+    };
+    if let Err(e) = contract::check(scene, &output.history) {
+        let message = format!("history breaks the output contract: {e}");
+        return (Err(message), Status::Failed);
+    }
+    if let Err(e) = contract::check_finite(&output.history) {
+        return (Err(e), Status::Unstable);
+    }
+    let success = JobSuccess {
+        info: output.info,
+        history: output.history,
+    };
+    (Ok(success), Status::Ok)
+}
 
 fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
     if let Some(s) = payload.downcast_ref::<&str>() {

@@ -27,11 +27,13 @@
 //! run the same points. Each point runs [`Grid::repeat`] times; the CPU seconds of each run are
 //! the running thread's own (`CLOCK_THREAD_CPUTIME_ID`), setup included.
 //!
-//! This layer measures nothing against a reference: the caller hands in how a history's error
-//! is measured ([`ErrorOf`]), which the stall rule needs.
+//! This layer measures and judges nothing: the caller hands in how a finished run is measured
+//! ([`ErrorOf`]: its error against the exact solution, which the stall rule needs, and whether
+//! its growth makes it unstable, the comparison's verdict). A point's status is otherwise the
+//! engine's own, typed ([`crate::engines::EngineError`]).
 
-use crate::contract::{self, History};
-use crate::engines::{Coarsest, Engine, RunSettings, Stepping};
+use crate::contract::History;
+use crate::engines::{Coarsest, Engine, RunInfo, RunSettings, Stepping};
 use crate::scene::{IncrementRule, PenaltyRule, Scene};
 use rayon::prelude::*;
 
@@ -136,6 +138,12 @@ pub enum PathKind {
         /// The increment.
         increment: f64,
     },
+    /// Runs toward an accuracy the increment path did not reach: the increment its
+    /// extrapolation predicts, then finer (the comparison's reach, `work_precision`).
+    Reach {
+        /// The accuracy aimed at (error over the peak).
+        target: f64,
+    },
 }
 
 /// One path of one engine.
@@ -164,16 +172,25 @@ impl SweepPath {
                 penalty_ratio: None,
             } => format!("{}, h", self.engine),
             PathKind::Substeps { .. } => format!("{}, substeps", self.engine),
+            PathKind::Reach { target } => format!("{}, to {target:.0e}", self.engine),
         }
     }
 }
 
-/// How the caller measures a history's error: engine name and history to (max, RMS), or
-/// `None` where it cannot (no baseline).
-pub type ErrorOf<'a> = dyn Fn(&str, &History) -> Option<(f64, f64)> + Sync + 'a;
+/// What the caller measures of a finished run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Measured {
+    /// (max, RMS) over the peak against the exact solution (`None`: no baseline).
+    pub error: Option<(f64, f64)>,
+    /// Whether the run's energy kept growing: the comparison's verdict on its history.
+    pub growing: bool,
+}
 
-/// How the caller measures a history's error on a scene (see [`ErrorOf`]).
-pub type SceneErrorOf<'a> = dyn Fn(&Scene, &str, &History) -> Option<(f64, f64)> + Sync + 'a;
+/// How the caller measures a finished run: engine name, history and increments taken.
+pub type ErrorOf<'a> = dyn Fn(&str, &History, u64) -> Measured + Sync + 'a;
+
+/// How the caller measures a finished run on a scene (see [`ErrorOf`]).
+pub type SceneErrorOf<'a> = dyn Fn(&Scene, &str, &History, u64) -> Measured + Sync + 'a;
 
 /// The engines of `engines` a sweep can run: those that step in time ([`Engine::stepping`]).
 pub fn steppers<'a>(engines: &[&'a dyn Engine]) -> Vec<&'a dyn Engine> {
@@ -247,7 +264,7 @@ pub fn run(
     let done: Vec<(usize, SweepPath)> = jobs
         .par_iter()
         .map(|(i, scene, engine, kind)| {
-            let error = |e: &str, h: &History| error_of(scene, e, h);
+            let error = |e: &str, h: &History, steps: u64| error_of(scene, e, h, steps);
             let path = run_path(scene, *engine, *kind, grid, &error);
             tick(&format!("{}/{}", scene.id, path.label()));
             (*i, path)
@@ -275,6 +292,30 @@ pub fn thread_cpu_seconds() -> f64 {
     ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
 }
 
+/// One run of `engine` on `scene` at `increment` (forced) with its own substeps, timed: a
+/// point of a path toward an accuracy ([`PathKind::Reach`]).
+pub fn run_at(scene: &Scene, engine: &dyn Engine, increment: f64, error: &ErrorOf) -> Point {
+    let settings = RunSettings {
+        increment: Some(IncrementRule::Forced(increment)),
+        ..RunSettings::default()
+    };
+    let iterations = engine.stepping().and_then(|s| s.substeps);
+    run_point(scene, engine, &settings, iterations, 1, error)
+}
+
+/// The increments (substeps counted) a run of `engine` on `scene` at `increment` takes.
+pub fn increments_at(scene: &Scene, engine: &dyn Engine, increment: f64) -> f64 {
+    let settings = RunSettings {
+        increment: Some(IncrementRule::Forced(increment)),
+        ..RunSettings::default()
+    };
+    let substeps = engine.stepping().and_then(|s| s.substeps).unwrap_or(1) as f64;
+    engine
+        .increments(scene, &settings)
+        .unwrap_or(scene.duration() / increment)
+        * substeps
+}
+
 /// One setting run `repeat` times.
 fn run_point(
     scene: &Scene,
@@ -289,85 +330,70 @@ fn run_point(
         _ => 0.0,
     };
     let mut cpu = Vec::new();
-    type Measured = (f64, u64, Option<f64>, Option<f64>, Option<(f64, f64)>);
-    let mut first: Option<Result<Measured, String>> = None;
+    type Finished = (RunInfo, Measured);
+    let mut first: Option<Result<Finished, (Status, String)>> = None;
     for _ in 0..repeat.max(1) {
         if crate::interrupt::checkpoint("sweep").is_err() {
-            first.get_or_insert(Err("interrupted".into()));
+            first.get_or_insert(Err((Status::Failed, "interrupted".into())));
             break;
         }
         let start = thread_cpu_seconds();
-        let out = engine.run(scene, settings).map_err(|e| e.to_string());
-        let checked = out.and_then(|o| {
-            contract::check(scene, &o.history)?;
-            contract::check_finite(&o.history)?;
-            Ok(o)
-        });
+        let run =
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| engine.run(scene, settings)));
+        let (checked, status) = crate::run::checked_run(scene, run);
         cpu.push(thread_cpu_seconds() - start);
         let failed = checked.is_err();
         if first.is_none() {
-            first = Some(checked.map(|o| {
-                (
-                    o.info.increment,
-                    o.info.steps,
-                    o.info.stable_increment,
-                    o.info.penalty_stiffness,
-                    error(engine.name(), &o.history),
-                )
-            }));
+            first = Some(match checked {
+                Ok(o) => {
+                    let measured = error(engine.name(), &o.history, o.info.steps);
+                    Ok((o.info, measured))
+                }
+                Err(message) => Err((status.into(), message)),
+            });
         }
         if failed {
             break;
         }
     }
     match first.expect("at least one run") {
-        Ok((increment, steps, stable_increment, penalty_stiffness, error)) => {
-            // Above its stable increment a penalty contact can chatter without its energy
-            // growing past the engine's guard (the contact opens, so the unstable mode stays
-            // bounded): such a run finishes but holds nothing of the answer.
-            let above = stable_increment.is_some_and(|s| increment > s * (1.0 + 1e-9));
-            let lost = error.is_some_and(|e| e.0 > 1.0);
-            let (status, message) = if above && lost {
-                (
-                    Status::Unstable,
-                    Some(format!(
-                        "finished above the stable increment {:e} with an error of {:.2e} of the peak",
-                        stable_increment.unwrap_or(0.0),
-                        error.map_or(0.0, |e| e.0)
-                    )),
-                )
+        Ok((info, measured)) => Point {
+            increment: info.increment,
+            penalty_stiffness: info.penalty_stiffness,
+            iterations,
+            steps: info.steps,
+            stable_increment: info.stable_increment,
+            error: measured.error,
+            cpu_seconds: cpu,
+            status: if measured.growing {
+                Status::Unstable
             } else {
-                (Status::Ok, None)
-            };
-            Point {
-                increment,
-                penalty_stiffness,
-                iterations,
-                steps,
-                stable_increment,
-                error,
-                cpu_seconds: cpu,
-                status,
-                message,
-            }
-        }
-        Err(message) => {
-            let unstable = message.contains("unstable") || message.contains("non-finite");
-            Point {
-                increment: requested,
-                penalty_stiffness: None,
-                iterations,
-                steps: 0,
-                stable_increment: None,
-                error: None,
-                cpu_seconds: cpu,
-                status: if unstable {
-                    Status::Unstable
-                } else {
-                    Status::Failed
-                },
-                message: Some(message),
-            }
+                Status::Ok
+            },
+            message: measured
+                .growing
+                .then(|| "its energy kept growing to the end of the run".to_string()),
+        },
+        Err((status, message)) => Point {
+            increment: requested,
+            penalty_stiffness: None,
+            iterations,
+            steps: 0,
+            stable_increment: None,
+            error: None,
+            cpu_seconds: cpu,
+            status,
+            message: Some(message),
+        },
+    }
+}
+
+impl From<crate::run::Status> for Status {
+    fn from(s: crate::run::Status) -> Status {
+        match s {
+            crate::run::Status::Ok => Status::Ok,
+            crate::run::Status::Unstable => Status::Unstable,
+            crate::run::Status::NotApplicable | crate::run::Status::Failed => Status::Failed,
         }
     }
 }
@@ -393,6 +419,7 @@ fn run_path(
     let count = match kind {
         PathKind::Substeps { .. } => grid.substeps.len().min(grid.max_points),
         PathKind::Increment { .. } => grid.max_points,
+        PathKind::Reach { .. } => 0,
     };
     let mut probe: Option<Point> = None;
     let mut stalls = 0;
@@ -467,7 +494,6 @@ const UNSTEPPED: Stepping = Stepping {
     substeps: None,
     budget_share: 1.0,
     precision: "f64",
-    energy_reading: crate::engines::central_difference_energy_reading,
     on_request: false,
 };
 

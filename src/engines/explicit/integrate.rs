@@ -671,7 +671,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         } else {
             String::new()
         };
-        EngineError::Failed(format!(
+        EngineError::Unstable(format!(
             "{what} by t = {t:e}: the run is unstable at increment {h:e} (stable increment: {limit}){mode}"
         ))
     }

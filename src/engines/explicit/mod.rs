@@ -108,7 +108,6 @@ impl Engine for ExplicitEngine {
             substeps: None,
             budget_share: 1.0,
             precision: "f64",
-            energy_reading: super::central_difference_energy_reading,
             on_request: true,
         })
     }

@@ -615,7 +615,7 @@ macro_rules! backend {
                                 && s.angvel.iter().all(|x| x.is_finite())
                         }) && forces.iter().all(|f| f.is_finite());
                         if !finite || quarantined(&world) {
-                            return Err(EngineError::Failed(format!(
+                            return Err(EngineError::Unstable(format!(
                                 "rapier: the state became non-finite by t = {t:e} (dt = {dt:e})"
                             )));
                         }

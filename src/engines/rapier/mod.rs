@@ -539,8 +539,6 @@ impl Engine for RapierEngine {
             },
             // It answers `--tolerance` too, but its pilot runs cost about 40 s on the seed
             // cases at 1e-3 (measured), more than the default run's whole budget for the study.
-            // Rapier's implicit steps dissipate; it is held to central differences' reading.
-            energy_reading: super::central_difference_energy_reading,
             on_request: false,
         })
     }

@@ -439,7 +439,7 @@ impl<'a> Recorder<'a> {
         }
         self.resolve(true);
         if let Some(row) = self.rows.iter().find(|r| r.iter().any(|x| !x.is_finite())) {
-            return Err(EngineError::Failed(format!(
+            return Err(EngineError::Unstable(format!(
                 "rapier: non-finite output at t = {:e}",
                 row[0]
             )));

@@ -1,19 +1,19 @@
-//! `summary.json`: every metric of a run, per case and engine, with what each run used and
-//! cost. REPORT.md is rendered from the same [`Summary`], so their numbers agree.
+//! A run judged: every metric and verdict of a run, per case and engine, with what each run
+//! used and cost, decided by [`super::verdict`]'s rules. The report writes it as
+//! `summary.json` and renders REPORT.md from it, so their numbers agree; it decides nothing.
 
 use crate::comparison::attribution::Attribution;
 use crate::comparison::contact::{self, Impacts};
 use crate::comparison::discrepancy::{ColumnBudget, JobBudget, PARTS};
 use crate::comparison::equivalence::{self, Equivalence};
-use crate::comparison::work_precision::{CaseSweep, CostToAccuracy, Floor, ObservedOrder};
-use crate::comparison::{self, CLOSED_FORM, Comparison, ContactValidity};
+use crate::comparison::verdict::cost::CostToAccuracy;
+use crate::comparison::work_precision::{CaseSweep, Floor, ObservedOrder};
+use crate::comparison::{self, CLOSED_FORM, Comparison, ContactValidity, verdict};
 use crate::contract::History;
-use crate::report::data::{csv_path, read_history};
-use crate::run::{JobResult, Outcome, Plan};
+use crate::run::{JobResult, Outcome, Plan, Status};
 use crate::scene::{Dimension, Scene};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
-use std::path::Path;
 
 /// The whole run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -31,11 +31,20 @@ pub struct Summary {
     /// equivalent in every engine ([`crate::comparison::equivalence`]).
     #[serde(default)]
     pub equivalences: Vec<Equivalence>,
+    /// Parameters a case's exact solution ignores, each cell run at both of their values
+    /// ([`crate::comparison::invariance`]).
+    #[serde(default)]
+    pub invariances: Vec<crate::comparison::invariance::Invariance>,
+    /// Extrapolated costs checked by runs at the increment they predict
+    /// ([`crate::comparison::reach`]).
+    #[serde(default)]
+    pub checks: Vec<crate::comparison::reach::Check>,
 }
 
 /// The layout of `summary.json` this build writes. 1: `schema_version`, `cost_to_accuracy`
-/// and `critical_increment` on each run.
-pub const SCHEMA_VERSION: u32 = 1;
+/// and `critical_increment` on each run; 2: each run's typed `status`, the critical
+/// increment's `own_step`, orientation compared as a rotation.
+pub const SCHEMA_VERSION: u32 = 2;
 
 /// Pairs of engines compared with each other, (candidate, reference):
 /// - `explicit` against `explicit_small`: finite against small rotation, same integrator: the
@@ -88,7 +97,9 @@ pub struct CaseSummary {
 pub struct EngineSummary {
     /// Engine name.
     pub engine: String,
-    /// Why the run failed, if it did.
+    /// How the run came out (typed): what every verdict reads.
+    pub status: Status,
+    /// Why the run did not finish, in the engine's words, if it did not.
     pub error: Option<String>,
     /// Time increment used (0 for closed forms).
     pub increment: Option<f64>,
@@ -151,7 +162,7 @@ pub struct EngineSummary {
     pub critical_increment: Option<CriticalIncrement>,
 }
 
-/// The largest increment at which a run stays bounded ([`crate::run::stability::Critical`]).
+/// The largest increment at which a run stays bounded ([`super::stability::Critical`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CriticalIncrement {
     /// Seconds.
@@ -161,6 +172,21 @@ pub struct CriticalIncrement {
     /// `bisected` (to 1 %), `at_least` (bounded up to the largest ratio tried) or `below`
     /// (unstable down to the smallest).
     pub bound: String,
+    /// The largest increment the engine runs at anywhere in the report, seconds: an
+    /// `at_least` bound below it says nothing of the engine's own runs.
+    #[serde(default)]
+    pub own_step: f64,
+    /// Whether the map's run at the increment the engine's job ran at stayed bounded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bounded_at_own_step: Option<bool>,
+}
+
+impl CriticalIncrement {
+    /// Whether it answers the question for the engine's own runs (see
+    /// [`super::stability::Critical::covers_own_step`]).
+    pub fn covers_own_step(&self) -> bool {
+        self.bound != "at_least" || self.seconds >= self.own_step * (1.0 - 1e-9)
+    }
 }
 
 impl CaseSummary {
@@ -192,10 +218,14 @@ impl EngineSummary {
 impl Summary {
     /// Build from a run's plan and outcome.
     ///
-    /// Histories of engines this run did not include are read from the CSVs already in `out`
-    /// (a run of some engines still compares against the analytic answer on disk); a failed
-    /// job whose CSV from an earlier run is still in `out` says so.
-    pub fn build(plan: &Plan, outcome: &Outcome, out: &Path) -> Summary {
+    /// Histories of engines this run did not include come from `earlier` (the report's CSVs
+    /// from an earlier run: a run of some engines still compares against the analytic answer on
+    /// disk); a failed job whose history from an earlier run is still there says so.
+    pub fn build(
+        plan: &Plan,
+        outcome: &Outcome,
+        earlier: &dyn Fn(&str, &str) -> Option<History>,
+    ) -> Summary {
         let history = |case: &str, engine: &str| -> Option<History> {
             match outcome
                 .jobs
@@ -203,7 +233,7 @@ impl Summary {
                 .find(|j| j.case == case && j.engine == engine)
             {
                 Some(j) => j.result.as_ref().ok().map(|s| s.history.clone()),
-                None => read_history(&csv_path(out, case, engine)).ok(),
+                None => earlier(case, engine),
             }
         };
         let cases = plan
@@ -217,7 +247,7 @@ impl Summary {
                     .iter()
                     .filter(|j| j.case == scene.id)
                     .map(|j| {
-                        let stale = !j.is_ok() && csv_path(out, &j.case, &j.engine).exists();
+                        let stale = !j.is_ok() && earlier(&j.case, &j.engine).is_some();
                         // The engine's own model's exact solution, or the closed form where
                         // that is missing (the reference refused the scene, or did not run).
                         let baseline = comparison::baseline(&j.engine).and_then(|b| {
@@ -263,6 +293,8 @@ impl Summary {
             schema_version: SCHEMA_VERSION,
             generator: format!("crosscheck {}", env!("CARGO_PKG_VERSION")),
             equivalences: equivalence::measure(&plan.cases, &engines, history),
+            invariances: Vec::new(),
+            checks: Vec::new(),
             engines,
             cases,
         }
@@ -271,6 +303,7 @@ impl Summary {
     /// Keep what `previous` had for cases and engines this summary lacks (a run of some cases or
     /// engines must not lose the others' results).
     pub fn merge_previous(&mut self, previous: Summary) {
+        let ran: Vec<String> = self.cases.iter().map(|c| c.id.clone()).collect();
         for old_case in previous.cases {
             match self.cases.iter_mut().find(|c| c.id == old_case.id) {
                 None => self.cases.push(old_case),
@@ -292,6 +325,21 @@ impl Summary {
                 }
             }
         }
+        self.checks.extend(
+            previous
+                .checks
+                .into_iter()
+                .filter(|c| !ran.contains(&c.case)),
+        );
+        for old in previous.invariances {
+            if !self
+                .invariances
+                .iter()
+                .any(|i| i.case == old.case && i.parameter == old.parameter)
+            {
+                self.invariances.push(old);
+            }
+        }
         for old in previous.equivalences {
             if !self
                 .equivalences
@@ -307,10 +355,7 @@ impl Summary {
             }
         }
         // Report order: cases by id, engines as `engines::all()` lists them.
-        let canonical: Vec<String> = crate::engines::all()
-            .iter()
-            .map(|e| e.name().to_string())
-            .collect();
+        let canonical: Vec<String> = crate::run::engine_names();
         let order = |name: &str| {
             canonical
                 .iter()
@@ -321,6 +366,8 @@ impl Summary {
         self.cases.sort_by(|a, b| a.id.cmp(&b.id));
         self.equivalences
             .sort_by(|a, b| (&a.same_as, &a.case).cmp(&(&b.same_as, &b.case)));
+        self.invariances
+            .sort_by(|a, b| (&a.case, &a.parameter).cmp(&(&b.case, &b.parameter)));
         for c in &mut self.cases {
             c.runs.sort_by_key(|r| order(&r.engine));
         }
@@ -359,25 +406,35 @@ impl Summary {
     /// Put each engine's observed order and floor from the sweeps on its run entry.
     pub fn attach_sweeps(&mut self, sweeps: &[CaseSweep]) {
         for sweep in sweeps {
+            self.checks.retain(|c| c.case != sweep.case);
+            self.checks.extend(sweep.checks.iter().cloned());
             for fit in &sweep.fits {
                 if let Some(run) = self.run_mut(&sweep.case, &fit.engine) {
                     run.observed_order = fit.observed_order.as_ref().map(|o| o.value);
                     run.order_fit = fit.observed_order.clone();
                     run.floor = fit.floor.clone();
-                    run.cost_to_accuracy = crate::comparison::work_precision::costs(sweep, fit);
+                    run.cost_to_accuracy = verdict::cost::costs(sweep, fit);
                 }
             }
         }
     }
 
-    /// Put each pair's critical increment on its run.
-    pub fn attach_critical(&mut self, critical: &[crate::run::stability::Critical]) {
-        for c in critical {
+    /// Put each pair's critical increment, and whether its run at its own step stayed bounded,
+    /// on its run.
+    pub fn attach_critical(&mut self, map: &super::stability::Map) {
+        for c in &map.critical {
+            let own = map.points.iter().find(|p| {
+                p.case == c.case
+                    && p.engine == c.engine
+                    && p.search == super::stability::Search::OwnStep
+            });
             if let Some(run) = self.run_mut(&c.case, &c.engine) {
                 run.critical_increment = Some(CriticalIncrement {
                     seconds: c.increment,
                     explicit_ratio: c.explicit_ratio(),
                     bound: c.bound.name().to_string(),
+                    own_step: c.own_step,
+                    bounded_at_own_step: own.map(|p| p.outcome.bounded()),
                 });
             }
         }
@@ -419,12 +476,11 @@ impl Summary {
                     }
                     // Compared over no row: the engine does not apply there. A cell compared
                     // over rows but with no column with a peak is counted, unjudged.
-                    let measured = match (&r.error, &r.against_baseline) {
-                        (Some(e), _) if e.starts_with(crate::run::NOT_APPLICABLE) => return None,
-                        (Some(_), _) => None,
-                        (None, Some(a)) if a.rows > 0 => a.worst_max,
-                        (None, _) => return None,
-                    };
+                    let rows = r.against_baseline.as_ref().map(|a| a.rows);
+                    if !verdict::is_cell(r.status, rows) {
+                        return None;
+                    }
+                    let measured = r.against_baseline.as_ref().and_then(|a| a.worst_max);
                     Some(ToleranceCheck {
                         case: &c.id,
                         engine: &r.engine,
@@ -471,10 +527,11 @@ fn engine_summary(
     baseline: Option<&(&str, History)>,
     stale_csv: bool,
 ) -> EngineSummary {
-    let tolerance = comparison::tolerance(scene, &job.engine);
+    let tolerance = verdict::tolerance(scene, &job.engine);
     match &job.result {
         Err(e) => EngineSummary {
             engine: job.engine.clone(),
+            status: job.status,
             error: Some(if stale_csv {
                 format!("{e} (a CSV from an earlier run is still in place)")
             } else {
@@ -490,7 +547,7 @@ fn engine_summary(
             baseline: baseline.map(|b| b.0.to_string()),
             against_baseline: None,
             tolerance,
-            meets_tolerance: tolerance.map(|_| false),
+            meets_tolerance: verdict::meets(job.status, None, tolerance),
             budget: None,
             budget_error: None,
             observed_order: None,
@@ -506,12 +563,11 @@ fn engine_summary(
                 .then(|| reference.map(|r| comparison::compare(scene, r, &s.history)))
                 .flatten();
             let judged = baseline.map(|(_, b)| comparison::compare(scene, b, &s.history));
-            let meets = match (&judged, tolerance) {
-                (Some(c), Some(t)) => c.worst_max.map(|w| w <= t),
-                _ => None,
-            };
+            let worst = judged.as_ref().and_then(|c| c.worst_max);
+            let meets = verdict::meets(job.status, worst, tolerance);
             EngineSummary {
                 engine: job.engine.clone(),
+                status: job.status,
                 error: None,
                 increment: Some(s.info.increment),
                 steps: Some(s.info.steps),
@@ -536,9 +592,4 @@ fn engine_summary(
             }
         }
     }
-}
-
-/// Whether a run's error says its engine does not apply to the scene.
-pub(super) fn not_applicable(error: &str) -> bool {
-    error.starts_with(crate::run::NOT_APPLICABLE)
 }

@@ -1,0 +1,268 @@
+//! What reaching an accuracy costs an engine on a case, from its sweep: the cheapest run
+//! within it (the sweep's, or a run toward it, [`crate::comparison::reach`]); else the floor
+//! that stops it above the accuracy; else an extrapolation along the engine's observed order,
+//! where that is an asymptotic range that has not begun to level; else not reached.
+//!
+//! A floor is never extrapolated across. The floors: where a sweep path stalled (the sweep's
+//! floor, with its cause); f32 round-off (the f32 engine's f64 twin twice as accurate at its
+//! most refined setting); a levelling error (the local order of the fitted path's last two
+//! points below half the fitted order); and where runs toward the accuracy levelled.
+
+use crate::comparison::reach::Ended;
+use crate::comparison::work_precision::{CaseSweep, EngineFit, Floor, Row, TARGETS};
+use serde::{Deserialize, Serialize};
+
+/// How an engine fares against an accuracy target.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Reach<'a> {
+    /// The cheapest ok point (least minimum CPU time) whose error is within the target.
+    Reached(&'a Row),
+    /// Not reached; the smallest error the engine attains (None: no ok point).
+    NotReached(Option<f64>),
+}
+
+/// The cheapest row of `engine` within `target`.
+pub fn cheapest<'a>(rows: &'a [Row], engine: &str, target: f64) -> Reach<'a> {
+    let own = rows
+        .iter()
+        .filter(|r| r.engine == engine && r.status == "ok");
+    let mut best: Option<&Row> = None;
+    let mut smallest: Option<f64> = None;
+    for r in own {
+        let Some(e) = r.error_max else { continue };
+        smallest = Some(smallest.map_or(e, |s: f64| s.min(e)));
+        if e <= target && best.is_none_or(|b| r.cpu_s_min < b.cpu_s_min) {
+            best = Some(r);
+        }
+    }
+    best.map_or(Reach::NotReached(smallest), Reach::Reached)
+}
+
+/// How a time to accuracy was found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Reached {
+    /// A swept point within the target: the cheapest such.
+    Measured,
+    /// Beyond the sweep, along the observed order from its most accurate point.
+    Extrapolated,
+    /// Refinement stopped paying above the target (the floor is named).
+    Floor,
+    /// Runs toward the target checked the extrapolation and did not reach it within their
+    /// budget: it costs more than the CPU time given (that of the costliest such run).
+    AtLeast,
+    /// Neither reached nor extrapolable (no asymptotic range).
+    NotReached,
+}
+
+/// What reaching an accuracy costs an engine on a case.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CostToAccuracy {
+    /// The accuracy asked for: largest error over the peak, worst column.
+    pub target: f64,
+    /// How it was found.
+    pub reached: Reached,
+    /// CPU seconds per simulated second (measured or extrapolated).
+    pub cpu_s_per_simulated_s: Option<f64>,
+    /// The order it was extrapolated along (error ∝ hᵖ, CPU time ∝ 1/h).
+    pub order: Option<f64>,
+    /// The error of the point it was measured at or extrapolated from; for a floor, the floor.
+    pub error: Option<f64>,
+    /// The increment it was measured at, or that the extrapolation predicts, seconds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub increment: Option<f64>,
+    /// For a floor, what limits it.
+    pub cause: Option<String>,
+}
+
+/// What each of [`TARGETS`] costs `fit`'s engine on `sweep`'s case (see the module doc):
+/// extrapolated along the observed order p from the engine's most accurate point on the path
+/// the order was fitted on, CPU time × (error / target)^(1/p) at increment × (target /
+/// error)^(1/p) (CPU time ∝ 1/h, error ∝ hᵖ).
+pub fn costs(sweep: &CaseSweep, fit: &EngineFit) -> Vec<CostToAccuracy> {
+    let rows: Vec<Row> = sweep
+        .paths
+        .iter()
+        .filter(|p| p.engine == fit.engine)
+        .flat_map(|p| sweep.path_rows(p))
+        .collect();
+    // The points to extrapolate from: the fitted path's (every path of the engine for the
+    // penalty diagonal, which is not one path).
+    let along: Vec<Row> = match &fit.observed_order {
+        Some(o) => {
+            let path: Vec<Row> = sweep
+                .paths
+                .iter()
+                .filter(|p| p.engine == fit.engine && p.label() == o.path)
+                .flat_map(|p| sweep.path_rows(p))
+                .collect();
+            if path.is_empty() { rows.clone() } else { path }
+        }
+        None => Vec::new(),
+    };
+    let ok: Vec<&Row> = along
+        .iter()
+        .filter(|r| r.status == "ok" && r.error_max.is_some())
+        .collect();
+    let best = ok
+        .iter()
+        .filter_map(|r| Some((r.error_max?, r.cpu_s_min, r.increment)))
+        .min_by(|a, b| a.0.total_cmp(&b.0));
+    let order = fit.observed_order.as_ref().map(|o| o.value);
+    let floor = fit
+        .floor
+        .clone()
+        .or_else(|| order.and_then(|p| levelling(&ok, p, &fit.engine)));
+    TARGETS
+        .iter()
+        .map(|&target| {
+            let mut cost = CostToAccuracy {
+                target,
+                reached: Reached::NotReached,
+                cpu_s_per_simulated_s: None,
+                order: None,
+                error: None,
+                increment: None,
+                cause: None,
+            };
+            if let Reach::Reached(r) = cheapest(&rows, &fit.engine, target) {
+                cost.reached = Reached::Measured;
+                cost.cpu_s_per_simulated_s = Some(r.cpu_s_min);
+                cost.error = r.error_max;
+                cost.increment = Some(r.increment);
+                return cost;
+            }
+            let smallest = rows
+                .iter()
+                .filter(|r| r.status == "ok")
+                .filter_map(|r| r.error_max)
+                .reduce(f64::min);
+            let check = sweep
+                .checks
+                .iter()
+                .find(|c| c.engine == fit.engine && c.target == target);
+            let checked = check.filter(|c| c.ended == Ended::Levelled);
+            if let Some(c) = check.filter(|c| c.ended == Ended::Budget && !c.runs.is_empty()) {
+                cost.reached = Reached::AtLeast;
+                cost.cpu_s_per_simulated_s = c.runs.iter().map(|r| r.2).reduce(f64::max);
+                cost.error = c.runs.iter().filter_map(|r| r.1).reduce(f64::min);
+                cost.increment = c.runs.iter().map(|r| r.0).reduce(f64::min);
+                return cost;
+            }
+            match (&floor, checked, order, best) {
+                (Some(f), _, _, _) if f.value > target => {
+                    cost.reached = Reached::Floor;
+                    cost.error = Some(f.value);
+                    cost.cause = Some(f.cause.clone());
+                }
+                (_, Some(_), _, _) => {
+                    cost.reached = Reached::Floor;
+                    cost.error = smallest;
+                    cost.cause = Some(if fit.engine.contains("f32") {
+                        "f32 round-off (runs toward the accuracy level off)".into()
+                    } else {
+                        "runs toward the accuracy level off".into()
+                    });
+                }
+                (_, _, Some(p), Some((e, cpu, h))) if p >= MIN_EXTRAPOLATED_ORDER => {
+                    cost.reached = Reached::Extrapolated;
+                    cost.cpu_s_per_simulated_s = Some(cpu * (e / target).powf(1.0 / p));
+                    cost.increment = Some(h * (target / e).powf(1.0 / p));
+                    cost.order = Some(p);
+                    cost.error = Some(e);
+                }
+                _ => cost.error = smallest,
+            }
+            cost
+        })
+        .collect()
+}
+
+/// A floor where the fitted path's error is levelling: the local order of its last two ok
+/// points below half the fitted order `p` (its smallest error; f32 round-off for an f32
+/// engine).
+fn levelling(ok: &[&Row], p: f64, engine: &str) -> Option<Floor> {
+    let [a, b] = [ok.get(ok.len().checked_sub(2)?)?, ok.last()?];
+    let (ea, eb) = (a.error_max?, b.error_max?);
+    let local = (ea / eb).ln() / (a.increment / b.increment).ln();
+    (local < p / 2.0).then(|| Floor {
+        value: eb.min(ea),
+        cause: if engine.contains("f32") {
+            format!("f32 round-off: levelling (local order {local:.2}, fitted {p:.2})")
+        } else {
+            format!("levelling: local order {local:.2}, under half the fitted {p:.2}")
+        },
+        path: b.path.clone(),
+    })
+}
+
+/// Below this observed order a time to accuracy is not extrapolated (a slope that shallow is
+/// not an asymptotic range).
+pub const MIN_EXTRAPOLATED_ORDER: f64 = 0.5;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::comparison::work_precision::fit;
+    use crate::run::sweep::{self, PathKind, Status, SweepPath};
+
+    /// A first-order engine whose CPU time per simulated second is 1/h: error h, so the time to
+    /// an error ε is 1/ε, measured or not.
+    fn first_order(finest: i32) -> CaseSweep {
+        let points = (0..=finest)
+            .map(|k| {
+                let h = 10f64.powi(-k);
+                sweep::Point {
+                    increment: h,
+                    penalty_stiffness: None,
+                    iterations: None,
+                    steps: (1.0 / h) as u64,
+                    stable_increment: None,
+                    error: Some((h, h)),
+                    cpu_seconds: vec![1.0 / h],
+                    status: Status::Ok,
+                    message: None,
+                }
+            })
+            .collect();
+        let path = SweepPath {
+            engine: "rapier_f64".into(),
+            precision: "f64",
+            kind: PathKind::Increment {
+                penalty_ratio: None,
+            },
+            points,
+            ended: "budget",
+        };
+        let fits = vec![fit("rapier_f64", std::slice::from_ref(&path), false)];
+        CaseSweep {
+            case: "synthetic".into(),
+            duration: 1.0,
+            paths: vec![path],
+            fits,
+            checks: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn a_cost_beyond_the_sweep_is_extrapolated_along_the_observed_order() {
+        let sweep = first_order(2); // errors 1, 0.1, 0.01
+        let found = costs(&sweep, &sweep.fits[0]);
+        let at = |t: f64| found.iter().find(|c| c.target == t).unwrap();
+        assert_eq!(at(1e-2).reached, Reached::Measured);
+        assert_eq!(at(1e-2).cpu_s_per_simulated_s, Some(100.0));
+        // 1e-4 and 1e-6: along order 1 from the finest point, 1/ε (to round-off).
+        for t in [1e-4, 1e-6] {
+            let c = at(t);
+            assert_eq!(c.reached, Reached::Extrapolated);
+            assert!((c.order.unwrap() - 1.0).abs() < 1e-12);
+            let cpu = c.cpu_s_per_simulated_s.unwrap();
+            assert!((cpu * t - 1.0).abs() < 1e-9, "{t}: {cpu}");
+        }
+        // Swept further, the same figure is measured.
+        let further = first_order(4);
+        let measured = costs(&further, &further.fits[0]);
+        assert_eq!(measured[1].reached, Reached::Measured);
+        assert!((measured[1].cpu_s_per_simulated_s.unwrap() * 1e-4 - 1.0).abs() < 1e-9);
+    }
+}

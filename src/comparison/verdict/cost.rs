@@ -209,20 +209,28 @@ mod tests {
     /// A first-order engine whose CPU time per simulated second is 1/h: error h, so the time to
     /// an error ε is 1/ε, measured or not.
     fn first_order(finest: i32) -> CaseSweep {
-        let points = (0..=finest)
-            .map(|k| {
-                let h = 10f64.powi(-k);
-                sweep::Point {
-                    increment: h,
-                    penalty_stiffness: None,
-                    iterations: None,
-                    steps: (1.0 / h) as u64,
-                    stable_increment: None,
-                    error: Some((h, h)),
-                    cpu_seconds: vec![1.0 / h],
-                    status: Status::Ok,
-                    message: None,
-                }
+        along(
+            (0..=finest)
+                .map(|k| 10f64.powi(-k))
+                .map(|h| (h, h))
+                .collect(),
+        )
+    }
+
+    /// A sweep of `rapier_f64` over the (increment, error) points given, CPU time 1/h.
+    fn along(errors: Vec<(f64, f64)>) -> CaseSweep {
+        let points = errors
+            .into_iter()
+            .map(|(h, e)| sweep::Point {
+                increment: h,
+                penalty_stiffness: None,
+                iterations: None,
+                steps: (1.0 / h) as u64,
+                stable_increment: None,
+                error: Some((e, e)),
+                cpu_seconds: vec![1.0 / h],
+                status: Status::Ok,
+                message: None,
             })
             .collect();
         let path = SweepPath {
@@ -264,5 +272,50 @@ mod tests {
         let measured = costs(&further, &further.fits[0]);
         assert_eq!(measured[1].reached, Reached::Measured);
         assert!((measured[1].cpu_s_per_simulated_s.unwrap() * 1e-4 - 1.0).abs() < 1e-9);
+    }
+
+    /// An error that falls as h and then levels (its last local order 0.10, under half the
+    /// fitted one) is a floor: 1e-4 is not extrapolated across it.
+    #[test]
+    fn a_levelling_error_is_a_floor_not_an_extrapolation() {
+        let sweep = along(vec![(1.0, 1.0), (0.1, 0.1), (0.01, 0.01), (0.001, 0.008)]);
+        let found = costs(&sweep, &sweep.fits[0]);
+        let c = found.iter().find(|c| c.target == 1e-4).unwrap();
+        assert_eq!(c.reached, Reached::Floor, "{c:?}");
+        assert_eq!(c.error, Some(0.008));
+        assert!(
+            c.cause.as_deref().unwrap().starts_with("levelling"),
+            "{c:?}"
+        );
+    }
+
+    /// A run at the increment an extrapolation predicts that falls short, with the next over
+    /// the budget, turns the cost into a lower bound: the CPU time of that run, and its error.
+    #[test]
+    fn a_checked_extrapolation_that_falls_short_is_a_lower_bound() {
+        use crate::comparison::reach::{Check, Ended};
+        let mut sweep = first_order(2);
+        sweep.checks.push(Check {
+            case: "synthetic".into(),
+            engine: "rapier_f64".into(),
+            target: 1e-4,
+            order: 1.0,
+            predicted_increment: 1e-4,
+            predicted_cpu: 1e4,
+            runs: vec![(1e-4, Some(1.62e-4), 1e4)],
+            ended: Ended::Budget,
+        });
+        let found = costs(&sweep, &sweep.fits[0]);
+        let c = found.iter().find(|c| c.target == 1e-4).unwrap();
+        assert_eq!(c.reached, Reached::AtLeast);
+        assert_eq!(
+            (c.cpu_s_per_simulated_s, c.error),
+            (Some(1e4), Some(1.62e-4))
+        );
+        // A check that levelled is a floor at the smallest error reached.
+        sweep.checks[0].ended = Ended::Levelled;
+        let found = costs(&sweep, &sweep.fits[0]);
+        let c = found.iter().find(|c| c.target == 1e-4).unwrap();
+        assert_eq!((c.reached, c.error), (Reached::Floor, Some(1e-2)));
     }
 }

@@ -189,6 +189,7 @@ fn colour(o: Outcome) -> RGBColor {
 }
 
 /// The legend's words for an outcome.
+#[cfg(feature = "figures")]
 fn legend(o: Outcome) -> &'static str {
     match o {
         Outcome::Accurate => "accurate (bounded, within the case's tolerance)",

@@ -362,12 +362,16 @@ fn rapier_0_35_3_and_0_36_1_agree_to_the_bit_on_every_case() {
 fn rapier_0_34_leaves_out_the_gyroscopic_torque_unless_asked() {
     // A free body spinning at 1000 rad/s near its intermediate axis flips (Dzhanibekov) and
     // near its minor axis precesses. 0.34 leaves a body's gyroscopic torque ω × Iω out by
-    // default (`gyroscopic_forces_enabled` false; 0.35 turned it on): its spin keeps ω, an
-    // error of the order of the motion (1.00 and 0.63 of the peak measured). The control turns
-    // them on, the only change: within the case's tolerance, as 0.36 is (7.0e-4 and 2.4e-3
-    // measured, against 1.75e-4 and 6.0e-4). On 0.35 and 0.36 turning them on changes no
-    // history: it is their default.
-    for id in ["stress_spin_intermediate", "stress_spin_minor"] {
+    // default (`gyroscopic_forces_enabled` false; 0.35 turned it on): its spin keeps ω. Near
+    // the intermediate axis the body then never flips, an error of the order of the motion
+    // (1.00 of the peak measured); near the minor axis it misses only the slow precession, its
+    // orientation 1.6e-3 of π off (measured, within the tolerance). The control turns them on,
+    // the only change: within the case's tolerance, as 0.36 is (3.6e-3 and 7.0e-6 measured).
+    // On 0.35 and 0.36 turning them on changes no history: it is their default.
+    for (id, flips) in [
+        ("stress_spin_intermediate", true),
+        ("stress_spin_minor", false),
+    ] {
         let s = stress_scene(id);
         let exact = engines::named("reference")
             .unwrap()
@@ -382,7 +386,15 @@ fn rapier_0_34_leaves_out_the_gyroscopic_torque_unless_asked() {
         let engine = matched(Release::V0_34, |_| {});
         let off = error(&run(&s, &engine));
         let on = error(&run(&s, &engine.clone().with_gyroscopic(true)));
-        assert!(off > 0.5 && on < tolerance, "{id}: {off:.3e} → {on:.3e}");
+        println!("{id}: {off:.3e} → {on:.3e}");
+        if flips {
+            assert!(off > 0.5 && on < tolerance, "{id}: {off:.3e} → {on:.3e}");
+        } else {
+            assert!(
+                off < tolerance && on < off / 10.0,
+                "{id}: {off:.3e} → {on:.3e}"
+            );
+        }
         let offered = engine
             .controls(&s)
             .into_iter()

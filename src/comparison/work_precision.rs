@@ -17,8 +17,8 @@
 //!   sweep), its
 //!   smallest error, with its cause named from the discrepancy budget's parts: penalty
 //!   compliance (≈ k/k_p) for penalty paths, f32 round-off where the f64 twin goes lower on the
-//!   same path, f64 round-off below 1e-10, and otherwise the engine's solver (rapier's contact
-//!   softness and projected Gauss–Seidel sweeps).
+//!   same path, f64 round-off below 1e-10, and otherwise the solver settings the path holds
+//!   fixed (a description, not a cause: the causes of a flagged cell are its controls').
 
 use super::verdict::growth::{self, Verdict};
 use super::{baseline, compare};
@@ -418,7 +418,8 @@ fn floor_cause(path: &SweepPath, value: f64, twin: Option<&SweepPath>, contact: 
         return format!("{} round-off", path.precision);
     }
     match (path.engine.ends_with("default"), path.kind) {
-        (true, _) => "solver: rapier's default contact softness and one PGS sweep".to_string(),
+        // What the increment path holds fixed, not a cause: the controls name causes.
+        (true, _) => "levels at the default solver settings (its causes: accuracy.md)".to_string(),
         (false, PathKind::Substeps { increment }) if contact => format!(
             "contact points found once per increment ({increment:.1e} s): substeps reuse them"
         ),
@@ -428,7 +429,7 @@ fn floor_cause(path: &SweepPath, value: f64, twin: Option<&SweepPath>, contact: 
         #[cfg(feature = "rapier")]
         (false, _) if path.engine.starts_with("rapier") => {
             format!(
-                "solver: rapier's contact softness ({} kHz) and PGS sweeps",
+                "levels at the matched solver settings (contact softness {} kHz)",
                 sweep::matched_contact_frequency(&path.engine) / 1e3
             )
         }

@@ -374,7 +374,7 @@ fn the_run_names_each_cause_with_its_control() {
         settings: RunSettings::default(),
     };
     let outcome = run::execute(&plan, false);
-    let found = attribution::measure(&plan, &outcome, false);
+    let found = attribution::measure(&plan, &outcome, &[], false);
     let cause = |engine: &str| {
         let a = found.iter().find(|a| a.engine == engine).unwrap();
         assert!(matches!(a.flag, Flag::MissesTolerance(_)), "{a:?}");
@@ -444,7 +444,7 @@ fn equivalent_cases_get_the_same_cause() {
         settings: RunSettings::default(),
     };
     let outcome = run::execute(&plan, false);
-    let found = attribution::measure(&plan, &outcome, false);
+    let found = attribution::measure(&plan, &outcome, &[], false);
     let twins = [
         ("rigid2d_pin_lumped", "rigid3d_pin_lumped"),
         ("springs_grounded_a", "springs_grounded_b"),

@@ -14,6 +14,7 @@
 //! time step) before a cell is called *unexplained*; the controls tried are listed with their
 //! errors all the same.
 
+use super::invariance::Invariance;
 use super::verdict::cause::{Cause, Flag, explain, flag};
 use super::{EXACT_SOLUTIONS, baseline, compare};
 use crate::contract::{History, IMPACTS_COLUMN};
@@ -182,9 +183,15 @@ fn run_all(
 
 /// Attribute every cell of `outcome` that needs a cause (in outcome order), running the
 /// controls in parallel; then, for each cell no single control explains, the controls
-/// combined with the time step ladder's finest increment. A progress bar on stderr when
-/// `progress` is set.
-pub fn measure(plan: &Plan, outcome: &Outcome, progress: bool) -> Vec<Attribution> {
+/// combined with the time step ladder's finest increment. The invariance controls already run
+/// ([`super::invariance`]) count among a cell's controls: its engine at the other value of a
+/// parameter the exact solution ignores. A progress bar on stderr when `progress` is set.
+pub fn measure(
+    plan: &Plan,
+    outcome: &Outcome,
+    invariances: &[Invariance],
+    progress: bool,
+) -> Vec<Attribution> {
     let cells = cells(plan, outcome);
     let work: Vec<(usize, Planned)> = cells
         .iter()
@@ -222,6 +229,14 @@ pub fn measure(plan: &Plan, outcome: &Outcome, progress: bool) -> Vec<Attributio
         .collect();
     bar.inc_length(combined.len() as u64);
     runs.extend(run_all(&cells, &combined, true, &bar));
+    for (i, cell) in cells.iter().enumerate() {
+        let own = controls_of_cell(&runs, i);
+        let offered = invariant(cell, invariances).into_iter().filter(|c| {
+            !own.iter()
+                .any(|o| o.kind == c.kind && o.increment.is_none())
+        });
+        runs.extend(offered.map(|c| (i, c)));
+    }
     bar.finish_and_clear();
     cells
         .iter()
@@ -239,6 +254,32 @@ pub fn measure(plan: &Plan, outcome: &Outcome, progress: bool) -> Vec<Attributio
                 controls,
             }
         })
+        .collect()
+}
+
+/// The cell's engine at the other values of each parameter its case's exact solution ignores
+/// (from the invariance controls), as controls: the values the case does not state.
+fn invariant(cell: &Cell, invariances: &[Invariance]) -> Vec<ControlRun> {
+    invariances
+        .iter()
+        .filter(|i| i.case == cell.scene.id)
+        .filter_map(|i| {
+            let pair = i.engines.iter().find(|p| p.engine == cell.engine)?;
+            Some((0..2).filter(|&k| i.stated != Some(k)).map(move |k| {
+                ControlRun {
+                    kind: i.kind,
+                    change: format!("{}: {} instead of the case's", i.parameter, i.values[k]),
+                    increment: None,
+                    penalty: None,
+                    error: pair.errors[k],
+                    failure: pair.errors[k]
+                        .is_none()
+                        .then(|| "failed or compared nothing".to_string()),
+                    combined: false,
+                }
+            }))
+        })
+        .flatten()
         .collect()
 }
 

@@ -18,6 +18,7 @@
 use super::verdict::{meets, tolerance};
 use super::{baseline, compare};
 use crate::contract::IMPACTS_COLUMN;
+use crate::run::controls::ControlKind;
 use crate::run::{Engine, Outcome, Plan, RunSettings, Status, checked_run, matching};
 use crate::scene::{ContactState, PenaltyRule, Scene};
 use rayon::prelude::*;
@@ -52,10 +53,14 @@ impl Pair {
 pub struct Invariance {
     /// Case id.
     pub case: String,
+    /// What is varied, as a control's kind (restitution, penalty).
+    pub kind: ControlKind,
     /// The parameter, in words ("restitution of every contact pair").
     pub parameter: String,
     /// The two values, in words ("e = 0", "e = 1").
     pub values: [String; 2],
+    /// Which of the two the case states (`None`: neither, such as e = 0.5).
+    pub stated: Option<usize>,
     /// The exact solution's largest change between the two values, over its peak (round-off
     /// where the parameter is truly ignored).
     pub exact_change: Option<f64>,
@@ -65,6 +70,8 @@ pub struct Invariance {
 
 /// A parameter variant: its words and how a run is set up at each value.
 struct Variant {
+    kind: ControlKind,
+    stated: Option<usize>,
     parameter: String,
     values: [String; 2],
     scenes: [Scene; 2],
@@ -83,7 +90,10 @@ fn variants(scene: &Scene, struck: bool) -> Vec<Variant> {
         }
         s
     };
+    let all = |e: f64| scene.contacts.iter().all(|c| c.restitution == e);
     let mut out = vec![Variant {
+        kind: ControlKind::Restitution,
+        stated: [0.0, 1.0].iter().position(|e| all(*e)),
         parameter: "the restitution of every contact pair (none strikes)".into(),
         values: ["e = 0".into(), "e = 1".into()],
         scenes: [restitution(0.0), restitution(1.0)],
@@ -100,6 +110,8 @@ fn variants(scene: &Scene, struck: bool) -> Vec<Variant> {
             ..RunSettings::default()
         };
         out.push(Variant {
+            kind: ControlKind::Penalty,
+            stated: Some(0),
             parameter: "the penalty stiffness (no pair closes)".into(),
             values: [
                 format!("k_p = {k:.1e}"),
@@ -208,6 +220,8 @@ fn invariance(plan: &Plan, outcome: &Outcome, scene: &Scene, v: &Variant) -> Inv
         .collect();
     Invariance {
         case: scene.id.clone(),
+        kind: v.kind,
+        stated: v.stated,
         parameter: v.parameter.clone(),
         values: v.values.clone(),
         exact_change,

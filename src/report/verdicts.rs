@@ -346,7 +346,10 @@ pub fn cause_label(kind: ControlKind, engine: &str) -> &'static str {
         ControlKind::Penalty => "model: penalty contact",
         ControlKind::Precision => "precision (f32)",
         ControlKind::ContactSoftness => "model: rapier's soft contact",
-        ControlKind::Restitution => "model: rapier's restitution on a resting contact",
+        ControlKind::Restitution if engine.starts_with("rapier") => {
+            "model: rapier's restitution on a resting contact"
+        }
+        ControlKind::Restitution => "model: restitution on a contact that never strikes",
         ControlKind::ImpulseReading => "reading: rapier 0.34's reported contact impulse",
         ControlKind::Gyroscopic => "setting: rapier 0.34's gyroscopic forces, off by default",
     }
@@ -371,12 +374,15 @@ pub fn cause_meaning(kind: ControlKind) -> &'static str {
              contact constraint, where a stiff contact takes part of the bounce"
         }
         ControlKind::Restitution => {
-            "the contact starts closed and never strikes in the exact solution, so its \
-             restitution should not matter; but rapier cannot rest it: a contact of restitution \
-             1 is bouncy at every step, and one above 0 whenever its point is new again, its \
-             impulse having fallen to zero (`is_bouncy`), so whatever approach is left at the \
-             end of a step (round-off in f32, the curvature of a node sliding over a ball) is \
-             reflected, and the node hops along the face"
+            "the contact never strikes in the exact solution, so its restitution should not \
+             matter; the engine's result depends on it all the same. Rapier cannot rest a \
+             contact of restitution above 0: one of 1 is bouncy at every step, and one above 0 \
+             whenever its point is new again, its impulse having fallen to zero (`is_bouncy`), \
+             so whatever approach is left at the end of a step (round-off in f32, the curvature \
+             of a node sliding over a ball) is reflected, and the node hops along the face. The \
+             explicit engine's contact dashpot, sized for e < 1, acts whenever the contact is \
+             closed, on the gap rate its penalty's compliance leaves, where the exact contact \
+             dissipates nothing"
         }
         ControlKind::ImpulseReading => {
             "the same motion, its contact impulse read as n/(n + 1) of what rapier 0.34 reports \

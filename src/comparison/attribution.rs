@@ -15,9 +15,9 @@
 //! errors all the same.
 
 use super::invariance::Invariance;
-use super::verdict::cause::{Cause, Flag, explain, flag};
+use super::verdict::cause::{Cause, Explanation, Flag, Run, explain, flag};
 use super::{EXACT_SOLUTIONS, baseline, compare};
-use crate::contract::{History, IMPACTS_COLUMN};
+use crate::contract::History;
 use crate::run::controls::{self, ControlKind, Planned};
 use crate::run::{JobSuccess, Outcome, Plan};
 use crate::scene::Scene;
@@ -128,10 +128,7 @@ fn controls_of<'a>(plan: &'a Plan, cell: &Cell<'a>) -> Vec<Planned<'a>> {
     let Some(engine) = plan.engines.iter().find(|e| e.name() == cell.engine) else {
         return Vec::new();
     };
-    let strikes = cell
-        .exact
-        .column(IMPACTS_COLUMN)
-        .is_some_and(|i| i.iter().any(|x| *x > 0.0));
+    let strikes = super::strikes(cell.exact);
     controls::plan(cell.scene, engine.as_ref(), &plan.settings, cell.job)
         .into_iter()
         .filter(|c| !(c.kind() == ControlKind::Restitution && strikes))
@@ -206,20 +203,22 @@ pub fn measure(
             .map(|(_, r)| r.clone())
             .collect()
     };
+    // The invariance controls already run, where the engine has none of their kind of its own.
+    for (i, cell) in cells.iter().enumerate() {
+        let own = controls_of_cell(&runs, i);
+        let offered = invariant(cell, invariances).into_iter().filter(|c| {
+            !own.iter()
+                .any(|o| o.kind == c.kind && o.increment.is_none())
+        });
+        runs.extend(offered.map(|c| (i, c)));
+    }
     // Cells no single control explains: their controls at the ladder's finest increment.
     let combined: Vec<(usize, Planned)> = cells
         .iter()
         .enumerate()
         .filter(|(i, c)| {
-            let mine = controls_of_cell(&runs, *i);
-            !matches!(
-                explain(&own_run(c), c.flag, &mine),
-                Some(Cause {
-                    explanation: crate::comparison::verdict::cause::Explanation::Under
-                        | crate::comparison::verdict::cause::Explanation::AlongOrder { .. },
-                    ..
-                })
-            )
+            let found = explain(&own_run(c), c.flag, &controls_of_cell(&runs, *i));
+            !found.is_some_and(|k| !matches!(k.explanation, Explanation::InPart { .. }))
         })
         .flat_map(|(i, c)| {
             combinations(plan, c, &controls_of_cell(&runs, i))
@@ -229,14 +228,6 @@ pub fn measure(
         .collect();
     bar.inc_length(combined.len() as u64);
     runs.extend(run_all(&cells, &combined, true, &bar));
-    for (i, cell) in cells.iter().enumerate() {
-        let own = controls_of_cell(&runs, i);
-        let offered = invariant(cell, invariances).into_iter().filter(|c| {
-            !own.iter()
-                .any(|o| o.kind == c.kind && o.increment.is_none())
-        });
-        runs.extend(offered.map(|c| (i, c)));
-    }
     bar.finish_and_clear();
     cells
         .iter()
@@ -284,8 +275,8 @@ fn invariant(cell: &Cell, invariances: &[Invariance]) -> Vec<ControlRun> {
 }
 
 /// The cell's own run, as the first point of its ladders.
-fn own_run(cell: &Cell) -> crate::comparison::verdict::cause::Run {
-    crate::comparison::verdict::cause::Run {
+fn own_run(cell: &Cell) -> Run {
+    Run {
         error: cell.error,
         increment: cell.job.info.increment,
         penalty: cell.job.info.penalty_stiffness,
@@ -306,10 +297,7 @@ fn combinations<'a>(plan: &'a Plan, cell: &Cell<'a>, controls: &[ControlRun]) ->
     ) else {
         return Vec::new();
     };
-    let strikes = cell
-        .exact
-        .column(IMPACTS_COLUMN)
-        .is_some_and(|i| i.iter().any(|x| *x > 0.0));
+    let strikes = super::strikes(cell.exact);
     controls::combined(cell.scene, engine.as_ref(), &plan.settings, cell.job, h)
         .into_iter()
         .filter(|c| !(c.kind() == ControlKind::Restitution && strikes))

@@ -234,6 +234,14 @@ fn rotated_body(scene: &Scene, column: &str) -> Option<crate::scene::BodyId> {
     })
 }
 
+/// Whether an exact solution has an impact: a contact pair that strikes (its `impacts` column
+/// above zero at some row). Restitution enters an exact solution only there.
+pub fn strikes(exact: &History) -> bool {
+    exact
+        .column(IMPACTS_COLUMN)
+        .is_some_and(|i| i.iter().any(|x| *x > 0.0))
+}
+
 /// The unit of a contract column: what the scene's probe measures (m, m/s, rad, N; "" for an
 /// identically zero column).
 pub fn unit(scene: &Scene, column: &str) -> &'static str {

@@ -23,18 +23,23 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// A run toward an accuracy may take this many times the sweep's budget of increments for one
-/// run of the engine ([`Grid::max_increments`] × its budget share).
-pub const BUDGET: f64 = 60.0;
+/// run of the engine ([`Grid::max_increments`] × its budget share): about a minute of CPU for
+/// rapier's matched configuration (0.9 µs per substep measured on the pinned seed case).
+pub const BUDGET: f64 = 300.0;
 
 /// Most runs toward one accuracy.
 pub const RUNS: usize = 3;
+
+/// The accuracies checked: those the report's first screen answers (1e-6 stays extrapolated,
+/// where no floor stops it).
+pub const CHECKED: [f64; 2] = [1e-2, 1e-4];
 
 /// After the run at the predicted increment, each run aims at this fraction of the accuracy,
 /// so that one more run lands within it rather than approaching it from above.
 pub const AIM: f64 = 0.7;
 
 /// A local order is read only between increments at least this far apart.
-pub const SPAN: f64 = 2.0;
+pub const SPAN: f64 = 4.0;
 
 /// How a reach ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -114,7 +119,7 @@ fn tasks<'a>(
     let budget = BUDGET * grid.max_increments * stepping.budget_share;
     cost::costs(sweep, fit)
         .into_iter()
-        .filter(|c| c.reached == Reached::Extrapolated)
+        .filter(|c| c.reached == Reached::Extrapolated && CHECKED.contains(&c.target))
         .filter_map(|c| {
             let (h, cpu, order) = (c.increment?, c.cpu_s_per_simulated_s?, c.order?);
             let e = c.error?;
@@ -156,7 +161,7 @@ fn reach(task: &Task, grid: &Grid, error: &ErrorOf) -> (Check, SweepPath) {
             ended = Ended::Failed;
             break;
         };
-        if e <= task.target {
+        if super::verdict::within(e, task.target) {
             ended = Ended::Reached;
             break;
         }
@@ -213,6 +218,7 @@ pub fn measure(
     let work: Vec<Task> = sweeps
         .iter()
         .enumerate()
+        .filter(|(_, s)| s.same_as.is_none())
         .filter_map(|(i, s)| Some((i, s, plan.cases.iter().find(|c| c.id == s.case)?)))
         .flat_map(|(i, s, scene)| {
             s.fits.iter().flat_map(move |fit| {

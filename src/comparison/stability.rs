@@ -111,7 +111,8 @@ pub struct Point {
 }
 
 /// How a critical increment was bounded.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Bound {
     /// Between a bounded and an unstable run within [`BISECTION_WIDTH`].
     Bisected,
@@ -163,11 +164,17 @@ impl Critical {
         self.increment / self.explicit_stable
     }
 
-    /// Whether it answers the question for the engine's own runs: bisected, below, or at least
-    /// an increment no smaller than the largest the engine runs at.
+    /// Whether it answers the question for the engine's own runs ([`covers`]).
     pub fn covers_own_step(&self) -> bool {
-        self.bound != Bound::AtLeast || self.increment >= self.own_step * (1.0 - 1e-9)
+        covers(self.bound, self.increment, self.own_step)
     }
+}
+
+/// Whether a critical `increment` bounded so answers the question for an engine whose largest
+/// increment anywhere in the report is `own_step`: bisected, below, or at least an increment no
+/// smaller than that (a bound "at least" below it is no answer: the map stopped short of it).
+pub fn covers(bound: Bound, increment: f64, own_step: f64) -> bool {
+    bound != Bound::AtLeast || increment >= own_step * (1.0 - 1e-9)
 }
 
 /// A map: its runs and each (case, engine)'s critical increment.
@@ -242,13 +249,14 @@ fn point(
     {
         return first;
     }
-    let longer = runs::run_on(scene, engine, ratio, growth::CONFIRM as usize);
+    let longer = runs::run_on(scene, engine, ratio, growth::CONFIRM);
     let confirmed = judge(scene, name, ratio, search, longer, error_of);
-    if confirmed.outcome == Outcome::Unstable {
+    // Only a longer run that is bounded undoes the verdict; one that fails or is still growing
+    // confirms it.
+    if !confirmed.outcome.bounded() {
         return Point {
-            continued: confirmed.continued,
-            growth: confirmed.growth,
-            message: confirmed.message,
+            continued: confirmed.continued.or(first.continued),
+            growth: confirmed.growth.or(first.growth),
             ..first
         };
     }
@@ -362,70 +370,22 @@ fn map_pair(pair: &Pair, error_of: &ErrorOf) -> (Vec<Point>, Option<Critical>) {
     (points, critical)
 }
 
-/// The critical increment of a pair from its runs so far, running the ones it needs.
+/// The critical increment of a pair from its runs so far, running the ones it needs: the
+/// bracket the grid (and the own step) gives, then beyond or below it, then bisected.
 fn search(
     pair: &Pair,
     ceiling: f64,
     points: &mut Vec<Point>,
     run: &dyn Fn(f64, Search) -> Point,
 ) -> Option<Critical> {
-    let sorted = |points: &[Point]| -> Vec<Point> {
-        let mut v: Vec<Point> = points
-            .iter()
-            .filter(|p| matches!(p.search, Search::Grid | Search::OwnStep))
-            .cloned()
-            .collect();
-        v.sort_by(|a, b| a.ratio.total_cmp(&b.ratio));
-        v
-    };
-    let grid = sorted(points);
-    let first_unstable = grid.iter().position(|p| p.outcome == Outcome::Unstable);
-    let (mut low, mut high): (Option<Point>, Option<Point>) = match first_unstable {
-        Some(0) => (None, Some(grid[0].clone())),
-        Some(i) => (
-            grid[..i]
-                .iter()
-                .rev()
-                .find(|p| p.outcome.bounded())
-                .cloned(),
-            Some(grid[i].clone()),
-        ),
-        None => (
-            grid.iter().rev().find(|p| p.outcome.bounded()).cloned(),
-            None,
-        ),
-    };
+    let (mut low, mut high) = bracket(points);
     if high.is_none() {
-        let mut r = grid.last().map_or(1.0, |p| p.ratio);
-        while r < ceiling * (1.0 - 1e-9) {
-            r = (r * LADDER).min(ceiling);
-            let p = run(r, Search::Beyond);
-            points.push(p.clone());
-            match p.outcome {
-                o if o.bounded() => low = Some(p),
-                Outcome::Unstable => {
-                    high = Some(p);
-                    break;
-                }
-                _ => break,
-            }
-        }
+        (low, high) = beyond(low, ceiling, points, run);
     }
     if low.is_none() {
-        for r in BELOW {
-            let p = run(r, Search::Below);
-            points.push(p.clone());
-            match p.outcome {
-                o if o.bounded() => {
-                    low = Some(p);
-                    break;
-                }
-                Outcome::Unstable => high = Some(p),
-                _ => break,
-            }
-        }
+        (low, high) = below(high, points, run);
     }
-    let bound = match (&low, &high) {
+    let mut bound = match (&low, &high) {
         (Some(_), Some(_)) => Bound::Bisected,
         (Some(_), None) => Bound::AtLeast,
         (None, _) => Bound::Below,
@@ -437,7 +397,12 @@ fn search(
             match p.outcome {
                 o if o.bounded() => *l = p,
                 Outcome::Unstable => *h = p,
-                _ => break,
+                // A run that neither stays bounded nor grows leaves the bracket open: the
+                // largest bounded run is only a lower bound.
+                _ => {
+                    bound = Bound::AtLeast;
+                    break;
+                }
             }
         }
     }
@@ -450,4 +415,67 @@ fn search(
         bound,
         own_step: pair.own,
     })
+}
+
+/// The first bracket from the grid and the own step, by ratio: (the largest bounded run below
+/// the first unstable one, the first unstable one).
+fn bracket(points: &[Point]) -> (Option<Point>, Option<Point>) {
+    let mut grid: Vec<&Point> = points
+        .iter()
+        .filter(|p| matches!(p.search, Search::Grid | Search::OwnStep))
+        .collect();
+    grid.sort_by(|a, b| a.ratio.total_cmp(&b.ratio));
+    let first_unstable = grid.iter().position(|p| p.outcome == Outcome::Unstable);
+    let bounded_below = |i: usize| grid[..i].iter().rev().find(|p| p.outcome.bounded());
+    match first_unstable {
+        Some(i) => (
+            bounded_below(i).map(|p| (*p).clone()),
+            Some(grid[i].clone()),
+        ),
+        None => (bounded_below(grid.len()).map(|p| (*p).clone()), None),
+    }
+}
+
+/// Bounded on the grid: × [`LADDER`] at a time from the grid's last ratio up to `ceiling`,
+/// until a run is unstable (the bracket) or neither bounded nor unstable (the search stops).
+fn beyond(
+    mut low: Option<Point>,
+    ceiling: f64,
+    points: &mut Vec<Point>,
+    run: &dyn Fn(f64, Search) -> Point,
+) -> (Option<Point>, Option<Point>) {
+    let mut r = RATIOS[RATIOS.len() - 1];
+    while r < ceiling * (1.0 - 1e-9) {
+        r = (r * LADDER).min(ceiling);
+        let p = run(r, Search::Beyond);
+        points.push(p.clone());
+        match p.outcome {
+            o if o.bounded() => {
+                if low.as_ref().is_none_or(|l| l.ratio < p.ratio) {
+                    low = Some(p);
+                }
+            }
+            Outcome::Unstable => return (low, Some(p)),
+            _ => break,
+        }
+    }
+    (low, None)
+}
+
+/// Unstable at the grid's smallest ratio: the ratios of [`BELOW`], until one is bounded.
+fn below(
+    mut high: Option<Point>,
+    points: &mut Vec<Point>,
+    run: &dyn Fn(f64, Search) -> Point,
+) -> (Option<Point>, Option<Point>) {
+    for r in BELOW {
+        let p = run(r, Search::Below);
+        points.push(p.clone());
+        match p.outcome {
+            o if o.bounded() => return (Some(p), high),
+            Outcome::Unstable => high = Some(p),
+            _ => break,
+        }
+    }
+    (None, high)
 }

@@ -90,6 +90,10 @@ pub struct CaseSummary {
     pub cross: Vec<CrossCheck>,
     /// Per engine, in report order.
     pub runs: Vec<EngineSummary>,
+    /// The tolerance the run asked each engine for (accuracy on request: `--tolerance`, or
+    /// `[time] tolerance` in the case file), where it asked one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub requested: Option<f64>,
 }
 
 /// One engine on one case.
@@ -171,7 +175,7 @@ pub struct CriticalIncrement {
     pub explicit_ratio: f64,
     /// `bisected` (to 1 %), `at_least` (bounded up to the largest ratio tried) or `below`
     /// (unstable down to the smallest).
-    pub bound: String,
+    pub bound: super::stability::Bound,
     /// The largest increment the engine runs at anywhere in the report, seconds: an
     /// `at_least` bound below it says nothing of the engine's own runs.
     #[serde(default)]
@@ -185,7 +189,7 @@ impl CriticalIncrement {
     /// Whether it answers the question for the engine's own runs (see
     /// [`super::stability::Critical::covers_own_step`]).
     pub fn covers_own_step(&self) -> bool {
-        self.bound != "at_least" || self.seconds >= self.own_step * (1.0 - 1e-9)
+        super::stability::covers(self.bound, self.seconds, self.own_step)
     }
 }
 
@@ -262,7 +266,12 @@ impl Summary {
                         engine_summary(scene, j, reference, baseline.as_ref(), stale)
                     })
                     .collect();
+                let requested = match plan.settings.increment.unwrap_or(scene.settings.increment) {
+                    crate::scene::IncrementRule::Tolerance(eps) => Some(eps),
+                    _ => None,
+                };
                 CaseSummary {
+                    requested,
                     id: scene.id.clone(),
                     title: scene.title.clone(),
                     family: scene.family.name().to_string(),
@@ -432,7 +441,7 @@ impl Summary {
                 run.critical_increment = Some(CriticalIncrement {
                     seconds: c.increment,
                     explicit_ratio: c.explicit_ratio(),
-                    bound: c.bound.name().to_string(),
+                    bound: c.bound,
                     own_step: c.own_step,
                     bounded_at_own_step: own.map(|p| p.outcome.bounded()),
                 });

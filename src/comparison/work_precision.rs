@@ -90,6 +90,9 @@ pub struct CaseSweep {
     pub fits: Vec<EngineFit>,
     /// The extrapolated costs checked by runs toward their accuracy ([`super::reach`]).
     pub checks: Vec<super::reach::Check>,
+    /// The case this one is equivalent to (the same closed form, [`super::equivalence`]),
+    /// where it is: its costs beyond its own sweep are that case's, checked there.
+    pub same_as: Option<String>,
 }
 
 /// One point as the sweep CSV writes it.
@@ -243,6 +246,7 @@ pub fn measure(
                 paths,
                 fits,
                 checks: Vec::new(),
+                same_as: None,
             }
         })
         .collect()
@@ -283,21 +287,12 @@ pub fn reach(
     };
     // A case equivalent to another (the same closed form) is checked on that one only.
     let closed = |case: &str, engine: &str| outcome.history(case, engine).cloned();
-    let twins: Vec<String> = super::equivalence::measure(&plan.cases, &[], closed)
-        .into_iter()
-        .map(|e| e.case)
-        .collect();
-    let cases = Plan {
-        cases: plan
-            .cases
-            .iter()
-            .filter(|s| !twins.contains(&s.id))
-            .cloned()
-            .collect(),
-        engines: Vec::new(),
-        settings: plan.settings,
-    };
-    super::reach::measure(&cases, engines, sweeps, grid, &error_of, progress);
+    for e in super::equivalence::measure(&plan.cases, &[], closed) {
+        if let Some(s) = sweeps.iter_mut().find(|s| s.case == e.case) {
+            s.same_as = Some(e.same_as);
+        }
+    }
+    super::reach::measure(plan, engines, sweeps, grid, &error_of, progress);
 }
 
 /// The ok points of a path as (increment, error), coarse to fine: those at or below the

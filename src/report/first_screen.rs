@@ -10,6 +10,7 @@ use super::format::{ratio, sci};
 use super::provenance::Provenance;
 use super::regression::Since;
 use crate::comparison::EXACT_SOLUTIONS;
+use crate::comparison::stability::Bound;
 use crate::comparison::summary::{CaseSummary, Summary, ToleranceCheck};
 use crate::comparison::verdict::cause::FLAG_RATIO;
 use crate::comparison::verdict::cost::{CostToAccuracy, Reached};
@@ -211,12 +212,19 @@ fn cost_column(s: &Summary, engine: &str, target: f64) -> (String, String) {
         _ => "–".into(),
     };
     let count = |r: Reached| ratios.iter().filter(|x| x.1 == r).count();
+    let floors = representatives(s)
+        .iter()
+        .filter(|c| cost_of(c, engine, target).is_some_and(|k| k.reached == Reached::Floor))
+        .count();
     let how = format!(
         "{} / {} / {}",
         count(Reached::Measured),
         count(Reached::Extrapolated),
         count(Reached::AtLeast)
     );
+    if values.is_empty() && floors > 0 {
+        return (format!("floor on {floors}"), how);
+    }
     (cell, how)
 }
 
@@ -313,7 +321,7 @@ fn stable(w: &mut String, s: &Summary, engines: &[&str]) {
         "**Stable?** Unstable means energy still growing at the end of a run, confirmed on a \
          horizon 4× longer; a transient that decays is bounded. Ratios are over the explicit \
          engine's computed stable increment; each engine is mapped up to 4× the largest \
-         increment it runs at anywhere here ([stability.md](stability.md)).\n"
+         increment it runs at anywhere here, and at least 64× ([stability.md](stability.md)).\n"
     );
     let _ = writeln!(
         w,
@@ -334,14 +342,14 @@ fn stable(w: &mut String, s: &Summary, engines: &[&str]) {
             .collect();
         let bisected = mine
             .iter()
-            .filter(|(_, k)| k.bound != "at_least")
+            .filter(|(_, k)| k.bound != Bound::AtLeast)
             .min_by(|a, b| a.1.explicit_ratio.total_cmp(&b.1.explicit_ratio));
         let (low, on) = bisected.map_or(("–".to_string(), "–"), |(c, k)| {
             (format!("{:.2}", k.explicit_ratio), *c)
         });
         let ceiling = mine
             .iter()
-            .filter(|(_, k)| k.bound == "at_least" && k.covers_own_step())
+            .filter(|(_, k)| k.bound == Bound::AtLeast && k.covers_own_step())
             .count();
         let _ = writeln!(
             w,

@@ -589,7 +589,7 @@ fn on_request(w: &mut String, c: &CaseSummary) {
         .filter_map(|r| {
             let eps = *r.measures.get("requested_tolerance")?;
             let achieved = r.against_baseline.as_ref()?.worst_max?;
-            let verdict = if achieved <= eps && achieved >= eps / 10.0 {
+            let verdict = if crate::comparison::verdict::in_band(achieved, eps) {
                 "within [ε/10, ε]"
             } else if achieved > eps {
                 "**above ε**"
@@ -609,14 +609,13 @@ fn on_request(w: &mut String, c: &CaseSummary) {
             ))
         })
         .collect();
+    // Asked for a tolerance, an engine that declines says why.
     let refused: Vec<String> = c
         .runs
         .iter()
-        .filter_map(|r| {
-            let e = r.error.as_ref()?;
-            e.contains("out of reach")
-                .then(|| format!("- `{}`: {e}", r.engine))
-        })
+        .filter(|_| c.requested.is_some())
+        .filter(|r| r.status == Status::NotApplicable)
+        .filter_map(|r| Some(format!("- `{}`: {}", r.engine, r.error.as_ref()?)))
         .collect();
     if rows.is_empty() && refused.is_empty() {
         return;

@@ -478,8 +478,7 @@ pub fn overview(w: &mut String, map: &Map) {
     }
     let _ = writeln!(
         w,
-        "\n## Where each engine stays stable\n\n\
-         Every stepping engine ran every case that has a stable increment at {} × the explicit \
+        "\nEvery stepping engine ran every case that has a stable increment at {} × the explicit \
          engine's computed stable increment (the explicit engines at that ratio of their own, \
          rapier at that ratio of the explicit one's), each increment exactly; at the increment \
          its own job ran at (*own step*); and, where it stayed bounded, on × {LADDER} at a time \
@@ -509,7 +508,7 @@ pub fn overview(w: &mut String, map: &Map) {
     );
     let _ = writeln!(
         w,
-        "| engine | cases | accurate at own step | unstable on the grid (first ratio) | bounded to its ceiling | largest transient of a bounded run | failed |\n|---|---:|---:|---|---:|---|---:|"
+        "| engine | cases it applies to | at its own step: accurate of judged | unstable on the grid (first ratio) | bounded to its ceiling | largest transient of a bounded run: level (case, ratio, time) | failed |\n|---|---:|---:|---|---:|---|---:|"
     );
     for (engine, points) in &maps {
         let _ = writeln!(w, "{}", summary_row(engine, points, map));
@@ -533,11 +532,16 @@ pub fn overview(w: &mut String, map: &Map) {
 
 /// One engine's row of the overview table.
 fn summary_row(engine: &str, points: &[&Point], map: &Map) -> String {
-    let mut cases: Vec<&str> = points.iter().map(|p| p.case.as_str()).collect();
+    let mut cases: Vec<&str> = points
+        .iter()
+        .filter(|p| p.outcome != Outcome::NotApplicable)
+        .map(|p| p.case.as_str())
+        .collect();
     cases.dedup();
     let own: Vec<&&Point> = points
         .iter()
         .filter(|p| p.search == Search::OwnStep)
+        .filter(|p| matches!(p.outcome, Outcome::Accurate | Outcome::Inaccurate))
         .collect();
     let accurate_own = own
         .iter()
@@ -568,10 +572,11 @@ fn summary_row(engine: &str, points: &[&Point], map: &Map) -> String {
         .max_by(|a, b| a.0.total_cmp(&b.0))
         .map_or("–".to_string(), |(peak, p)| {
             format!(
-                "{} ({}, {}×)",
+                "{} ({}, {}×, t = {} s)",
                 sci(peak),
                 p.case,
-                crate::report::format::ratio(p.ratio)
+                crate::report::format::ratio(p.ratio),
+                p.growth.map_or("–".into(), |g| sci(g.peak_time))
             )
         });
     let failed = points

@@ -191,15 +191,18 @@ fn invariances(w: &mut String, s: &Summary) {
     }
     let _ = writeln!(
         w,
-        "### Parameters the exact solution ignores
-
-Where a case's exact solution does not          depend on a parameter (the restitution of a contact that never strikes; the penalty of          a contact that never closes), every judged cell was run again at both of its natural          values, against the same exact solution. An engine whose verdict changes with it is          named: its verdict on the case rests on a value the physics leaves free, and the case          states the physically natural one. *Exact change*: how far the exact solution itself          moved between the two values, over its peak (round-off where the parameter is truly          ignored).
-"
+        "### Parameters the exact solution ignores\n\nWhere a case's exact solution does not \
+         depend on a parameter (the restitution of a contact that never strikes; the penalty of \
+         a contact that never closes), every judged cell was run again at both of its natural \
+         values, against the same exact solution. An engine whose verdict changes with it is \
+         named: its verdict on the case rests on a value the physics leaves free. The value the \
+         case states is marked (stated). *Exact change*: how far the exact solution itself \
+         moved between the two values, over its peak; where it is above round-off the \
+         parameter is not ignored after all, and no engine is judged on it.\n"
     );
     let _ = writeln!(
         w,
-        "| case | parameter | values | exact change | engines whose verdict depends on it (error at each value) | verdict the same |
-|---|---|---|---:|---|---|"
+        "| case | parameter | values | exact change | engines whose verdict depends on it (error at each value) | verdict the same |\n|---|---|---|---:|---|---|"
     );
     for i in &s.invariances {
         let depends: Vec<String> = i
@@ -225,13 +228,20 @@ Where a case's exact solution does not          depend on a parameter (the resti
             .filter(|p| !p.depends())
             .map(|p| format!("`{}`", p.engine))
             .collect();
+        let value = |k: usize| {
+            if i.stated == Some(k) {
+                format!("{} (stated)", i.values[k])
+            } else {
+                i.values[k].clone()
+            }
+        };
         let _ = writeln!(
             w,
             "| {} | {} | {} / {} | {} | {} | {} |",
             i.case,
             i.parameter,
-            i.values[0],
-            i.values[1],
+            value(0),
+            value(1),
             i.exact_change.map_or("–".into(), sci),
             if depends.is_empty() {
                 "none".to_string()

@@ -571,6 +571,7 @@ fn cost_cell(c: &CostToAccuracy) -> String {
             sci(v),
             c.error.map_or("–".into(), sci)
         ),
+        (Reached::AsEquivalent, _) => format!("as {}", c.cause.as_deref().unwrap_or("–")),
         (Reached::Floor, _) => format!(
             "floor {} ({})",
             c.error.map_or("–".into(), sci),
@@ -590,15 +591,18 @@ fn checks(w: &mut String, s: &crate::comparison::summary::Summary) {
     }
     let _ = writeln!(
         w,
-        "\n**Extrapolations checked.** Every cost the sweep left to an extrapolation, where a run \
-         at the increment it predicts takes at most {}× the sweep's budget of increments for one \
-         run (about a minute of CPU for rapier), was run there; then, where that missed, at {} of \
-         the accuracy along the local order of the last two points, up to {} runs, stopping where \
-         the local order fell below half the fitted one (the error levels: a floor). A case \
-         equivalent to another is checked on that one only. CPU: seconds per simulated second.\n",
+        "\n**Extrapolations checked.** Every cost to 1e-2 or 1e-4 the sweep left to an \
+         extrapolation, where a run at the increment it predicts takes at most {}× the sweep's \
+         budget of increments for one run (about a minute of CPU for rapier's matched \
+         configuration), was run there; then, where that missed, at {} of the accuracy along the \
+         fitted order, up to {} runs, stopping where the local order over at least a factor {} of \
+         increment fell below half the fitted one (the error levels: a floor). A case equivalent \
+         to another is checked on that one only (its costs read \"as\" it). CPU: seconds per \
+         simulated second.\n",
         crate::comparison::reach::BUDGET,
         crate::comparison::reach::AIM,
         crate::comparison::reach::RUNS,
+        crate::comparison::reach::SPAN,
     );
     let _ = writeln!(
         w,
@@ -629,13 +633,25 @@ fn checks(w: &mut String, s: &crate::comparison::summary::Summary) {
             } else {
                 further.join("; ")
             },
-            match c.ended {
-                Ended::Reached => "reached",
-                Ended::Levelled => "levels off: a floor",
-                Ended::Budget => "over budget: extrapolated",
-                Ended::Failed => "a run failed",
-            }
+            outcome(s, c)
         );
+    }
+}
+
+/// What a check came to, as the cost it leaves (the verdict's, not the check's own ending).
+fn outcome(s: &crate::comparison::summary::Summary, c: &crate::comparison::reach::Check) -> String {
+    let cost = s
+        .cases
+        .iter()
+        .find(|k| k.id == c.case)
+        .and_then(|k| k.run(&c.engine))
+        .and_then(|r| r.cost_to_accuracy.iter().find(|k| k.target == c.target));
+    match (cost.map(|k| k.reached), c.ended) {
+        (Some(Reached::Measured), _) => "reached: measured".into(),
+        (Some(Reached::Floor), _) => "levels off: a floor".into(),
+        (Some(Reached::AtLeast), _) => "fell short within the budget: a lower bound".into(),
+        (_, Ended::Failed) => "a run failed".into(),
+        _ => "–".into(),
     }
 }
 

@@ -127,15 +127,20 @@ pub fn plan<'a>(
     out
 }
 
-/// The increments of the time step ladder below `h`: each a quarter of the one before, down
-/// to `matched` (the last rung is `matched` itself where the quarters pass it); one rung, h/4,
-/// where `h` is already at or below it.
+/// The increments of the time step ladder below `h`: a quarter of `h`, then quarters of that
+/// while they stay more than twice `matched`, then `matched` itself (so that the last rung is
+/// at least a factor 2 from the one before); one rung, h/4, where that is already at or below
+/// `matched`.
 pub fn ladder(h: f64, matched: f64) -> Vec<f64> {
     let mut rungs = vec![h / 4.0];
-    while rungs[rungs.len() - 1] > matched * (1.0 + 1e-9) {
-        let next = rungs[rungs.len() - 1] / 4.0;
-        rungs.push(next.max(matched));
+    if rungs[0] <= matched * (1.0 + 1e-9) {
+        return rungs;
     }
+    while rungs[rungs.len() - 1] / 4.0 > 2.0 * matched {
+        let next = rungs[rungs.len() - 1] / 4.0;
+        rungs.push(next);
+    }
+    rungs.push(matched);
     rungs
 }
 

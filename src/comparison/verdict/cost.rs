@@ -31,7 +31,7 @@ pub fn cheapest<'a>(rows: &'a [Row], engine: &str, target: f64) -> Reach<'a> {
     for r in own {
         let Some(e) = r.error_max else { continue };
         smallest = Some(smallest.map_or(e, |s: f64| s.min(e)));
-        if e <= target && best.is_none_or(|b| r.cpu_s_min < b.cpu_s_min) {
+        if super::within(e, target) && best.is_none_or(|b| r.cpu_s_min < b.cpu_s_min) {
             best = Some(r);
         }
     }
@@ -51,6 +51,9 @@ pub enum Reached {
     /// Runs toward the target checked the extrapolation and did not reach it within their
     /// budget: it costs more than the CPU time given (that of the costliest such run).
     AtLeast,
+    /// Beyond its own sweep, the case's cost is its equivalent case's (named in `cause`), whose
+    /// extrapolations are checked.
+    AsEquivalent,
     /// Neither reached nor extrapolable (no asymptotic range).
     NotReached,
 }
@@ -109,10 +112,11 @@ pub fn costs(sweep: &CaseSweep, fit: &EngineFit) -> Vec<CostToAccuracy> {
         .filter_map(|r| Some((r.error_max?, r.cpu_s_min, r.increment)))
         .min_by(|a, b| a.0.total_cmp(&b.0));
     let order = fit.observed_order.as_ref().map(|o| o.value);
+    let round_off = |value: f64| twin_below(sweep, &fit.engine, value);
     let floor = fit
         .floor
         .clone()
-        .or_else(|| order.and_then(|p| levelling(&ok, p, &fit.engine)));
+        .or_else(|| order.and_then(|p| levelling(&ok, p, round_off)));
     TARGETS
         .iter()
         .map(|&target| {
@@ -137,12 +141,18 @@ pub fn costs(sweep: &CaseSweep, fit: &EngineFit) -> Vec<CostToAccuracy> {
                 .filter(|r| r.status == "ok")
                 .filter_map(|r| r.error_max)
                 .reduce(f64::min);
-            let check = sweep
-                .checks
-                .iter()
-                .find(|c| c.engine == fit.engine && c.target == target);
-            let checked = check.filter(|c| c.ended == Ended::Levelled);
-            if let Some(c) = check.filter(|c| c.ended == Ended::Budget && !c.runs.is_empty()) {
+            if let Some(other) = &sweep.same_as {
+                cost.reached = Reached::AsEquivalent;
+                cost.cause = Some(other.clone());
+                return cost;
+            }
+            // A check that fell short at this accuracy or a coarser one bounds this one from
+            // below; one that levelled at any accuracy is a floor for every finer one.
+            let mine = || sweep.checks.iter().filter(|c| c.engine == fit.engine);
+            let short = mine()
+                .find(|c| c.target >= target && c.ended == Ended::Budget && !c.runs.is_empty());
+            let checked = mine().find(|c| c.ended == Ended::Levelled);
+            if let Some(c) = short {
                 cost.reached = Reached::AtLeast;
                 cost.cpu_s_per_simulated_s = c.runs.iter().map(|r| r.2).reduce(f64::max);
                 cost.error = c.runs.iter().filter_map(|r| r.1).reduce(f64::min);
@@ -155,11 +165,12 @@ pub fn costs(sweep: &CaseSweep, fit: &EngineFit) -> Vec<CostToAccuracy> {
                     cost.error = Some(f.value);
                     cost.cause = Some(f.cause.clone());
                 }
-                (_, Some(_), _, _) => {
+                (_, Some(_), _, _) if smallest.is_some_and(|e| e > target) => {
                     cost.reached = Reached::Floor;
                     cost.error = smallest;
-                    cost.cause = Some(if fit.engine.contains("f32") {
-                        "f32 round-off (runs toward the accuracy level off)".into()
+                    cost.cause = Some(if smallest.is_some_and(round_off) {
+                        "f32 round-off: runs toward the accuracy level off, its f64 twin goes lower"
+                            .into()
                     } else {
                         "runs toward the accuracy level off".into()
                     });
@@ -179,21 +190,37 @@ pub fn costs(sweep: &CaseSweep, fit: &EngineFit) -> Vec<CostToAccuracy> {
 }
 
 /// A floor where the fitted path's error is levelling: the local order of its last two ok
-/// points below half the fitted order `p` (its smallest error; f32 round-off for an f32
-/// engine).
-fn levelling(ok: &[&Row], p: f64, engine: &str) -> Option<Floor> {
+/// points below half the fitted order `p` (its smallest error; f32 round-off where
+/// `round_off` says the engine's f64 twin goes lower).
+fn levelling(ok: &[&Row], p: f64, round_off: impl Fn(f64) -> bool) -> Option<Floor> {
     let [a, b] = [ok.get(ok.len().checked_sub(2)?)?, ok.last()?];
     let (ea, eb) = (a.error_max?, b.error_max?);
     let local = (ea / eb).ln() / (a.increment / b.increment).ln();
+    let value = eb.min(ea);
     (local < p / 2.0).then(|| Floor {
-        value: eb.min(ea),
-        cause: if engine.contains("f32") {
+        value,
+        cause: if round_off(value) {
             format!("f32 round-off: levelling (local order {local:.2}, fitted {p:.2})")
         } else {
             format!("levelling: local order {local:.2}, under half the fitted {p:.2}")
         },
         path: b.path.clone(),
     })
+}
+
+/// Whether `engine` is an f32 engine whose f64 twin, on the same case, reaches an error under
+/// half of `value`: a level the f64 arithmetic goes below is the f32 engine's round-off.
+fn twin_below(sweep: &CaseSweep, engine: &str, value: f64) -> bool {
+    let twin = engine.replace("f32", "f64");
+    twin != engine
+        && sweep
+            .paths
+            .iter()
+            .filter(|p| p.engine == twin)
+            .flat_map(|p| p.points.iter())
+            .filter(|q| q.status == crate::run::sweep::Status::Ok)
+            .filter_map(|q| q.error)
+            .any(|e| e.0 < value / 2.0)
 }
 
 /// Below this observed order a time to accuracy is not extrapolated (a slope that shallow is
@@ -249,6 +276,7 @@ mod tests {
             paths: vec![path],
             fits,
             checks: Vec::new(),
+            same_as: None,
         }
     }
 

@@ -42,11 +42,13 @@ pub const GROWTH: f64 = 10.0;
 pub const ROUND_OFF: f64 = 1e-12;
 
 /// The fewest increments a run needs for its growth to be judged (the stability map's scenes
-/// are continued in time where a case is shorter than this at an increment).
-pub const MIN_INCREMENTS: f64 = 20.0;
+/// are continued in time where a case is shorter than this at an increment). Over the second
+/// half of such a run, a decade of growth in energy is an amplitude growing at least 1.12× per
+/// increment: slower growth shows only on a longer run.
+pub use crate::run::stability::MIN_INCREMENTS;
 
 /// How much longer the horizon on which a run growing at its end is confirmed.
-pub const CONFIRM: f64 = 4.0;
+pub const CONFIRM: usize = 4;
 
 /// What the rule says of a run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -56,7 +58,8 @@ pub enum Verdict {
     Bounded,
     /// Its level is at its largest at the end and has grown by [`GROWTH`] over the second half.
     Growing,
-    /// Fewer than [`MIN_INCREMENTS`] increments: the horizon cannot tell.
+    /// Fewer than [`MIN_INCREMENTS`] increments, or too few rows for every window to hold
+    /// one: the horizon cannot tell.
     TooShort,
 }
 
@@ -79,6 +82,9 @@ pub struct Growth {
 /// The level of each row of `history` (see the module doc), with its time; `None` for a
 /// history without rows.
 pub fn levels(history: &History) -> Option<Vec<(f64, f64)>> {
+    if history.rows.is_empty() {
+        return None;
+    }
     let t = history.column("t")?;
     let energies = (
         history.column(E_KINETIC),
@@ -105,7 +111,7 @@ pub fn levels(history: &History) -> Option<Vec<(f64, f64)>> {
                 .iter()
                 .map(|r| r.iter().skip(1).map(|x| x * x).sum())
                 .collect();
-            let early = squares.len().div_ceil(WINDOWS).max(1);
+            let early = squares.len().div_ceil(WINDOWS);
             let scale = squares[..early].iter().fold(0.0f64, |m, x| m.max(*x));
             squares
                 .iter()
@@ -128,14 +134,16 @@ pub fn judge(history: &History, increments: f64) -> Option<Growth> {
     let end = levels.last()?.1;
     let span = (t1 - t0).max(f64::MIN_POSITIVE);
     let mut windows = [ROUND_OFF; WINDOWS];
+    let mut filled = [false; WINDOWS];
     for (t, l) in &levels {
         let k = (((t - t0) / span * WINDOWS as f64) as usize).min(WINDOWS - 1);
         windows[k] = windows[k].max(*l);
+        filled[k] = true;
     }
     let last = windows[WINDOWS - 1];
     let second_half = last / windows[WINDOWS / 2 - 1];
     let largest = windows.iter().fold(0.0f64, |m, x| m.max(*x));
-    let verdict = if increments < MIN_INCREMENTS {
+    let verdict = if increments < MIN_INCREMENTS || filled.contains(&false) {
         Verdict::TooShort
     } else if last >= largest && second_half >= GROWTH {
         Verdict::Growing
@@ -316,6 +324,14 @@ mod tests {
         let h = energy(201, 1.0, |t| (50.0 * t).exp());
         assert_eq!(judge(&h, 19.0).unwrap().verdict, Verdict::TooShort);
         assert_eq!(judge(&h, 20.0).unwrap().verdict, Verdict::Growing);
+        // Too few rows for every window to hold one, however many increments.
+        let sparse = energy(6, 1.0, |t| 1.0 + 0.1 * (t * 20.0).sin());
+        assert_eq!(judge(&sparse, 1000.0).unwrap().verdict, Verdict::TooShort);
+        let empty = History {
+            columns: vec!["t".into(), "u".into()],
+            rows: Vec::new(),
+        };
+        assert!(judge(&empty, 1000.0).is_none());
     }
 
     #[test]

@@ -20,7 +20,10 @@
 //! step's normal impulse is spread evenly over the step, and a row at t carries the impulse
 //! over [t − w, t + w] divided by 2w, with w half the shorter of the output intervals on either
 //! side (so that a force that changes linearly is read without bias). The first and last rows
-//! have no room on one side: they carry the mean force of the step that holds them. Rapier
+//! have no room on one side: they carry the mean force of the step that holds them, or of the
+//! full step before it where that step is the run's last, cut short to end on the duration
+//! (rapier's position correction does not scale with a step's length, so the impulse of a short
+//! step over its length is no force). Rapier
 //! resolves contact by impulses, which come step by step and, where a contact carries little
 //! load, not in every step; a row that sampled one step's impulse would alias them.
 //!
@@ -186,6 +189,9 @@ pub struct Recorder<'a> {
     impulse: Vec<f64>,
     /// Per contact, the mean force of the last step.
     last_force: Vec<f64>,
+    /// The longest step so far, and the force of the last step that long.
+    longest_step: f64,
+    full_force: Vec<f64>,
     /// The edges of the rows' windows: row j's is [edges[2j], edges[2j + 1]] (of no length at
     /// the first and last rows).
     edges: Vec<f64>,
@@ -247,6 +253,8 @@ impl<'a> Recorder<'a> {
             previous: None,
             impulse: vec![0.0; nc],
             last_force: vec![0.0; nc],
+            longest_step: 0.0,
+            full_force: vec![0.0; nc],
             edges,
             next_edge: 0,
             at_edges: std::collections::VecDeque::new(),
@@ -290,6 +298,19 @@ impl<'a> Recorder<'a> {
                 }
                 *was = Some(now);
             }
+            // A step shorter than the run's others (the last, cut to end on the duration) is
+            // no force to read alone: rapier's position correction does not scale with its
+            // length. A row that reads one step's force reads the last full step's instead.
+            let length = record.time - p.time;
+            if length >= self.longest_step * (1.0 - 1e-6) {
+                self.longest_step = self.longest_step.max(length);
+                self.full_force.clone_from(f);
+            }
+            let read = if length >= self.longest_step * (1.0 - 1e-6) {
+                f.clone()
+            } else {
+                self.full_force.clone()
+            };
             // The impulse at each window edge this step passes, the step's spread evenly.
             while !self.contact_columns.is_empty()
                 && self.next_edge < self.edges.len()
@@ -302,13 +323,13 @@ impl<'a> Recorder<'a> {
                     .zip(f)
                     .map(|(i, f)| i + f * into)
                     .collect();
-                self.at_edges.push_back((at, f.clone()));
+                self.at_edges.push_back((at, read.clone()));
                 self.next_edge += 1;
             }
             for (i, f) in self.impulse.iter_mut().zip(f) {
                 *i += f * (record.time - p.time);
             }
-            self.last_force.clone_from(f);
+            self.last_force = read;
         }
         // Rows the new record has passed: the previous record is the last at or before them.
         while self.next < self.times.len() && record.time > self.times[self.next] + self.tol {

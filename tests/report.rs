@@ -393,7 +393,7 @@ fn equivalent_cases_are_found_and_agree() {
 #[test]
 fn the_stability_map_is_in_the_report_and_matches_its_csvs() {
     let (out, _, report) = run_into_temporary_directory();
-    assert!(report.contains("## Where each engine stays stable"));
+    assert!(report.contains("# Where each engine stays stable"));
     let mut reader = csv::Reader::from_path(out.path().join("stability.csv")).unwrap();
     let records: Vec<Vec<String>> = reader
         .records()

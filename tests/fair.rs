@@ -358,23 +358,27 @@ fn a_column_without_a_peak_is_compared_in_its_unit_and_no_rows_is_no_error() {
     assert_eq!((c.rows, c.worst_max), (0, None));
 }
 
+/// The cells of `cases` run by `engines` that need a cause, attributed as the main command does.
+fn attributed(cases: Vec<Scene>, engines: &[&str]) -> Vec<attribution::Attribution> {
+    let plan = Plan {
+        cases,
+        engines: engines.iter().map(|e| named(e)).collect(),
+        settings: RunSettings::default(),
+    };
+    let outcome = run::execute(&plan, false);
+    attribution::measure(&plan, &outcome, &[], false)
+}
+
 #[test]
 fn the_run_names_each_cause_with_its_control() {
     // contact_reopen run as the main command runs it: `explicit` misses its tolerance through
     // its penalty contact (measured 6.1e-1; at 16 and 256 k_p, 2.0e-1 and 4.7e-2: order 0.46
     // in 1/k_p, about the 0.5 of a penalty impact's duration), rapier_f32 through its
     // precision (1.3e-1; the same settings in f64, 1.3e-2).
-    let cases = vec![stress_scene("contact_reopen")];
-    let engines = ["analytic", "reference", "explicit", "rapier_f32"]
-        .map(named)
-        .into();
-    let plan = Plan {
-        cases,
-        engines,
-        settings: RunSettings::default(),
-    };
-    let outcome = run::execute(&plan, false);
-    let found = attribution::measure(&plan, &outcome, &[], false);
+    let found = attributed(
+        vec![stress_scene("contact_reopen")],
+        &["analytic", "reference", "explicit", "rapier_f32"],
+    );
     let cause = |engine: &str| {
         let a = found.iter().find(|a| a.engine == engine).unwrap();
         assert!(matches!(a.flag, Flag::MissesTolerance(_)), "{a:?}");
@@ -427,24 +431,18 @@ fn equivalent_cases_get_the_same_cause() {
     .iter()
     .map(|id| common::scene(id))
     .collect();
-    let engines = [
-        "analytic",
-        "reference",
-        "explicit",
-        "rapier_f64",
-        "rapier_f32",
-        "rapier_f64_default",
-        "rapier_f32_default",
-    ]
-    .map(named)
-    .into();
-    let plan = Plan {
+    let found = attributed(
         cases,
-        engines,
-        settings: RunSettings::default(),
-    };
-    let outcome = run::execute(&plan, false);
-    let found = attribution::measure(&plan, &outcome, &[], false);
+        &[
+            "analytic",
+            "reference",
+            "explicit",
+            "rapier_f64",
+            "rapier_f32",
+            "rapier_f64_default",
+            "rapier_f32_default",
+        ],
+    );
     let twins = [
         ("rigid2d_pin_lumped", "rigid3d_pin_lumped"),
         ("springs_grounded_a", "springs_grounded_b"),

@@ -366,18 +366,27 @@ fn map_pair(pair: &Pair, error_of: &ErrorOf) -> (Vec<Point>, Option<Critical>) {
         return (points, None);
     }
     let ceiling = (CEILING * own / stable).max(RATIOS[RATIOS.len() - 1] * LADDER * LADDER);
-    let critical = search(pair, ceiling, &mut points, &run);
+    let critical = search(ceiling, &mut points, &run).and_then(|(at, bound)| {
+        Some(Critical {
+            case: scene.id.clone(),
+            engine: engine.name().to_string(),
+            increment: at.increment?,
+            explicit_stable: stable,
+            bound,
+            own_step: own,
+        })
+    });
     (points, critical)
 }
 
-/// The critical increment of a pair from its runs so far, running the ones it needs: the
-/// bracket the grid (and the own step) gives, then beyond or below it, then bisected.
+/// The run at a pair's critical increment and how it is bounded, from its runs so far, running
+/// the ones it needs: the bracket the grid (and the own step) gives, then beyond it up to
+/// `ceiling` or below it, then bisected.
 fn search(
-    pair: &Pair,
     ceiling: f64,
     points: &mut Vec<Point>,
     run: &dyn Fn(f64, Search) -> Point,
-) -> Option<Critical> {
+) -> Option<(Point, Bound)> {
     let (mut low, mut high) = bracket(points);
     if high.is_none() {
         (low, high) = beyond(low, ceiling, points, run);
@@ -406,15 +415,7 @@ fn search(
             }
         }
     }
-    let at = low.or(high)?;
-    Some(Critical {
-        case: pair.scene.id.clone(),
-        engine: pair.engine.name().to_string(),
-        increment: at.increment?,
-        explicit_stable: pair.stable,
-        bound,
-        own_step: pair.own,
-    })
+    Some((low.or(high)?, bound))
 }
 
 /// The first bracket from the grid and the own step, by ratio: (the largest bounded run below
@@ -478,4 +479,78 @@ fn below(
         }
     }
     (None, high)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A run at `ratio` whose outcome `at` gives (increment = ratio).
+    fn run_with(at: impl Fn(f64) -> Outcome) -> impl Fn(f64, Search) -> Point {
+        move |ratio, search| Point {
+            case: "synthetic".into(),
+            engine: "synthetic".into(),
+            search,
+            ratio,
+            increment: Some(ratio),
+            continued: Some(1),
+            outcome: at(ratio),
+            error_max: None,
+            growth: None,
+            message: None,
+        }
+    }
+
+    fn grid(run: &dyn Fn(f64, Search) -> Point) -> Vec<Point> {
+        RATIOS.iter().map(|r| run(*r, Search::Grid)).collect()
+    }
+
+    /// Bounded up to 1.3, unstable above, but bounded again at 2 (a chattering contact): the
+    /// bracket is the first unstable run and the largest bounded one below it, bisected to 1 %.
+    #[test]
+    fn a_non_monotone_map_is_bisected_below_its_first_unstable_run() {
+        let run = run_with(|r| match r {
+            r if r <= 1.3 => Outcome::Accurate,
+            r if (1.9..2.1).contains(&r) => Outcome::Inaccurate,
+            _ => Outcome::Unstable,
+        });
+        let mut points = grid(&run);
+        let (at, bound) = search(64.0, &mut points, &run).unwrap();
+        assert_eq!(bound, Bound::Bisected);
+        assert!(
+            at.ratio <= 1.3 && at.ratio * BISECTION_WIDTH > 1.3,
+            "{}",
+            at.ratio
+        );
+    }
+
+    /// Bounded on the whole grid: × 4 from the grid's last ratio up to the ceiling, each run
+    /// there; bounded at all of them is "at least" the ceiling.
+    #[test]
+    fn a_map_bounded_on_its_grid_goes_on_to_its_ceiling() {
+        let run = run_with(|_| Outcome::Inaccurate);
+        let mut points = grid(&run);
+        let (at, bound) = search(1000.0, &mut points, &run).unwrap();
+        assert_eq!((at.ratio, bound), (1000.0, Bound::AtLeast));
+        let beyond: Vec<f64> = points
+            .iter()
+            .filter(|p| p.search == Search::Beyond)
+            .map(|p| p.ratio)
+            .collect();
+        assert_eq!(beyond, [16.0, 64.0, 256.0, 1000.0]);
+    }
+
+    /// A run that fails inside the bracket leaves it open: the largest bounded run is a lower
+    /// bound, not a bisected limit.
+    #[test]
+    fn a_failed_run_inside_the_bracket_leaves_a_lower_bound() {
+        let run = run_with(|r| match r {
+            r if r <= 1.0 => Outcome::Accurate,
+            r if r < 1.1 => Outcome::Failed,
+            _ => Outcome::Unstable,
+        });
+        let mut points = grid(&run);
+        let (at, bound) = search(64.0, &mut points, &run).unwrap();
+        assert_eq!((at.ratio, bound), (0.98, Bound::AtLeast));
+    }
 }

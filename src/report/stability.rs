@@ -161,10 +161,10 @@ pub fn read_all(out: &Path) -> Map {
 
 /// The critical increment as the report prints it: seconds, with `≥` or `<` where the search
 /// did not bracket it; where a bound "at least" stops short of the engine's own step (its case
-/// too short to continue), it says so instead of giving a number.
+/// too short to continue, or a run failed), it says so instead of giving a number.
 pub fn critical_cell(c: &Critical) -> String {
     if !c.covers_own_step() {
-        return format!("too short past {:.3e}", c.increment);
+        return format!("not mapped past {:.3e}", c.increment);
     }
     let prefix = match c.bound {
         Bound::Bisected => "",

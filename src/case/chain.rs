@@ -154,8 +154,10 @@ impl Chain {
         let ends = [0, n + 1]
             .into_iter()
             .flat_map(|i| [held(i, 0, None), held(i, 1, None)]);
-        let mut shaped: Vec<BoundaryCondition> = ends.clone().collect();
-        let mut released: Vec<BoundaryCondition> = ends.collect();
+        let mut shaped: Vec<BoundaryCondition> = Vec::with_capacity(2 * n + 4);
+        let mut released: Vec<BoundaryCondition> = Vec::with_capacity(n + 4);
+        shaped.extend(ends.clone());
+        released.extend(ends);
         for i in 1..=n {
             shaped.push(held(i, 0, Some(self.amplitude * self.shape(i))));
             shaped.push(held(i, 1, None));

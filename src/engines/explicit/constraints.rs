@@ -11,8 +11,11 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     pub fn constraints(&self, step: &Step) -> Constraints<S> {
         let np = self.particles.len();
         let nb = self.bodies.len();
+        // Held directions per particle while the conditions are read; kept as the distinct
+        // sets and an index per particle.
+        let mut particle_held: Vec<HeldSet<S::V>> = vec![HeldSet::default(); np];
         let mut c = Constraints {
-            particle_held: vec![Vec::new(); np],
+            held_sets: Vec::new(),
             motions: Vec::new(),
             particle_motion: Vec::new(),
             body_held_t: vec![Vec::new(); nb],
@@ -39,7 +42,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 (Point::Particle(_), Dof::Rotation(_)) => unreachable!("validated"),
             };
             match target {
-                Target::Particle(i, d) => c.particle_held[i].push(d),
+                Target::Particle(i, d) => particle_held[i].push(d),
                 Target::Translation(b, d) => c.body_held_t[b].push(d),
                 Target::Rotation(b, g) => c.body_held_r[b].push(g),
             }
@@ -50,12 +53,12 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         // The distinct held sets, each with its projection (the last one found is tried first:
         // neighbours usually share theirs; a set not among the first 64 is added again rather
         // than searched for, so a scene of many frames compiles in linear time).
-        let mut distinct: Vec<&Vec<S::V>> = Vec::new();
+        let mut distinct: Vec<&[S::V]> = Vec::new();
         let mut last = 0;
-        c.particle_motion = c
-            .particle_held
+        c.particle_motion = particle_held
             .iter()
             .map(|h| {
+                let h = h.directions();
                 if distinct.get(last).is_none_or(|d| *d != h) {
                     last = distinct
                         .iter()
@@ -70,6 +73,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             })
             .collect();
         c.motions = distinct.iter().map(|h| Motion::of(h, S::DIM)).collect();
+        c.held_sets = distinct.into_iter().map(<[S::V]>::to_vec).collect();
         for b in 0..nb {
             c.body_free_r[b] = S::free_rotations(&c.body_held_r[b]);
             let free_r = S::ROT - c.body_held_r[b].len();
@@ -175,9 +179,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         if !self.bodies.is_empty() || !self.contacts.is_empty() {
             return None;
         }
-        let free: Vec<Vec<S::V>> = (self.particles.iter().zip(&held.particle_held))
-            .map(|(p, h)| free_axes(&p.axes, h))
-            .collect();
+        let free = |i: usize| free_axes(&self.particles[i].axes, held.particle_held(i));
         let mut stiffness = vec![0.0; self.particles.len() * S::DIM];
         let mut damping = vec![0.0; self.particles.len() * S::DIM];
         let entry = |e: &S::V, f: &S::V, d: &S::V, c: f64, t: f64| {
@@ -188,11 +190,14 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         let add = |rows: &mut Vec<f64>, ends: [&Point<S>; 2], d: &S::V, c: f64, t: f64| {
             for end in ends {
                 let Point::Particle(i) = end else { continue };
-                for (a, e) in free[*i].iter().enumerate() {
+                let (axes, count) = free(*i);
+                for (a, e) in axes[..count].iter().enumerate() {
                     let mut sum = 0.0;
                     for other in ends {
                         if let Point::Particle(j) = other {
-                            sum += free[*j].iter().map(|f| entry(e, f, d, c, t)).sum::<f64>();
+                            let (axes, count) = free(*j);
+                            let row = axes[..count].iter().map(|f| entry(e, f, d, c, t));
+                            sum += row.sum::<f64>();
                         }
                     }
                     rows[*i * S::DIM + a] += sum;
@@ -219,6 +224,10 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 (s.direction, s.length0)
             }
         };
+        for s in &self.line_springs {
+            let [a, b] = s.ends();
+            add(&mut stiffness, [&a, &b], &s.direction, s.c, 0.0);
+        }
         for s in &self.springs {
             let (d, len) = direction(s);
             let tension = if s.axial && FINITE {
@@ -245,22 +254,72 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     pub fn free_dofs(&self, held: &Constraints<S>) -> Vec<Target<S>> {
         let mut out = Vec::new();
         for (i, p) in self.particles.iter().enumerate() {
-            let free = free_axes(&p.axes, &held.particle_held[i]);
-            out.extend(free.into_iter().map(|d| Target::Particle(i, d)));
+            let (free, count) = free_axes(&p.axes, held.particle_held(i));
+            out.extend(free[..count].iter().map(|d| Target::Particle(i, *d)));
         }
         for (b, body) in self.bodies.iter().enumerate() {
-            let free = free_axes(&body.axes, &held.body_held_t[b]);
-            out.extend(free.into_iter().map(|d| Target::Translation(b, d)));
-            let free = free_axes(&body.rot_axes, &held.body_held_r[b]);
-            out.extend(free.into_iter().map(|g| Target::Rotation(b, g)));
+            let (free, count) = free_axes(&body.axes, &held.body_held_t[b]);
+            out.extend(free[..count].iter().map(|d| Target::Translation(b, *d)));
+            let (free, count) = free_axes(&body.rot_axes, &held.body_held_r[b]);
+            out.extend(free[..count].iter().map(|g| Target::Rotation(b, *g)));
         }
         out
+    }
+
+    /// How many generalised DOFs a step's constraints leave free ([`Model::free_dofs`]'s
+    /// length, without listing them).
+    pub fn free_dof_count(&self, held: &Constraints<S>) -> usize {
+        let particles = self.particles.iter().enumerate();
+        let particles = particles.map(|(i, p)| free_axes(&p.axes, held.particle_held(i)).1);
+        let bodies = self.bodies.iter().enumerate().map(|(b, body)| {
+            free_axes(&body.axes, &held.body_held_t[b]).1
+                + free_axes(&body.rot_axes, &held.body_held_r[b]).1
+        });
+        particles.sum::<usize>() + bodies.sum::<usize>()
     }
 }
 
 /// The axes of a node's frame that the held directions leave free (no held direction within
-/// 60° of them).
-fn free_axes<V: Lin>(axes: &[V], held: &[V]) -> Vec<V> {
-    let free = |a: &&V| held.iter().all(|h| h.dot(a).abs() < 0.5);
-    axes.iter().filter(free).copied().collect()
+/// 60° of them): the first `count` of the array.
+fn free_axes<V: Lin>(axes: &[V], held: &[V]) -> ([V; 3], usize) {
+    let mut out = [V::zero(); 3];
+    let mut count = 0;
+    for a in axes {
+        if held.iter().all(|h| h.dot(a).abs() < 0.5) {
+            out[count] = *a;
+            count += 1;
+        }
+    }
+    (out, count)
+}
+
+/// The directions held on one particle while a step's conditions are read (at most three:
+/// a fixed array, so that a scene of a million particles allocates none per particle).
+#[derive(Debug, Clone, Copy)]
+struct HeldSet<V: Lin> {
+    directions: [V; 3],
+    count: usize,
+}
+
+impl<V: Lin> Default for HeldSet<V> {
+    fn default() -> Self {
+        HeldSet {
+            directions: [V::zero(); 3],
+            count: 0,
+        }
+    }
+}
+
+impl<V: Lin> HeldSet<V> {
+    /// Hold `d` too (a fourth direction adds nothing in three dimensions and is left out).
+    fn push(&mut self, d: V) {
+        if self.count < 3 {
+            self.directions[self.count] = d;
+            self.count += 1;
+        }
+    }
+
+    fn directions(&self) -> &[V] {
+        &self.directions[..self.count]
+    }
 }

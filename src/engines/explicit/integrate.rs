@@ -53,7 +53,11 @@ pub const ENERGY_GUARD: f64 = 2.0;
 /// ratio `ratio` = h/(2/ω_max): central differences' reading, 1/(1 − ratio²) below 1.
 pub use crate::engines::central_difference_energy_reading as measured_energy_allowance;
 
-/// Increments between two looks at the interruption flag.
+/// Particle- and body-increments between two looks at the interruption flag (a few
+/// milliseconds of work whatever the scene's size; at most [`INTERRUPT_STRIDE`] increments).
+const INTERRUPT_WORK: u64 = 1 << 16;
+
+/// Increments between two looks at the interruption flag, at most.
 const INTERRUPT_STRIDE: u64 = 4096;
 
 /// Above this many free DOFs, a scene without bodies or contact takes its stable increment
@@ -77,7 +81,7 @@ pub fn stable_increment<S: Space, const FINITE: bool>(
             continue;
         }
         let held = model.constraints(step);
-        let dense = model.free_dofs(&held).len() <= DENSE_LIMIT;
+        let dense = model.free_dof_count(&held) <= DENSE_LIMIT;
         let bound = if dense {
             None
         } else {
@@ -368,7 +372,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         if self
             .stable
             .is_some_and(|s| self.h > s.increment * (1.0 + 1e-12))
-            && model.free_dofs(held).len() <= DENSE_LIMIT
+            && model.free_dof_count(held) <= DENSE_LIMIT
         {
             let treatment = self.settings.damping;
             self.past_limit = PastLimit::new(model, &self.cfg, held, self.h, treatment);
@@ -390,11 +394,13 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
             self.start_state(&held);
         }
         let mut plan = self.plan(si, duration, held);
+        let size = (self.model.particles.len() + self.model.bodies.len()).max(1) as u64;
+        let stride = (INTERRUPT_WORK / size).clamp(1, INTERRUPT_STRIDE);
         for n in plan.first..=plan.first + plan.count {
             if n == plan.first + plan.count && !plan.last {
                 break; // the next step starts from this configuration
             }
-            if n.is_multiple_of(INTERRUPT_STRIDE) && crate::interrupt::requested() {
+            if n.is_multiple_of(stride) && crate::interrupt::requested() {
                 return Err(EngineError::Failed(format!("interrupted at increment {n}")));
             }
             self.increment(n, &mut plan)?;
@@ -463,6 +469,11 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         }
         self.watch_solids(n)?;
         let restart = !self.started || n == plan.first;
+        let advances = n != plan.first + plan.count;
+        if !restart && !row && advances && !plan.velocity.reads_velocity() {
+            self.advance_fused(n, plan);
+            return Ok(());
+        }
         let power = if restart {
             self.restart(plan)
         } else {
@@ -492,7 +503,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
             self.write_row(n, plan)?;
         }
         self.last_power = power;
-        if n == plan.first + plan.count {
+        if !advances {
             return Ok(());
         }
         model.advance(
@@ -506,6 +517,33 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         std::mem::swap(&mut self.v_half, &mut self.v_next);
         std::mem::swap(&mut self.acc_prev, &mut self.acc);
         Ok(())
+    }
+
+    /// The rest of increment n where no force reads the velocity and no row falls: the
+    /// particles in one fused pass ([`Model::step_particles`], their half-step velocities
+    /// updated in place, their accelerations kept only for the step's last increment, which
+    /// the next step restarts from), then the bodies as the general path takes them.
+    fn advance_fused(&mut self, n: u64, plan: &StepPlan<S>) {
+        let (model, h, held) = (self.model, self.h, &plan.held);
+        let (cfg, carry, acc) = (&mut self.cfg, &mut self.carry, &mut self.acc);
+        let (forces, v_half) = (&self.forces, &mut self.v_half);
+        if n + 1 == plan.first + plan.count {
+            model.step_particles::<true>(cfg, carry, h, forces, held, v_half, acc);
+        } else {
+            model.step_particles::<false>(cfg, carry, h, forces, held, v_half, acc);
+        }
+        let counters = &mut self.counters;
+        let v_next = &mut self.v_next;
+        model.body_accelerations(cfg, forces, v_half, held, acc, counters);
+        v_next.set_plus_bodies(v_half, h, acc);
+        model.advance_bodies(cfg, carry, h, v_next, held, counters);
+        if n > 0 {
+            self.dissipated += 0.5 * h * self.last_power;
+        }
+        self.last_power = 0.0;
+        std::mem::swap(&mut self.v_half.b, &mut self.v_next.b);
+        std::mem::swap(&mut self.v_half.w, &mut self.v_next.w);
+        std::mem::swap(&mut self.acc_prev, &mut self.acc);
     }
 
     /// At t = 0 and at every step boundary v(n) is known (at a boundary: the previous step
@@ -650,7 +688,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         let limit = self.stable.map_or("none computed".to_string(), |s| {
             format!("{:e}, ratio {:.4}", s.increment, h / s.increment)
         });
-        let dofs = self.model.free_dofs(&plan.held).len();
+        let dofs = self.model.free_dof_count(&plan.held);
         let mode = if self.v_next.is_finite() && dofs <= DENSE_LIMIT {
             let treatment = self.settings.damping;
             growing_mode(

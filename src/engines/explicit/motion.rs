@@ -44,6 +44,19 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         {
             *a = held.motions[*motion as usize].project(*f * *inverse_mass);
         }
+        self.body_accelerations(cfg, forces, vel, held, out, counters);
+    }
+
+    /// The bodies' part of [`Model::accelerations`].
+    pub fn body_accelerations(
+        &self,
+        cfg: &Config<S>,
+        forces: &Forces<S>,
+        vel: &Rates<S>,
+        held: &Constraints<S>,
+        out: &mut Rates<S>,
+        counters: &mut Counters,
+    ) {
         for b in 0..self.bodies.len() {
             let inertia = &cfg.inertia[b];
             let mut f = forces.b[b];
@@ -104,6 +117,49 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         for ((x, c), v) in cfg.u.iter_mut().zip(carry.p.iter_mut()).zip(&vel.p) {
             compensated_add(x, c, *v * h);
         }
+        self.advance_bodies(cfg, carry, h, vel, held, counters);
+    }
+
+    /// The particles' part of an increment whose forces do not read the velocity, in one pass
+    /// over them: a(n) = P M⁻¹ f(n) (into `acc` where `STORE_ACC`), v(n+½) = v(n−½) + h·a(n)
+    /// in place of v(n−½) in `v_half`, and x(n+1) = x(n) + h·v(n+½) into `cfg` (compensated).
+    /// The arithmetic of [`Model::accelerations`], [`Rates::set_plus`] and [`Model::advance`]
+    /// one after the other, bit for bit, with each particle's data read once instead of three
+    /// times and the acceleration written only where a later increment reads it.
+    #[allow(clippy::too_many_arguments)]
+    pub fn step_particles<const STORE_ACC: bool>(
+        &self,
+        cfg: &mut Config<S>,
+        carry: &mut Rates<S>,
+        h: f64,
+        forces: &Forces<S>,
+        held: &Constraints<S>,
+        v_half: &mut Rates<S>,
+        acc: &mut Rates<S>,
+    ) {
+        let motions = &held.motions;
+        let state = (cfg.u.iter_mut().zip(carry.p.iter_mut())).zip(v_half.p.iter_mut());
+        let data = (forces.p.iter().zip(&self.inverse_masses)).zip(&held.particle_motion);
+        for (i, (((x, c), v), ((f, inverse_mass), motion))) in state.zip(data).enumerate() {
+            let a = motions[*motion as usize].project(*f * *inverse_mass);
+            if STORE_ACC {
+                acc.p[i] = a;
+            }
+            *v += a * h;
+            compensated_add(x, c, *v * h);
+        }
+    }
+
+    /// The bodies' part of [`Model::advance`].
+    pub fn advance_bodies(
+        &self,
+        cfg: &mut Config<S>,
+        carry: &mut Rates<S>,
+        h: f64,
+        vel: &Rates<S>,
+        held: &Constraints<S>,
+        counters: &mut Counters,
+    ) {
         for ((x, c), v) in cfg.bu.iter_mut().zip(carry.b.iter_mut()).zip(&vel.b) {
             compensated_add(x, c, *v * h);
         }
@@ -126,8 +182,8 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
 
     /// Remove velocity components along held directions.
     pub fn enforce(&self, vel: &mut Rates<S>, held: &Constraints<S>) {
-        for (v, h) in vel.p.iter_mut().zip(&held.particle_held) {
-            *v = project(h, *v);
+        for (v, m) in vel.p.iter_mut().zip(&held.particle_motion) {
+            *v = project(&held.held_sets[*m as usize], *v);
         }
         for b in 0..self.bodies.len() {
             vel.b[b] = project(&held.body_held_t[b], vel.b[b]);

@@ -65,13 +65,35 @@ pub(super) struct Velocities<S: Space> {
 }
 
 impl<S: Space> Velocities<S> {
+    /// v(n) shaped like the model; the solve's work space is made by the first increment that
+    /// needs it ([`Velocities::shaped`]), so a scene whose forces never read the velocity holds
+    /// none.
     pub(super) fn new<const FINITE: bool>(model: &Model<S, FINITE>) -> Self {
         Velocities {
             v_n: model.zero_rates(),
-            guess: model.zero_rates(),
-            total: model.zero_forces(),
+            guess: Rates::zeros(0, 0),
+            total: Forces::zeros(0, 0, 0),
             directions: Vec::new(),
         }
+    }
+
+    /// The work space shaped like the model.
+    fn shaped<const FINITE: bool>(&mut self, model: &Model<S, FINITE>) -> &mut Self {
+        let shape = (
+            model.particles.len(),
+            model.bodies.len(),
+            model.contacts.len(),
+        );
+        if (
+            self.total.p.len(),
+            self.total.b.len(),
+            self.total.contact.len(),
+        ) != shape
+        {
+            self.guess = model.zero_rates();
+            self.total = model.zero_forces();
+        }
+        self
     }
 }
 
@@ -129,6 +151,7 @@ impl<S: Space> VelocityRule<S> {
                 Ok(0.0)
             }
             VelocityRule::Lagged => {
+                let work = work.shaped(model);
                 work.v_n.clone_from(v_half);
                 work.total.copy_from(forces);
                 if !model.has_dashpots() {
@@ -145,6 +168,7 @@ impl<S: Space> VelocityRule<S> {
                 solved,
                 dofs,
             } => {
+                let work = work.shaped(model);
                 model.dashpot_directions(cfg, &mut work.directions);
                 if !*solved {
                     // Without dashpots `work.total` holds the position forces, whose

@@ -591,7 +591,10 @@ macro_rules! backend {
                         }
                         world.step();
                         steps += 1;
-                        if steps % 1024 == 0 && crate::interrupt::requested() {
+                        // A look at the interruption flag every few milliseconds of work:
+                        // every 1024 steps, or sooner as the bodies grow past 16.
+                        let stride = (16_384 / handles.len().max(1) as u64).clamp(1, 1024);
+                        if steps % stride == 0 && crate::interrupt::requested() {
                             return Err(EngineError::Failed(format!(
                                 "interrupted at step {steps}"
                             )));

@@ -31,7 +31,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             let target = match (self.points[node], dof) {
                 (Point::Ground(_), _) => continue,
                 (Point::Particle(i), Dof::Translation(k)) => {
-                    Target::Particle(i, self.particles[i].axes[k.min(S::DIM - 1)])
+                    Target::Particle(i, self.particle_axes(i)[k.min(S::DIM - 1)])
                 }
                 (Point::Body { body, .. }, Dof::Translation(k)) => {
                     Target::Translation(body, self.bodies[body].axes[k.min(S::DIM - 1)])
@@ -179,7 +179,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         if !self.bodies.is_empty() || !self.contacts.is_empty() {
             return None;
         }
-        let free = |i: usize| free_axes(&self.particles[i].axes, held.particle_held(i));
+        let free = |i: usize| free_axes(self.particle_axes(i), held.particle_held(i));
         let mut stiffness = vec![0.0; self.particles.len() * S::DIM];
         let mut damping = vec![0.0; self.particles.len() * S::DIM];
         let entry = |e: &S::V, f: &S::V, d: &S::V, c: f64, t: f64| {
@@ -253,8 +253,8 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// Free generalised DOFs under a step's constraints.
     pub fn free_dofs(&self, held: &Constraints<S>) -> Vec<Target<S>> {
         let mut out = Vec::new();
-        for (i, p) in self.particles.iter().enumerate() {
-            let (free, count) = free_axes(&p.axes, held.particle_held(i));
+        for i in 0..self.particles.len() {
+            let (free, count) = free_axes(self.particle_axes(i), held.particle_held(i));
             out.extend(free[..count].iter().map(|d| Target::Particle(i, *d)));
         }
         for (b, body) in self.bodies.iter().enumerate() {
@@ -269,8 +269,8 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// How many generalised DOFs a step's constraints leave free ([`Model::free_dofs`]'s
     /// length, without listing them).
     pub fn free_dof_count(&self, held: &Constraints<S>) -> usize {
-        let particles = self.particles.iter().enumerate();
-        let particles = particles.map(|(i, p)| free_axes(&p.axes, held.particle_held(i)).1);
+        let particles = (0..self.particles.len())
+            .map(|i| free_axes(self.particle_axes(i), held.particle_held(i)).1);
         let bodies = self.bodies.iter().enumerate().map(|(b, body)| {
             free_axes(&body.axes, &held.body_held_t[b]).1
                 + free_axes(&body.rot_axes, &held.body_held_r[b]).1

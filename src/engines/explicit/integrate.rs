@@ -526,7 +526,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
     fn advance_fused(&mut self, n: u64, plan: &StepPlan<S>) {
         let (model, h, held) = (self.model, self.h, &plan.held);
         let (cfg, carry, acc) = (&mut self.cfg, &mut self.carry, &mut self.acc);
-        let (forces, v_half) = (&self.forces, &mut self.v_half);
+        let (forces, v_half) = (&mut self.forces, &mut self.v_half);
         if n + 1 == plan.first + plan.count {
             model.step_particles::<true>(cfg, carry, h, forces, held, v_half, acc);
         } else {

@@ -150,6 +150,10 @@ pub struct Forces<S: Space> {
     pub contact: Vec<f64>,
     /// Signed gap per contact pair where the pass evaluated contact (negative: penetration).
     pub gap: Vec<f64>,
+    /// Whether `p` is all zero already: the pass that consumed the particle forces
+    /// ([`Model::step_particles`]) cleared them as it read them, so [`Forces::clear`] need not
+    /// stream through them again.
+    pub(super) particles_cleared: bool,
 }
 
 impl<S: Space> Forces<S> {
@@ -162,6 +166,7 @@ impl<S: Space> Forces<S> {
             dissipation: 0.0,
             contact: vec![0.0; contacts],
             gap: vec![0.0; contacts],
+            particles_cleared: false,
         }
     }
     /// Copy another force set into this one (same shape).
@@ -173,10 +178,14 @@ impl<S: Space> Forces<S> {
         self.gap.copy_from_slice(&other.gap);
         self.elastic = other.elastic;
         self.dissipation = other.dissipation;
+        self.particles_cleared = other.particles_cleared;
     }
     /// Reset to zero, keeping the allocation.
     pub fn clear(&mut self) {
-        fill_zero(&mut self.p, S::V::zero());
+        if !self.particles_cleared {
+            fill_zero(&mut self.p, S::V::zero());
+        }
+        self.particles_cleared = false;
         fill_zero(&mut self.b, S::V::zero());
         fill_zero(&mut self.m, S::W::zero());
         fill_zero(&mut self.contact, 0.0);
@@ -324,14 +333,14 @@ pub(super) struct Load<S: Space> {
 }
 
 /// A particle's constant data.
-#[derive(Debug, Clone)]
-pub struct Particle<S: Space> {
+#[derive(Debug, Clone, Copy)]
+pub struct Particle {
     /// Scene node.
     pub node: usize,
     /// Mass.
     pub mass: f64,
-    /// Frame axes (DOF directions).
-    pub axes: Vec<S::V>,
+    /// Its frame's axes (DOF directions), as an index into [`Model::frames`].
+    pub frame: u32,
 }
 
 /// A body's constant data.
@@ -496,7 +505,9 @@ pub enum DashpotLine<S: Space> {
 #[derive(Debug, Clone)]
 pub struct Model<S: Space, const FINITE: bool> {
     /// Particles (free nodes).
-    pub particles: Vec<Particle<S>>,
+    pub particles: Vec<Particle>,
+    /// The distinct frames the particles' DOFs are taken in (axes per frame).
+    pub frames: Vec<Vec<S::V>>,
     /// Rigid bodies.
     pub bodies: Vec<Body<S>>,
     pub(super) grounded_springs: Vec<Grounded<S>>,
@@ -631,16 +642,22 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             *f &= n.attachment == Attachment::Free && n.mass == 0.0;
         }
         let mut points = Vec::with_capacity(scene.nodes.len());
+        let mut frames: Vec<Vec<S::V>> = Vec::new();
         particles.reserve_exact(fixed.iter().filter(|f| !**f).count());
         for (i, n) in scene.nodes.iter().enumerate() {
             let x = S::v(&n.position);
             points.push(match n.attachment {
                 Attachment::Free if fixed[i] => Point::Ground(x),
                 Attachment::Free => {
+                    let frame = axes(&n.frame);
+                    // Neighbours usually share a frame: the last one is tried first.
+                    if frames.last() != Some(&frame) {
+                        frames.push(frame);
+                    }
                     particles.push(Particle {
                         node: i,
                         mass: n.mass,
-                        axes: axes(&n.frame),
+                        frame: u32::try_from(frames.len() - 1).expect("fewer than 2^32 frames"),
                     });
                     Point::Particle(particles.len() - 1)
                 }
@@ -758,6 +775,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         Model {
             inverse_masses: particles.iter().map(|p| 1.0 / p.mass).collect(),
             particles,
+            frames,
             bodies,
             grounded_springs,
             grounded_dashpots,
@@ -776,6 +794,12 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         !self.grounded_dashpots.is_empty()
             || !self.dashpots.is_empty()
             || self.has_contact_dashpots()
+    }
+
+    /// The axes of particle `i`'s frame.
+    #[inline]
+    pub fn particle_axes(&self, i: usize) -> &[S::V] {
+        &self.frames[self.particles[i].frame as usize]
     }
 
     /// The configuration at t = 0.

@@ -125,29 +125,32 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// in place of v(n−½) in `v_half`, and x(n+1) = x(n) + h·v(n+½) into `cfg` (compensated).
     /// The arithmetic of [`Model::accelerations`], [`Rates::set_plus`] and [`Model::advance`]
     /// one after the other, bit for bit, with each particle's data read once instead of three
-    /// times and the acceleration written only where a later increment reads it.
+    /// times and the acceleration written only where a later increment reads it. The particle
+    /// forces are cleared as they are read, for the next force pass.
     #[allow(clippy::too_many_arguments)]
     pub fn step_particles<const STORE_ACC: bool>(
         &self,
         cfg: &mut Config<S>,
         carry: &mut Rates<S>,
         h: f64,
-        forces: &Forces<S>,
+        forces: &mut Forces<S>,
         held: &Constraints<S>,
         v_half: &mut Rates<S>,
         acc: &mut Rates<S>,
     ) {
         let motions = &held.motions;
         let state = (cfg.u.iter_mut().zip(carry.p.iter_mut())).zip(v_half.p.iter_mut());
-        let data = (forces.p.iter().zip(&self.inverse_masses)).zip(&held.particle_motion);
+        let data = (forces.p.iter_mut().zip(&self.inverse_masses)).zip(&held.particle_motion);
         for (i, (((x, c), v), ((f, inverse_mass), motion))) in state.zip(data).enumerate() {
             let a = motions[*motion as usize].project(*f * *inverse_mass);
+            *f = S::V::zero();
             if STORE_ACC {
                 acc.p[i] = a;
             }
             *v += a * h;
             compensated_add(x, c, *v * h);
         }
+        forces.particles_cleared = true;
     }
 
     /// The bodies' part of [`Model::advance`].

@@ -64,7 +64,7 @@ enum Command {
         /// Which study.
         #[arg(long, value_enum, default_value = "all")]
         study: ScalingStudy,
-        /// Largest chain (masses; at most 10^6, which holds about 1.3 GB).
+        /// Largest chain (masses; at most 10^6, which holds about 0.8 GB).
         #[arg(long, value_name = "N", default_value_t = 1_000_000, value_parser = clap::value_parser!(u64).range(10..=1_000_000))]
         max_n: u64,
         /// Output directory.
@@ -448,8 +448,8 @@ fn finished<T>(study: Result<T, String>) -> Result<T, ExitCode> {
     })
 }
 
-/// Print a study's `text`, write its CSV (path, text) and, where given, its figure (path,
-/// SVG), and say where.
+/// Print a study's `text`, write its CSV (path, text), the commit it was measured at (the
+/// CSV's path with `.provenance`) and, where given, its figure (path, SVG), and say where.
 fn publish(
     stdout: &mut Stdout,
     text: &str,
@@ -457,10 +457,18 @@ fn publish(
     figure: Option<(PathBuf, String)>,
 ) -> ExitCode {
     stdout.print(text);
-    let written = report::data::write_atomic(&path, csv.as_bytes()).and_then(|_| match figure {
-        Some((path, svg)) => report::data::write_atomic(&path, svg.as_bytes()),
-        None => Ok(()),
-    });
+    // The commit the figures were measured at, beside them: a speed figure is only as current
+    // as the engine it measured (tests/figures_current.rs).
+    let provenance = format!("{}\n", env!("CROSSCHECK_COMMIT"));
+    let written = report::data::write_atomic(&path, csv.as_bytes())
+        .and_then(|_| {
+            let at = path.with_extension("provenance");
+            report::data::write_atomic(&at, provenance.as_bytes())
+        })
+        .and_then(|_| match figure {
+            Some((path, svg)) => report::data::write_atomic(&path, svg.as_bytes()),
+            None => Ok(()),
+        });
     if let Err(e) = written {
         eprintln!("error: {e}");
         return ExitCode::FAILURE;
@@ -519,9 +527,16 @@ fn chain_study(max_n: usize, target: &Path, quiet: bool, stdout: &mut Stdout) ->
     use crosscheck::run::scaling;
     let sizes = scaling::sizes(max_n);
     let bar = progress_bar(2 * sizes.len() as u64, quiet, "points");
+    // Without a terminal (piped, in CI) the bar is hidden: a line per point instead.
+    let lines = !quiet && !std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let started = std::time::Instant::now();
     let study = scaling::study(max_n, |engine, n| {
         bar.set_message(format!("{engine}, N = {n}"));
         bar.inc(1);
+        if lines {
+            let elapsed = started.elapsed().as_secs_f64();
+            eprintln!("scaling: {engine}, N = {n} (at {elapsed:.1} s)");
+        }
     });
     bar.finish_and_clear();
     let study = match finished(study) {

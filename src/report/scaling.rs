@@ -9,13 +9,14 @@ use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 
 /// The CSV's columns, in order.
-pub const COLUMNS: [&str; 9] = [
+pub const COLUMNS: [&str; 10] = [
     "engine",
     "n",
     "steps",
     "ns_per_step",
     "ns_per_dof_step",
     "peak_rss_bytes",
+    "scene_rss_bytes",
     "error",
     "limit_ns_per_dof_step",
     "predicted_error",
@@ -46,6 +47,7 @@ pub fn csv(study: &Study) -> String {
             number(p.ns_per_step),
             number(p.ns_per_dof_step),
             p.peak_rss_bytes.to_string(),
+            p.scene_rss_bytes.to_string(),
             number(p.error),
             number(p.limit_ns_per_dof_step),
             number(p.predicted_error),
@@ -59,19 +61,33 @@ pub fn csv(study: &Study) -> String {
 /// exponents.
 pub fn table(study: &Study) -> String {
     let mut s = format!(
-        "{:<12} {:>9} {:>7} {:>14} {:>10} {:>10} {:>12} {:>10} {:>10}\n",
-        "engine", "n", "steps", "ns/increment", "ns/DOF", "limit", "peak RSS", "error", "predicted"
+        "{:<12} {:>9} {:>7} {:>14} {:>8} {:>8} {:>7} {:>12} {:>7} {:>7} {:>10} {:>10}\n",
+        "engine",
+        "n",
+        "steps",
+        "ns/increment",
+        "ns/DOF",
+        "limit",
+        "ratio",
+        "peak RSS",
+        "B/DOF",
+        "scene",
+        "error",
+        "predicted"
     );
     for p in &study.points {
         s += &format!(
-            "{:<12} {:>9} {:>7} {:>14.0} {:>10.2} {:>10.2} {:>9.1} MB {:>10.3e} {:>10.3e}\n",
+            "{:<12} {:>9} {:>7} {:>14.0} {:>8.2} {:>8.2} {:>7.2} {:>9.1} MB {:>7.0} {:>7.0} {:>10.3e} {:>10.3e}\n",
             p.engine,
             p.n,
             p.steps,
             p.ns_per_step,
             p.ns_per_dof_step,
             p.limit_ns_per_dof_step,
+            p.ns_per_dof_step / p.limit_ns_per_dof_step,
             p.peak_rss_bytes as f64 / 1e6,
+            p.peak_rss_bytes as f64 / p.n as f64,
+            p.scene_rss_bytes as f64 / p.n as f64,
             p.error,
             p.predicted_error
         );
@@ -168,9 +184,9 @@ pub fn render(study: &Study) -> Option<String> {
             };
             if let Some(skip) = study.skipped.iter().find(|s| s.engine == *engine) {
                 label += &format!(
-                    "; N ≥ {} not run (over {:.0} s)",
+                    "; N ≥ {} not run (the study's {:.0} s)",
                     skip.n,
-                    crate::run::scaling::RAPIER_BUDGET_SECONDS
+                    crate::run::scaling::STUDY_SECONDS
                 );
             }
             chart
@@ -242,6 +258,7 @@ mod tests {
             ns_per_step: ns,
             ns_per_dof_step: ns / n as f64,
             peak_rss_bytes: 1,
+            scene_rss_bytes: 1,
             error: 1e-3,
             predicted_error: 1e-3,
             limit_ns_per_dof_step: 1.0,
@@ -276,7 +293,7 @@ mod tests {
         let mut lines = text.lines();
         assert_eq!(
             lines.next().unwrap(),
-            "engine,n,steps,ns_per_step,ns_per_dof_step,peak_rss_bytes,error,limit_ns_per_dof_step,predicted_error"
+            "engine,n,steps,ns_per_step,ns_per_dof_step,peak_rss_bytes,scene_rss_bytes,error,limit_ns_per_dof_step,predicted_error"
         );
         assert_eq!(lines.count(), 2);
         assert!(render(&study).is_some());

@@ -2,12 +2,13 @@
 //! memory can deliver.
 //!
 //! For N = 10, 100, …, `max_n` masses of the chain family ([`crate::case::chain`]), the study
-//! runs `explicit` (every N) and `rapier_f64` in its matched configuration (while a run is
-//! predicted to finish within [`RAPIER_BUDGET_SECONDS`]), and measures per point:
+//! runs `explicit`, then `rapier_f64` in its matched configuration, each point while its
+//! predicted time fits in what is left of [`STUDY_SECONDS`], and measures per point:
 //! - the marginal wall time per increment: runs of S and 2S increments (each repeated at least
-//!   [`MIN_REPEATS`] times, small chains more often, the fastest repeat taken, since on a
-//!   shared machine interference only ever adds time), (t₂ − t₁)/S, so the setup (building
-//!   the scene's model, the static step, the stable increment) drops out;
+//!   [`MIN_REPEATS`] times, more often where a point takes under [`POINT_SECONDS`], the
+//!   fastest repeat taken, since on a shared machine interference only ever adds time),
+//!   (t₂ − t₁)/S, so the setup (building the scene's model, the static step, the stable
+//!   increment) drops out;
 //! - the peak resident memory of the longer run (the kernel's high-water mark, reset before
 //!   it);
 //! - the error of the probed displacements against the exact solution, with the error that
@@ -22,10 +23,15 @@ use crate::engines::{Engine, RunSettings};
 use crate::run::matching;
 use std::time::Instant;
 
-/// `rapier_f64` is run at the next N only while its longer run is predicted (from the last N,
-/// linearly in N) to take at most this long, seconds. The budget is per run: the point repeats
-/// the short and the long run, so it takes about 1.5 × repeats × this at the most.
-pub const RAPIER_BUDGET_SECONDS: f64 = 60.0;
+/// Wall-clock seconds the chain study may take in all: a point is run only while its time,
+/// predicted from the engine's previous point (linearly in N), fits in what is left. What is
+/// not run is listed with its prediction.
+pub const STUDY_SECONDS: f64 = 150.0;
+
+/// Wall-clock seconds one point aims at: its runs are repeated as often as that allows (at
+/// least [`MIN_REPEATS`], at most [`repeats_for`] N), so a slow engine's point is not repeated
+/// as often as a fast one's.
+pub const POINT_SECONDS: f64 = 10.0;
 
 /// Increments of the shorter of the two timed runs at every N (the longer takes twice as
 /// many): about 2.5 periods of the mode at h = 0.1·√(m/k).
@@ -57,6 +63,9 @@ pub struct Point {
     pub ns_per_dof_step: f64,
     /// Peak resident memory of the longer run, bytes (0 where the platform does not say).
     pub peak_rss_bytes: u64,
+    /// Of that, what building the scene added to the resident memory before the run (the
+    /// case as the scene holds it: names, frames, conditions), bytes.
+    pub scene_rss_bytes: u64,
     /// Largest error of the probed displacements against the exact solution, over the
     /// amplitude, in the longer run.
     pub error: f64,
@@ -101,50 +110,72 @@ pub fn repeats_for(n: usize) -> u64 {
 
 /// Run the study; `progress` is told each point as it starts (engine, N).
 pub fn study(max_n: usize, mut progress: impl FnMut(&str, usize)) -> Result<Study, String> {
+    let started = Instant::now();
     let mut out = Study::default();
     // `rapier_f64` where the build has the rapier engines (the `rapier` feature).
     let engines: Vec<Box<dyn Engine>> = std::iter::once(Box::new(ExplicitEngine::finite()) as _)
         .chain(crate::engines::named("rapier_f64"))
         .collect();
     for engine in &engines {
-        // Seconds of one longer run at the last N.
-        let mut last: Option<(usize, f64)> = None;
+        // Seconds of one point (all its runs) at the last N, and of its longer run.
+        let mut last: Option<(usize, f64, f64)> = None;
         for n in sizes(max_n) {
             crate::interrupt::checkpoint("scaling").map_err(|_| "interrupted".to_string())?;
             let name = engine.name().to_string();
-            let is_rapier = name.starts_with("rapier");
-            if is_rapier && let Some((n0, seconds)) = last {
-                let predicted = seconds * n as f64 / n0 as f64;
-                if predicted > RAPIER_BUDGET_SECONDS {
-                    out.skipped.push(Skipped {
-                        engine: name,
-                        n,
-                        reason: format!(
-                            "predicted {predicted:.0} s (from {seconds:.1} s at N = {n0}), over the {RAPIER_BUDGET_SECONDS:.0} s budget"
-                        ),
-                    });
-                    break;
-                }
+            let left = STUDY_SECONDS - started.elapsed().as_secs_f64();
+            let predicted = last.map(|(n0, point, long)| {
+                let scale = n as f64 / n0 as f64;
+                (point * scale, long * scale)
+            });
+            // The point at its fewest repeats: a short and a long run each, MIN_REPEATS times.
+            let fewest = predicted.map(|(_, long)| 1.5 * long * MIN_REPEATS as f64);
+            if let Some(fewest) = fewest.filter(|s| *s > left) {
+                out.skipped.push(Skipped {
+                    engine: name,
+                    n,
+                    reason: format!(
+                        "predicted {fewest:.0} s at {MIN_REPEATS} repeats (linear in N from the last point), over the {left:.0} s left of the study's {STUDY_SECONDS:.0} s"
+                    ),
+                });
+                break;
             }
             progress(&name, n);
-            let point = measure(engine.as_ref(), n)?;
-            last = Some((n, 1e-9 * point.ns_per_step * 2.0 * point.steps as f64));
+            // The engine's first point has no time to go by: a single repeat of it first.
+            let long = match predicted {
+                Some((_, long)) => long,
+                None => {
+                    let pilot = measure_with(engine.as_ref(), n, 1)?;
+                    1e-9 * pilot.ns_per_step * 2.0 * pilot.steps as f64
+                }
+            };
+            let most = repeats_for(n).max(MIN_REPEATS);
+            let repeats = ((POINT_SECONDS / (1.5 * long)) as u64).clamp(MIN_REPEATS, most);
+            let begun = Instant::now();
+            let point = measure_with(engine.as_ref(), n, repeats)?;
+            let long = 1e-9 * point.ns_per_step * 2.0 * point.steps as f64;
+            last = Some((n, begun.elapsed().as_secs_f64(), long));
             out.points.push(point);
         }
     }
     Ok(out)
 }
 
-/// Measure one engine at one N.
+/// Measure one engine at one N, its runs repeated [`repeats_for`] N times.
 pub fn measure(engine: &dyn Engine, n: usize) -> Result<Point, String> {
-    let repeats = repeats_for(n);
+    measure_with(engine, n, repeats_for(n))
+}
+
+/// Measure one engine at one N, its runs repeated `repeats` times (the fastest counts).
+pub fn measure_with(engine: &dyn Engine, n: usize, repeats: u64) -> Result<Point, String> {
     // Seconds of the fastest of the repeated runs of `steps` increments, its peak RSS and
     // error.
-    let timed = |steps: u64| -> Result<(f64, u64, f64, Chain), String> {
+    let timed = |steps: u64| -> Result<(f64, (u64, u64), f64, Chain), String> {
         let chain = Chain::new(n, steps);
+        reset_peak_rss();
+        let before = resident_bytes();
         let scene = chain.scene();
         let settings = matching::job_settings(engine, &scene, &RunSettings::default());
-        reset_peak_rss();
+        let scene_bytes = resident_bytes().saturating_sub(before);
         let mut seconds = f64::INFINITY;
         let mut output = None;
         for _ in 0..repeats {
@@ -154,9 +185,10 @@ pub fn measure(engine: &dyn Engine, n: usize) -> Result<Point, String> {
                 .map_err(|e| format!("{} on chain N = {n}: {e}", engine.name()))?;
             seconds = seconds.min(start.elapsed().as_secs_f64());
             output = Some(run);
+            crate::interrupt::checkpoint("scaling").map_err(|_| "interrupted".to_string())?;
         }
         let output = output.expect("at least one repeat");
-        let rss = peak_rss_bytes();
+        let rss = (peak_rss_bytes(), scene_bytes);
         if output.info.steps != chain.steps {
             return Err(format!(
                 "{} on chain N = {n}: took {} increments, expected {}",
@@ -171,6 +203,8 @@ pub fn measure(engine: &dyn Engine, n: usize) -> Result<Point, String> {
     let (short, _, _, chain) = timed(STEPS)?;
     let (long, rss, error, long_chain) = timed(2 * chain.steps)?;
     let ns_per_step = (long - short).max(0.0) * 1e9 / chain.steps as f64;
+    let limit = streaming_limit(n, chain.steps, repeats);
+    crate::interrupt::checkpoint("scaling").map_err(|_| "interrupted".to_string())?;
     Ok(Point {
         engine: engine.name().to_string(),
         n,
@@ -178,10 +212,11 @@ pub fn measure(engine: &dyn Engine, n: usize) -> Result<Point, String> {
         repeats,
         ns_per_step,
         ns_per_dof_step: ns_per_step / n as f64,
-        peak_rss_bytes: rss,
+        peak_rss_bytes: rss.0,
+        scene_rss_bytes: rss.1,
         error,
         predicted_error: long_chain.predicted_error(long_chain.increment),
-        limit_ns_per_dof_step: streaming_limit(n, chain.steps, repeats),
+        limit_ns_per_dof_step: limit,
     })
 }
 
@@ -218,6 +253,11 @@ pub fn streaming_limit(n: usize, steps: u64, repeats: u64) -> f64 {
         let stiffness = vec![1.0e4; n + 1];
         let start = Instant::now();
         for _ in 0..steps {
+            // An interruption leaves the timing meaningless; the study stops at its next
+            // checkpoint.
+            if crate::interrupt::requested() {
+                break;
+            }
             let mut left = 0.0;
             for i in 0..n {
                 let right = if i + 1 < n { x[i + 1] } else { 0.0 };
@@ -258,11 +298,21 @@ fn reset_peak_rss() {
 /// The process's peak resident set size since the last reset, bytes (`VmHWM`; 0 where the
 /// platform does not say).
 pub fn peak_rss_bytes() -> u64 {
+    status_bytes("VmHWM:")
+}
+
+/// The process's resident set size now, bytes (`VmRSS`; 0 where the platform does not say).
+pub fn resident_bytes() -> u64 {
+    status_bytes("VmRSS:")
+}
+
+/// A `/proc/self/status` field given in kB, in bytes (0 where there is none).
+fn status_bytes(field: &str) -> u64 {
     std::fs::read_to_string("/proc/self/status")
         .ok()
         .and_then(|s| {
             s.lines()
-                .find(|l| l.starts_with("VmHWM:"))
+                .find(|l| l.starts_with(field))
                 .and_then(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok())
         })
         .map_or(0, |kib| kib * 1024)

@@ -95,6 +95,7 @@ impl<S: Space> Rates<S> {
         self.set_plus_bodies(a, s, b);
     }
     /// [`Rates::set_plus`] for the bodies alone.
+    #[inline(always)]
     pub fn set_plus_bodies(&mut self, a: &Self, s: f64, b: &Self) {
         for (o, (x, y)) in self.b.iter_mut().zip(a.b.iter().zip(&b.b)) {
             *o = *x + *y * s;

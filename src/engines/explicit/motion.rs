@@ -48,6 +48,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     }
 
     /// The bodies' part of [`Model::accelerations`].
+    #[inline(always)]
     pub fn body_accelerations(
         &self,
         cfg: &Config<S>,
@@ -154,6 +155,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     }
 
     /// The bodies' part of [`Model::advance`].
+    #[inline(always)]
     pub fn advance_bodies(
         &self,
         cfg: &mut Config<S>,

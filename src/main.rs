@@ -457,14 +457,8 @@ fn publish(
     figure: Option<(PathBuf, String)>,
 ) -> ExitCode {
     stdout.print(text);
-    // The commit the figures were measured at, beside them: a speed figure is only as current
-    // as the engine it measured (tests/figures_current.rs).
-    let provenance = format!("{}\n", env!("CROSSCHECK_COMMIT"));
     let written = report::data::write_atomic(&path, csv.as_bytes())
-        .and_then(|_| {
-            let at = path.with_extension("provenance");
-            report::data::write_atomic(&at, provenance.as_bytes())
-        })
+        .and_then(|_| report::data::write_provenance(&path))
         .and_then(|_| match figure {
             Some((path, svg)) => report::data::write_atomic(&path, svg.as_bytes()),
             None => Ok(()),
@@ -525,18 +519,13 @@ fn element_study(target: &Path, quiet: bool, dir: &Path, stdout: &mut Stdout) ->
 fn chain_study(max_n: usize, target: &Path, quiet: bool, stdout: &mut Stdout) -> ExitCode {
     use crosscheck::report::scaling as written;
     use crosscheck::run::scaling;
-    let sizes = scaling::sizes(max_n);
-    let bar = progress_bar(2 * sizes.len() as u64, quiet, "points");
-    // Without a terminal (piped, in CI) the bar is hidden: a line per point instead.
-    let lines = !quiet && !std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let bar = progress_bar(2 * scaling::sizes(max_n).len() as u64, quiet, "points");
+    let lines = !quiet && !std::io::IsTerminal::is_terminal(&std::io::stderr()); // bar hidden
     let started = std::time::Instant::now();
     let study = scaling::study(max_n, |engine, n| {
         bar.set_message(format!("{engine}, N = {n}"));
         bar.inc(1);
-        if lines {
-            let elapsed = started.elapsed().as_secs_f64();
-            eprintln!("scaling: {engine}, N = {n} (at {elapsed:.1} s)");
-        }
+        lines.then(|| eprintln!("scaling: {engine}, N = {n} (at {:.1?})", started.elapsed()));
     });
     bar.finish_and_clear();
     let study = match finished(study) {

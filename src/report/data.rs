@@ -123,6 +123,14 @@ pub fn write_history_to(path: &Path, history: &History) -> Result<(), DataError>
     result
 }
 
+/// Write the commit this build was made from beside a study's file (`path` with the extension
+/// `provenance`): a speed figure is only as current as the engine it measured
+/// (tests/figures_current.rs).
+pub fn write_provenance(path: &Path) -> Result<(), DataError> {
+    let text = format!("{}\n", env!("CROSSCHECK_COMMIT"));
+    write_atomic(&path.with_extension("provenance"), text.as_bytes())
+}
+
 /// Write `contents` to `path` atomically (temporary sibling, synced, renamed into place),
 /// creating the parent directory. On error any previous `path` is left untouched.
 pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<(), DataError> {

@@ -35,7 +35,42 @@ fn commit() -> String {
     }
 }
 
+/// `$OUT_DIR/embedded_cases.rs`: the shipped case files (`cases/*.toml`, `cases/stress/*.toml`)
+/// as `(path under cases/, text)`, sorted, for the binary to use where no case directory is
+/// given or found.
+fn embed_cases() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases");
+    let mut files = Vec::new();
+    for (sub, dir) in [("", root.clone()), ("stress/", root.join("stress"))] {
+        let Ok(entries) = std::fs::read_dir(&dir) else {
+            continue;
+        };
+        for entry in entries.flatten() {
+            let path = entry.path();
+            if path.extension().is_some_and(|x| x == "toml") && path.is_file() {
+                let name = path.file_name().unwrap().to_string_lossy().into_owned();
+                files.push((format!("{sub}{name}"), path));
+            }
+        }
+    }
+    files.sort();
+    let mut code = String::from("/// The shipped case files: (path under `cases/`, text).\n");
+    code.push_str("pub const FILES: &[(&str, &str)] = &[\n");
+    for (name, path) in &files {
+        code.push_str(&format!(
+            "    ({name:?}, include_str!({:?})),\n",
+            path.display().to_string()
+        ));
+    }
+    code.push_str("];\n");
+    let out = std::path::Path::new(&std::env::var("OUT_DIR").unwrap()).join("embedded_cases.rs");
+    std::fs::write(out, code).expect("write embedded_cases.rs");
+    println!("cargo:rerun-if-changed=cases");
+    println!("cargo:rerun-if-changed=cases/stress");
+}
+
 fn main() {
+    embed_cases();
     let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
     let version = output(&rustc, &["--version"]).unwrap_or_else(|| "unknown".into());
     println!("cargo:rustc-env=CROSSCHECK_RUSTC={version}");

@@ -1,4 +1,4 @@
-//! The output contract (`../shared/spec/PROBLEMS.md`, section 3): what every engine's time
+//! The output contract (`docs/problems.md`, section 3): what every engine's time
 //! history looks like, stated once so that engines, the comparison and the report read the
 //! same names.
 //!
@@ -54,6 +54,19 @@ pub const MIN_ROWS: usize = 200;
 /// the portable characters (letters, digits, `.`, `_`, `-`).
 pub fn file_stem(engine: &str) -> String {
     engine.replace('@', "-")
+}
+
+/// The engine a file stem names: [`file_stem`] undone (`rapier_f64-0.34` → `rapier_f64@0.34`;
+/// a stem whose last `-` is not followed by a release, digits and dots, is the name itself).
+pub fn engine_of_stem(stem: &str) -> String {
+    match stem.rsplit_once('-') {
+        Some((name, release))
+            if !release.is_empty() && release.chars().all(|c| c.is_ascii_digit() || c == '.') =>
+        {
+            format!("{name}@{release}")
+        }
+        _ => stem.to_string(),
+    }
 }
 
 /// An engine's name without its release (`rapier_f64@0.34` → `rapier_f64`), and the release

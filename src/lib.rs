@@ -15,10 +15,12 @@
 //! - [`comparison`]: the metrics of one history against another;
 //! - [`report`]: writes what a run returned: CSVs, figures, summary, REPORT.md, staged and
 //!   swapped into place;
-//! - [`pipeline`]: a run from end to end: the jobs, the studies, the report put in place (the
-//!   command line parses the options and calls it).
+//! - [`pipeline`]: a run from end to end: the jobs, the studies, the report put in place;
+//! - [`cli`]: the command line, which parses the options and calls the pipeline
+//!   ([`cli::main_with`]: every subcommand, for crosscheck's engines and a user's).
 
 pub mod case;
+pub mod cli;
 pub mod comparison;
 pub mod contract;
 pub mod engines;

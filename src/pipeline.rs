@@ -100,20 +100,22 @@ pub fn run(
         loaded: seconds_since(started),
         ..StageTimes::default()
     };
+    let lines = progress && !std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let lap = |stage: &str, previous: f64| lap(started, stage, previous, lines);
     let outcome = run::execute(plan, progress);
-    times.ran = seconds_since(started);
+    times.ran = lap("jobs", times.loaded);
     stop_if_interrupted()?;
     let budgets = discrepancy::measure(plan, &outcome, Depth::Basic, progress);
-    times.budgeted = seconds_since(started);
+    times.budgeted = lap("discrepancy budget", times.ran);
     stop_if_interrupted()?;
     let invariances = comparison::invariance::measure(plan, &outcome, progress);
-    times.invariant = seconds_since(started);
+    times.invariant = lap("invariance controls", times.budgeted);
     stop_if_interrupted()?;
     let attributions = comparison::attribution::measure(plan, &outcome, &invariances, progress);
-    times.attributed = seconds_since(started);
+    times.attributed = lap("controls", times.invariant);
     stop_if_interrupted()?;
     let measured = measure(
-        plan, &outcome, cases_dir, studies, progress, started, &mut times,
+        plan, &outcome, cases_dir, studies, progress, &lap, &mut times,
     )?;
     let study = Study {
         budgets: &budgets,
@@ -129,9 +131,9 @@ pub fn run(
     if interrupt::checkpoint("swap").is_err() {
         return Err(Stopped::Interrupted);
     }
-    times.written = seconds_since(started);
+    times.written = lap("report written", times.requested);
     staging.commit().map_err(Stopped::Swap)?;
-    times.swapped = seconds_since(started);
+    times.swapped = lap("report in place", times.written);
     Ok(Finished {
         outcome,
         summary,
@@ -147,7 +149,7 @@ fn measure(
     cases_dir: &Path,
     studies: &Studies,
     progress: bool,
-    started: Instant,
+    lap: &dyn Fn(&str, f64) -> f64,
     times: &mut StageTimes,
 ) -> Result<Measured, Stopped> {
     let engines: Vec<&dyn Engine> = plan.engines.iter().map(|e| e.as_ref()).collect();
@@ -172,30 +174,72 @@ fn measure(
         Some(_) => work_precision::measure(&sweep_plan, outcome, &engines, &grid, progress),
         None => Vec::new(),
     };
-    times.swept = seconds_since(started);
+    times.swept = if studies.sweep.is_some() {
+        lap("sweep", times.attributed)
+    } else {
+        lap("", times.attributed)
+    };
     stop_if_interrupted()?;
     work_precision::reach(&sweep_plan, outcome, &engines, &mut sweeps, &grid, progress);
-    times.reached = seconds_since(started);
+    times.reached = lap(
+        if studies.sweep.is_some() {
+            "time to accuracy checked"
+        } else {
+            ""
+        },
+        times.swept,
+    );
     stop_if_interrupted()?;
     let maps = if studies.stability {
         comparison::stability::measure(plan, outcome, &engines, progress)
     } else {
         Default::default()
     };
-    times.mapped = seconds_since(started);
+    times.mapped = lap(
+        if studies.stability {
+            "stability map"
+        } else {
+            ""
+        },
+        times.reached,
+    );
     stop_if_interrupted()?;
     let requests = if studies.on_request {
         comparison::on_request::measure(&seed_plan, outcome, &engines, progress)
     } else {
         Vec::new()
     };
-    times.requested = seconds_since(started);
+    times.requested = lap(
+        if studies.on_request {
+            "accuracy on request"
+        } else {
+            ""
+        },
+        times.mapped,
+    );
     stop_if_interrupted()?;
     Ok(Measured {
         sweeps,
         maps,
         requests,
     })
+}
+
+/// Seconds since `started`; with `lines` (progress asked for, standard error not a terminal,
+/// so no bar shows), a line on standard error naming the `stage` that just ended (none where
+/// it is empty: a study that did not run) and how long it took since `previous`.
+fn lap(started: Instant, stage: &str, previous: f64, lines: bool) -> f64 {
+    let now = seconds_since(started);
+    if lines && !stage.is_empty() {
+        let _ = std::io::Write::write_fmt(
+            &mut std::io::stderr(),
+            format_args!(
+                "crosscheck: {stage}: {:.1} s (at {now:.1} s)\n",
+                now - previous
+            ),
+        );
+    }
+    now
 }
 
 impl StageTimes {
@@ -385,13 +429,19 @@ pub fn compare(
         regression::read(base).map_err(|e| e.to_string())?,
         regression::read(new).map_err(|e| e.to_string())?,
     );
-    let changes = regression::compare(&a, &b).map_err(|e| e.to_string())?;
+    let compared = regression::compare(&a, &b).map_err(|e| e.to_string())?;
     if let Some(path) = junit {
-        let xml = regression::junit(&changes, threshold, physics_only);
+        let xml = regression::junit(&compared, threshold, physics_only);
         report::data::write_atomic(path, xml.as_bytes()).map_err(|e| e.to_string())?;
     }
-    let failed = changes
+    let drifted = compared.changes.iter().any(|c| c.drift > threshold);
+    let failed = compared
+        .changes
         .iter()
-        .any(|c| c.newly_failing() || (!physics_only && c.drift > threshold));
-    Ok((regression::markdown(base, new, &changes, threshold), failed))
+        .any(regression::Change::newly_failing)
+        || (!physics_only && (drifted || !compared.incomparable.is_empty()));
+    Ok((
+        regression::markdown(base, new, &compared, threshold),
+        failed,
+    ))
 }

@@ -1,6 +1,7 @@
 //! `crosscheck compare BASE NEW`: two runs of the same build compare clean; a history
 //! perturbed by 10 % is named as drift; a newly failing cell is a physics regression; JUnit XML
-//! parses; reports that cannot be compared are refused with exit 2 and the reason.
+//! parses; reports are compared over what they share and refused (exit 2) when that is nothing;
+//! baselines are saved, compared and accepted.
 use crosscheck::comparison::summary::SCHEMA_VERSION;
 use std::path::Path;
 use std::process::{Command, Output};
@@ -121,12 +122,28 @@ fn two_runs_compare_clean_and_a_perturbed_history_is_named() {
     assert!(stdout.contains("## Newly failing"), "{stdout}");
 }
 
+/// Reports that hold different cases are compared over the cells both hold, the others
+/// listed; reports that share nothing, or are not reports, or are of another schema version,
+/// are refused with exit 2 and the reason.
 #[test]
-fn reports_that_cannot_be_compared_are_refused() {
+fn reports_are_compared_over_what_they_share_and_refused_when_nothing() {
     let root = tempfile::tempdir().unwrap();
-    let (a, b) = (root.path().join("a"), root.path().join("b"));
+    let (a, b, c) = (
+        root.path().join("a"),
+        root.path().join("b"),
+        root.path().join("c"),
+    );
     report(&a, &["springs_grounded_a", "springs_grounded_b"]);
     report(&b, &["springs_grounded_a"]);
+    report(&c, &["springs_n2n_b"]);
+    let out = compare(&a, &b, &[]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    assert!(stdout.contains("0 drifted"), "{stdout}");
+    assert!(
+        stdout.contains("in the base report only (not compared): springs_grounded_b / `analytic`"),
+        "{stdout}"
+    );
     let refused = |base: &Path, new: &Path, expected: &str| {
         let out = compare(base, new, &[]);
         let stderr = String::from_utf8_lossy(&out.stderr);
@@ -136,7 +153,7 @@ fn reports_that_cannot_be_compared_are_refused() {
             "expected `{expected}` in {stderr}"
         );
     };
-    refused(&a, &b, "springs_grounded_b / explicit / u_end (base only)");
+    refused(&a, &c, "the reports share no cell, so nothing was compared");
     refused(&a, root.path(), "not a crosscheck report");
     let summary = b.join("summary.json");
     let text = std::fs::read_to_string(&summary).unwrap();
@@ -148,6 +165,106 @@ fn reports_that_cannot_be_compared_are_refused() {
     assert_ne!(text, newer, "summary.json names its schema version");
     std::fs::write(&summary, newer).unwrap();
     refused(&b, &b, "schema version 99");
+}
+
+/// The machine tier compares every history both reports hold, judged or not: two runs with
+/// no exact solution (no verdict at all) still name a history moved by 10 %.
+#[test]
+fn histories_without_an_exact_solution_are_compared() {
+    let root = tempfile::tempdir().unwrap();
+    let (a, b) = (root.path().join("a"), root.path().join("b"));
+    for out in [&a, &b] {
+        let status = bin()
+            .args([
+                "run",
+                "-q",
+                "springs_grounded_a",
+                "--engines",
+                "explicit",
+                "--out",
+            ])
+            .arg(out)
+            .status()
+            .unwrap();
+        assert!(status.success());
+    }
+    assert_eq!(compare(&a, &b, &[]).status.code(), Some(0));
+    edit_column(
+        &b.join("data/springs_grounded_a/explicit.csv"),
+        "u_end",
+        |x| format!("{:e}", 1.1 * x.parse::<f64>().unwrap()),
+    );
+    let out = compare(&a, &b, &[]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}");
+    assert!(
+        stdout.contains("| springs_grounded_a | `explicit` | u_end | 1.00e-1 |"),
+        "{stdout}"
+    );
+}
+
+/// Baselines: `--accept` makes NEW the baseline; a run saves one by name and is compared with
+/// it, failing when its histories moved.
+#[test]
+fn baselines_are_saved_compared_and_accepted() {
+    let root = tempfile::tempdir().unwrap();
+    let (a, b) = (root.path().join("a"), root.path().join("b"));
+    report(&a, &["springs_grounded_a"]);
+    report(&b, &["springs_grounded_a"]);
+    let file = "data/springs_grounded_a/explicit.csv";
+    edit_column(&b.join(file), "u_end", |x| {
+        format!("{:e}", 1.1 * x.parse::<f64>().unwrap())
+    });
+    assert_eq!(compare(&a, &b, &[]).status.code(), Some(1));
+    let out = compare(&a, &b, &["--accept"]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(compare(&a, &b, &[]).status.code(), Some(0));
+    assert_eq!(
+        std::fs::read(a.join(file)).unwrap(),
+        std::fs::read(b.join(file)).unwrap()
+    );
+
+    // A run saves its report as a named baseline beside it, and a later run compares with it.
+    let out_dir = root.path().join("report");
+    let run = |extra: &[&str]| {
+        bin()
+            .args(["run", "-q", "springs_grounded_a", "--out"])
+            .arg(&out_dir)
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let missing = run(&["--baseline", "main"]);
+    assert_eq!(missing.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("no baseline `main`"));
+    assert!(!out_dir.exists(), "nothing run");
+    assert_eq!(run(&["--save-baseline", "main"]).status.code(), Some(0));
+    let saved = root.path().join("baselines/main");
+    assert!(saved.join(file).is_file());
+    let again = run(&["--baseline", "main"]);
+    let stdout = String::from_utf8_lossy(&again.stdout);
+    assert_eq!(again.status.code(), Some(0), "{stdout}");
+    assert!(
+        stdout.contains("against the baseline `main`") && stdout.contains("0 drifted"),
+        "{stdout}"
+    );
+    // The baseline moved (as a change of the engine would move the run): exit 1, named.
+    edit_column(&saved.join(file), "u_end", |x| {
+        format!("{:e}", 0.9 * x.parse::<f64>().unwrap())
+    });
+    let moved = run(&["--baseline", "main"]);
+    let stdout = String::from_utf8_lossy(&moved.stdout);
+    assert_eq!(moved.status.code(), Some(1), "{stdout}");
+    assert!(
+        stdout.contains("| springs_grounded_a | `explicit` | u_end |"),
+        "{stdout}"
+    );
+    assert!(run(&["--baseline", "bad/name"]).status.code() == Some(2));
 }
 
 /// The main command says what changed since the report it replaces, with `compare`'s two

@@ -59,10 +59,10 @@ fn previous_report() -> (tempfile::TempDir, PathBuf, BTreeMap<String, Vec<u8>>) 
     let stepping = studied();
     assert_eq!(
         before.len(),
-        2 * (crosscheck::engines::all().len() + stepping) + 2 * 3 + 2 + 2 + 3 + 5,
+        2 * (crosscheck::engines::all().len() + stepping) + 2 * 3 + 2 + 2 + 3 + 6,
         "CSVs, budget CSVs, case figures (histories, errors, sketch), budget figures per family, \
-         case pages, summary, timings, REPORT.md, results.csv, README.md and the three question \
-         pages"
+         case pages, summary, verdicts, timings, REPORT.md, results.csv, README.md and the three \
+         question pages"
     );
     (root, out, before)
 }
@@ -258,7 +258,8 @@ fn out_dot_keeps_the_users_files() {
             "results.csv",
             "stability.md",
             "summary.json",
-            "timings.json"
+            "timings.json",
+            "verdicts.json"
         ]
     );
     assert_eq!(
@@ -284,11 +285,17 @@ fn closed_pipe() -> Stdio {
     }
 }
 
-/// A closed or full standard output gives a clear error and exit 1, never a panic, and a run
-/// still puts its report in place (the table is printed after the swap).
+/// A full standard output gives a clear error and exit 1, never a panic; a closed one (the
+/// reader left, as `| head` does) ends the output quietly with the command's own exit code. A
+/// run puts its report in place either way (the table is printed after the swap).
 #[test]
 fn closed_or_full_stdout_is_an_error_not_a_panic() {
     let list = bin().args(["list"]).stdout(closed_pipe()).output().unwrap();
+    let stderr = String::from_utf8_lossy(&list.stderr);
+    assert_eq!(list.status.code(), Some(0), "{stderr}");
+    assert!(stderr.is_empty(), "{stderr}");
+    let full = std::fs::File::create("/dev/full").unwrap();
+    let list = bin().args(["list"]).stdout(full).output().unwrap();
     let stderr = String::from_utf8_lossy(&list.stderr);
     assert_eq!(list.status.code(), Some(1), "{stderr}");
     assert!(
@@ -298,9 +305,9 @@ fn closed_or_full_stdout_is_an_error_not_a_panic() {
     assert!(!stderr.contains("panicked"), "{stderr}");
 
     let (root, out, before) = previous_report();
-    for stdout in [
-        closed_pipe(),
-        Stdio::from(std::fs::File::create("/dev/full").unwrap()),
+    for (stdout, code) in [
+        (closed_pipe(), 0),
+        (Stdio::from(std::fs::File::create("/dev/full").unwrap()), 1),
     ] {
         let run = bin()
             .args(["run", "-q", "springs_grounded_b", "--out"])
@@ -309,9 +316,10 @@ fn closed_or_full_stdout_is_an_error_not_a_panic() {
             .output()
             .unwrap();
         let stderr = String::from_utf8_lossy(&run.stderr);
-        assert_eq!(run.status.code(), Some(1), "{stderr}");
-        assert!(
+        assert_eq!(run.status.code(), Some(code), "{stderr}");
+        assert_eq!(
             stderr.contains("cannot write to standard output"),
+            code == 1,
             "{stderr}"
         );
         let after = snapshot(&out);

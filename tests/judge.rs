@@ -145,6 +145,17 @@ fn malformed_histories_are_refused_with_line_and_column() {
         "theirs.csv:10: column `rz`: `abc` is not a finite number",
     );
     refused(cell("NaN"), &[], "theirs.csv:10: column `rz`: `NaN`");
+    // A blank line before it: the bad cell is on the file's line 11 (a blank line is no
+    // record, yet a line of the file).
+    refused(
+        |i, l| match i {
+            5 => format!("\n{l}"),
+            10 => cell("abc")(i, l),
+            _ => l,
+        },
+        &[],
+        "theirs.csv:11: column `rz`: `abc` is not a finite number",
+    );
     // Time that does not increase.
     refused(
         |i, l| {

@@ -140,3 +140,32 @@ pub fn render(
     }
     out
 }
+
+/// ", did you mean `x`?" for the candidate nearest `given` by edit distance, where it is near
+/// enough to be a slip (at most a third of its characters differ); empty otherwise.
+pub fn did_you_mean<S: AsRef<str>>(given: &str, candidates: &[S]) -> String {
+    candidates
+        .iter()
+        .map(|c| (edit_distance(given, c.as_ref()), c.as_ref()))
+        .filter(|(d, c)| *d > 0 && 3 * d <= c.chars().count().max(given.chars().count()))
+        .min_by_key(|(d, _)| *d)
+        .map_or_else(String::new, |(_, c)| format!(", did you mean `{c}`?"))
+}
+
+/// Levenshtein distance between two strings, in characters.
+pub fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let next = (diagonal + usize::from(ca != *cb))
+                .min(row[j] + 1)
+                .min(row[j + 1] + 1);
+            diagonal = row[j + 1];
+            row[j + 1] = next;
+        }
+    }
+    row[b.len()]
+}

@@ -3,6 +3,7 @@
 pub mod build;
 pub mod chain;
 pub mod diagnostic;
+pub mod embedded;
 pub mod family;
 pub mod file;
 
@@ -76,8 +77,15 @@ pub enum CaseError {
         offset: usize,
     },
     /// A case id or path that matches no file.
-    #[error("no case `{0}`: give an id from cases/ or a path to a .toml file")]
-    NotFound(String),
+    #[error("no case `{arg}`{hint}: give an id from {dir} or a path to a .toml file")]
+    NotFound {
+        /// The argument given.
+        arg: String,
+        /// ", did you mean `id`?" where a case's id is near it; empty otherwise.
+        hint: String,
+        /// The case directory searched.
+        dir: String,
+    },
 }
 
 impl CaseError {
@@ -196,7 +204,16 @@ pub fn resolve(arg: &str, dir: &Path) -> Result<PathBuf, CaseError> {
             return Ok(in_dir);
         }
     }
-    Err(CaseError::NotFound(arg.to_string()))
+    let ids: Vec<String> = discover_suite(dir)
+        .unwrap_or_default()
+        .iter()
+        .filter_map(|p| p.file_stem().map(|s| s.to_string_lossy().into_owned()))
+        .collect();
+    Err(CaseError::NotFound {
+        arg: arg.to_string(),
+        hint: diagnostic::did_you_mean(arg, &ids),
+        dir: format!("{}/", dir.display()),
+    })
 }
 
 /// Read and validate a case file.

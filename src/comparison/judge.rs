@@ -201,11 +201,16 @@ pub fn read(
     let mut times: Vec<f64> = Vec::new();
     let mut values: Vec<Vec<f64>> = vec![Vec::new(); wanted.len()];
     for (k, record) in reader.records().enumerate() {
-        let line = k + 2;
         let record = record.map_err(|e| JudgeError::Unreadable {
             file: file.clone(),
-            message: format!("line {line}: {e}"),
+            message: match e.position() {
+                Some(p) => format!("line {}: {e}", p.line()),
+                None => format!("record {}: {e}", k + 1),
+            },
         })?;
+        // The line the record starts on in the file (blank lines are skipped, not counted
+        // as records).
+        let line = record.position().map_or(k + 2, |p| p.line() as usize);
         let cell = |index: usize, column: &str| -> Result<f64, JudgeError> {
             let text = record.get(index).unwrap_or("");
             text.parse::<f64>()

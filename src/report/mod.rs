@@ -4,6 +4,8 @@
 //! - [`data`]: the time histories, one CSV per case and engine (the spec's output contract);
 //! - `summary.json`: every metric and verdict per case and engine, as the comparison judged
 //!   them ([`crate::comparison::summary`]; deterministic: the same inputs give the same bytes);
+//! - [`gate`]: `verdicts.json`, each judged cell's error, tolerance, verdict and cause, and the
+//!   same as JUnit XML for a pipeline;
 //! - `timings.json`: wall-clock seconds per case and engine (the one thing that varies);
 //! - [`figures`]: `figures/<case>.svg`, each case's histories drawn, and its errors over time;
 //! - [`sketch`]: `figures/<case>.sketch.svg`, each scene drawn from the `Scene` itself;
@@ -23,6 +25,7 @@ pub mod element_cost;
 pub mod figures;
 pub mod first_screen;
 pub mod format;
+pub mod gate;
 pub mod judge;
 pub mod markdown;
 pub mod on_request;
@@ -51,7 +54,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// The report's own entries in its directory; nothing else there is the report's.
-pub const ENTRIES: [&str; 14] = [
+pub const ENTRIES: [&str; 15] = [
     "README.md",
     "cases",
     "accuracy.md",
@@ -64,6 +67,7 @@ pub const ENTRIES: [&str; 14] = [
     "stability.csv",
     "on_request.csv",
     "summary.json",
+    "verdicts.json",
     "timings.json",
     "REPORT.md",
 ];
@@ -153,6 +157,8 @@ pub fn write(
     #[cfg(feature = "figures")]
     write_figures(out, plan, &summary)?;
     data::write_atomic(&summary_path(out), summary.to_json().as_bytes())?;
+    let verdicts = gate::json(&gate::cells(&summary));
+    data::write_atomic(&gate::json_path(out), verdicts.as_bytes())?;
     data::write_atomic(&results::csv_path(out), results::csv(&summary).as_bytes())?;
     let json = serde_json::to_string_pretty(&timings).expect("timings serialise") + "\n";
     data::write_atomic(&timings_path(out), json.as_bytes())?;

@@ -33,6 +33,17 @@ pub enum Unusable {
     /// A file that cannot be read.
     #[error("{0}")]
     Read(String),
+    /// Two reports that share no history and no verdict: a comparison would look at nothing.
+    #[error(
+        "the reports share no cell, so nothing was compared ({base} cells in the base, {new} in \
+         the new one); compare reports of the same cases and engines"
+    )]
+    Nothing {
+        /// Cells of the base report.
+        base: usize,
+        /// Cells of the new report.
+        new: usize,
+    },
     /// Cells or columns present on one side only.
     #[error("the reports do not hold the same {what}: {list}")]
     Mismatch {
@@ -156,24 +167,6 @@ fn read_results(path: &Path) -> Result<BTreeMap<Key, Verdict>, Unusable> {
     Ok(out)
 }
 
-/// The first few keys on one side only, named with the side that has them.
-fn only_on_one_side<'a>(
-    base: impl Iterator<Item = &'a Key>,
-    new: impl Iterator<Item = &'a Key> + Clone,
-) -> Vec<String> {
-    let base: Vec<&Key> = base.collect();
-    let mut out: Vec<String> = base
-        .iter()
-        .filter(|k| !new.clone().any(|n| n == **k))
-        .map(|k| format!("{} / {} / {} (base only)", k.0, k.1, k.2))
-        .collect();
-    out.extend(
-        new.filter(|k| !base.contains(k))
-            .map(|k| format!("{} / {} / {} (new only)", k.0, k.1, k.2)),
-    );
-    out
-}
-
 /// The largest difference of each column between two histories of one cell, over the base
 /// column's peak; `Err` where their columns or rows differ.
 fn drift_of(base: &Path, new: &Path) -> Result<Vec<(String, f64)>, Unusable> {
@@ -222,15 +215,41 @@ pub fn drift_between(
     drift_of(&file(base), &file(new))
 }
 
-/// The (case, engine) cells of a report, in order.
-fn cells_of(report: &Report) -> Vec<(&str, &str)> {
-    let mut c: Vec<(&str, &str)> = report
+/// The (case, engine) cells of a report, in order: those `results.csv` judges and those with a
+/// history in `data/` (an engine compared with no exact solution has a history and no verdict).
+fn cells_of(report: &Report) -> Vec<(String, String)> {
+    let mut c: Vec<(String, String)> = report
         .verdicts
         .keys()
-        .map(|k| (k.0.as_str(), k.1.as_str()))
+        .map(|k| (k.0.clone(), k.1.clone()))
         .collect();
+    c.extend(histories_of(&report.dir));
+    c.sort();
     c.dedup();
     c
+}
+
+/// The (case, engine) of every history in `dir/data/<case>/<engine>.csv` (budget CSVs aside).
+fn histories_of(dir: &Path) -> Vec<(String, String)> {
+    let listing = |d: &Path| -> Vec<PathBuf> {
+        std::fs::read_dir(d)
+            .map(|l| l.filter_map(|e| e.ok().map(|e| e.path())).collect())
+            .unwrap_or_default()
+    };
+    let mut out = Vec::new();
+    for case in listing(&dir.join("data")).iter().filter(|p| p.is_dir()) {
+        let case_id = case.file_name().unwrap_or_default().to_string_lossy();
+        for file in listing(case) {
+            let name = file.file_name().unwrap_or_default().to_string_lossy();
+            if let Some(engine) = name.strip_suffix(".csv")
+                && !engine.ends_with(".budget")
+            {
+                let engine = crate::contract::engine_of_stem(engine);
+                out.push((case_id.to_string(), engine));
+            }
+        }
+    }
+    out
 }
 
 /// Both tiers of one cell, every column of its history.
@@ -241,7 +260,13 @@ fn cell_changes(
     engine: &str,
 ) -> Result<Vec<Change>, Unusable> {
     let file = |r: &Report| crate::report::data::csv_path(&r.dir, case, engine);
-    let drifts = if file(base).is_file() || file(new).is_file() {
+    let drifts = if file(base).is_file() != file(new).is_file() {
+        let side = if file(base).is_file() { "base" } else { "new" };
+        return Err(Unusable::Mismatch {
+            what: "histories".into(),
+            list: format!("{case} / {engine}: a history in the {side} report only"),
+        });
+    } else if file(base).is_file() {
         drift_of(&file(base), &file(new))?
     } else {
         // No history on either side (a run that failed in both): the verdicts alone.
@@ -269,21 +294,18 @@ fn cell_changes(
         .collect())
 }
 
-/// Compare two reports: every column of every cell, both tiers; they must hold the same
-/// cells and columns.
-pub fn compare(base: &Report, new: &Report) -> Result<Vec<Change>, Unusable> {
-    let differ = only_on_one_side(base.verdicts.keys(), new.verdicts.keys());
-    if !differ.is_empty() {
-        return Err(Unusable::Mismatch {
-            what: "cells and columns".into(),
-            list: differ.into_iter().take(5).collect::<Vec<_>>().join("; "),
+/// Compare two reports: both tiers of every column of the cells both hold (every history
+/// both hold, whether or not an exact solution judged it), the cells either holds alone
+/// listed; `Err` where they share nothing to compare.
+pub fn compare(base: &Report, new: &Report) -> Result<Since, Unusable> {
+    let compared = since(base, new);
+    if compared.changes.is_empty() && compared.incomparable.is_empty() {
+        return Err(Unusable::Nothing {
+            base: cells_of(base).len(),
+            new: cells_of(new).len(),
         });
     }
-    let mut changes = Vec::new();
-    for (case, engine) in cells_of(base) {
-        changes.extend(cell_changes(base, new, case, engine)?);
-    }
-    Ok(changes)
+    Ok(compared)
 }
 
 /// What changed between a report and the one that replaces it (the main command's "since the
@@ -321,10 +343,9 @@ pub fn since_dirs(previous: &Path, new: &Path) -> Option<Since> {
 /// [`compare`] over the cells `base` and `new` share, the others counted apart.
 pub fn since(base: &Report, new: &Report) -> Since {
     let (a, b) = (cells_of(base), cells_of(new));
-    let owned = |c: &(&str, &str)| (c.0.to_string(), c.1.to_string());
     let mut since = Since {
-        added: b.iter().filter(|c| !a.contains(c)).map(owned).collect(),
-        gone: a.iter().filter(|c| !b.contains(c)).map(owned).collect(),
+        added: b.iter().filter(|c| !a.contains(c)).cloned().collect(),
+        gone: a.iter().filter(|c| !b.contains(c)).cloned().collect(),
         ..Since::default()
     };
     for (case, engine) in a.iter().filter(|c| b.contains(c)) {
@@ -463,7 +484,8 @@ impl Since {
 
 /// The comparison as markdown: a verdict line, then the physics regressions and the drifted
 /// columns (largest first), each with both numbers.
-pub fn markdown(base: &Path, new: &Path, changes: &[Change], threshold: f64) -> String {
+pub fn markdown(base: &Path, new: &Path, compared: &Since, threshold: f64) -> String {
+    let changes = &compared.changes;
     let failing: Vec<&Change> = changes.iter().filter(|c| c.newly_failing()).collect();
     let mut drifted: Vec<&Change> = changes.iter().filter(|c| c.drift > threshold).collect();
     drifted.sort_by(|a, b| b.drift.total_cmp(&a.drift));
@@ -477,6 +499,21 @@ pub fn markdown(base: &Path, new: &Path, changes: &[Change], threshold: f64) -> 
         drifted.len(),
         sci(threshold)
     );
+    for (cells, what) in [
+        (&compared.added, "in the new report only (not compared)"),
+        (&compared.gone, "in the base report only (not compared)"),
+    ] {
+        if !cells.is_empty() {
+            let list: Vec<String> = cells.iter().map(|(c, e)| format!("{c} / `{e}`")).collect();
+            let _ = writeln!(s, "\n{} cells {what}: {}.", cells.len(), list.join(", "));
+        }
+    }
+    if !compared.incomparable.is_empty() {
+        s += "\n## Histories that cannot be compared (machine tier)\n\n";
+        for why in &compared.incomparable {
+            let _ = writeln!(s, "- {why}");
+        }
+    }
     let error = |v: &Verdict| {
         format!(
             "{}{}",
@@ -520,47 +557,33 @@ pub fn markdown(base: &Path, new: &Path, changes: &[Change], threshold: f64) -> 
     s
 }
 
-fn escape(text: &str) -> String {
-    text.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-}
-
 /// The comparison as JUnit XML: a suite per tier, a test case per column (`case/engine` its
 /// class, the column its name), a failure where the tier fails (machine: unless
-/// `physics_only`).
-pub fn junit(changes: &[Change], threshold: f64, physics_only: bool) -> String {
+/// `physics_only`), and in the machine tier one per history that cannot be compared.
+pub fn junit(compared: &Since, threshold: f64, physics_only: bool) -> String {
+    use quick_junit::{NonSuccessKind, Report, TestCase, TestCaseStatus, TestSuite};
+    let changes = &compared.changes;
     let physics: Vec<&Change> = changes.iter().filter(|c| c.physics.is_some()).collect();
-    let mut s = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuites>\n");
-    let mut suite = |name: &str, cases: &[&Change], fails: &dyn Fn(&Change) -> Option<String>| {
-        let failures = cases.iter().filter(|c| fails(c).is_some()).count();
-        let _ = writeln!(
-            s,
-            "  <testsuite name=\"{name}\" tests=\"{}\" failures=\"{failures}\">",
-            cases.len()
-        );
-        for c in cases {
-            let class = escape(&format!("{}/{}", c.key.0, c.key.1));
-            let _ = write!(
-                s,
-                "    <testcase classname=\"{class}\" name=\"{}\"",
-                escape(&c.key.2)
-            );
-            match fails(c) {
+    let all: Vec<&Change> = changes.iter().collect();
+    let suite = |name: &str, cases: &[&Change], fails: &dyn Fn(&Change) -> Option<String>| {
+        let mut suite = TestSuite::new(name);
+        suite.add_test_cases(cases.iter().map(|c| {
+            let status = match fails(c) {
                 Some(message) => {
-                    let _ = writeln!(
-                        s,
-                        ">\n      <failure message=\"{}\"/>\n    </testcase>",
-                        escape(&message)
-                    );
+                    let mut status = TestCaseStatus::non_success(NonSuccessKind::Failure);
+                    status.set_message(message);
+                    status
                 }
-                None => s.push_str("/>\n"),
-            }
-        }
-        s.push_str("  </testsuite>\n");
+                None => TestCaseStatus::success(),
+            };
+            let mut case = TestCase::new(c.key.2.as_str(), status);
+            case.set_classname(format!("{}/{}", c.key.0, c.key.1));
+            case
+        }));
+        suite
     };
-    suite("physics", &physics, &|c: &Change| {
+    let mut report = Report::new("crosscheck compare");
+    report.add_test_suite(suite("physics", &physics, &|c: &Change| {
         let (a, b) = c.physics.as_ref()?;
         c.newly_failing().then(|| {
             format!(
@@ -570,9 +593,8 @@ pub fn junit(changes: &[Change], threshold: f64, physics_only: bool) -> String {
                 b.tolerance.map_or("–".into(), sci)
             )
         })
-    });
-    let all: Vec<&Change> = changes.iter().collect();
-    suite("machine", &all, &|c: &Change| {
+    }));
+    let mut machine = suite("machine", &all, &|c: &Change| {
         (!physics_only && c.drift > threshold).then(|| {
             format!(
                 "drifted by {} of the peak (threshold {})",
@@ -581,5 +603,15 @@ pub fn junit(changes: &[Change], threshold: f64, physics_only: bool) -> String {
             )
         })
     });
-    s + "</testsuites>\n"
+    for why in &compared.incomparable {
+        let mut status = if physics_only {
+            TestCaseStatus::skipped()
+        } else {
+            TestCaseStatus::non_success(NonSuccessKind::Failure)
+        };
+        status.set_message(why.as_str());
+        machine.add_test_case(TestCase::new("history", status));
+    }
+    report.add_test_suite(machine);
+    report.to_string().unwrap_or_default()
 }

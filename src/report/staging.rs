@@ -324,6 +324,26 @@ fn link_tree(from: &Path, to: &Path) -> io::Result<()> {
     Ok(())
 }
 
+/// Put a copy of the report in `source` (its `entries`) in place of `target`'s, through a
+/// staging directory and the swap, so that `target` holds the old report or the new one, never
+/// a mixture; the files are hard-linked where the two share a device (a report's files are
+/// only ever replaced, never written in place). The caller holds `target`'s lock.
+pub fn replace_report(source: &Path, target: &Path, entries: &[&str]) -> io::Result<()> {
+    let staging = Staging::begin(target, entries)?;
+    for e in entries {
+        let (from, to) = (source.join(e), staging.dir.join(e));
+        match fs::symlink_metadata(&to) {
+            Ok(m) if m.is_dir() => fs::remove_dir_all(&to)?,
+            Ok(_) => fs::remove_file(&to)?,
+            Err(_) => {}
+        }
+        if fs::symlink_metadata(&from).is_ok() {
+            link_tree(&from, &to)?;
+        }
+    }
+    staging.commit()
+}
+
 impl Staging {
     /// Start a report for `target` (a path from [`resolve_output`], locked by the caller)
     /// whose own entries are `entries`: remove staging directories of dead runs, create this

@@ -80,7 +80,7 @@ pub fn check_increment(scene: &Scene) -> Result<(), SceneError> {
 
 /// An engine name that matches no engine.
 #[derive(Debug, Clone, thiserror::Error)]
-#[error("unknown engine `{name}`; valid engines: {}", .valid.join(", "))]
+#[error("unknown engine `{name}`{}; valid engines: {}", case::diagnostic::did_you_mean(.name, .valid), .valid.join(", "))]
 pub struct UnknownEngine {
     /// The name given.
     pub name: String,
@@ -98,21 +98,28 @@ pub fn engine_names() -> Vec<String> {
 
 /// Engines by name, in the order given (duplicates dropped); every engine when `names` is empty.
 pub fn select_engines(names: &[String]) -> Result<Vec<Box<dyn Engine>>, UnknownEngine> {
+    select_among(engines::all(), names)
+}
+
+/// [`select_engines`] among `available` (crosscheck's engines and a user's, in report order).
+pub fn select_among(
+    available: Vec<Box<dyn Engine>>,
+    names: &[String],
+) -> Result<Vec<Box<dyn Engine>>, UnknownEngine> {
     if names.is_empty() {
-        return Ok(engines::all());
+        return Ok(available);
     }
+    let valid: Vec<String> = available.iter().map(|e| e.name().to_string()).collect();
+    let mut slots: Vec<Option<Box<dyn Engine>>> = available.into_iter().map(Some).collect();
     let mut out: Vec<Box<dyn Engine>> = Vec::new();
     for name in names {
         let name = name.trim();
-        if out.iter().any(|e| e.name() == name) {
-            continue;
-        }
-        match engines::named(name) {
-            Some(e) => out.push(e),
+        match valid.iter().position(|v| v == name) {
+            Some(i) => out.extend(slots[i].take()),
             None => {
                 return Err(UnknownEngine {
                     name: name.to_string(),
-                    valid: engine_names(),
+                    valid,
                 });
             }
         }

@@ -45,7 +45,7 @@ pub mod sweep;
 
 pub use load::{
     LoadError, UnknownEngine, check_increment, check_overrides, check_scene, check_scene_for,
-    engine_names, load_cases, load_cases_for, select_engines,
+    engine_names, load_cases, load_cases_for, select_among, select_engines,
 };
 
 use crate::contract::{self, History};

@@ -1,0 +1,140 @@
+//! Baselines, as criterion and insta users expect them: `compare` (and `--accept`), and a
+//! run's `--baseline NAME` and `--save-baseline NAME`, kept in `baselines/NAME` beside the
+//! output directory.
+
+use super::{CompareArgs, Stdout, outcome};
+use crate::pipeline;
+use crate::report::{self, staging};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+/// A baseline's name: letters, digits, `_`, `-` and `.`, not starting with `.` (it names a
+/// directory).
+pub(super) fn name(s: &str) -> Result<String, String> {
+    let portable = s
+        .chars()
+        .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'));
+    if s.is_empty() || !portable || s.starts_with('.') {
+        return Err(
+            "a baseline name is letters, digits, `_`, `-` and `.`, not starting with `.`"
+                .to_string(),
+        );
+    }
+    Ok(s.to_string())
+}
+
+/// Where the baseline `name` of the report at `target` (a resolved output directory) is kept:
+/// `baselines/<name>` beside it.
+pub(super) fn path(target: &Path, name: &str) -> PathBuf {
+    target
+        .parent()
+        .unwrap_or(Path::new("."))
+        .join("baselines")
+        .join(name)
+}
+
+/// `crosscheck compare`: print the comparison (exit 1 when a tier fails, 2 when the reports
+/// cannot be compared); with `--accept`, then make NEW the baseline (exit 0 once it is).
+pub(super) fn compare_command(args: CompareArgs) -> ExitCode {
+    let compared = pipeline::compare(
+        &args.base,
+        &args.new,
+        args.threshold,
+        args.physics_only,
+        args.junit.as_deref(),
+    );
+    if !args.accept {
+        return outcome(compared);
+    }
+    let mut out = Stdout::default();
+    match compared {
+        Ok((text, _)) => out.print(&text),
+        Err(why) => out.print(&format!("(not compared: {why})\n")),
+    }
+    if !args.new.join("summary.json").is_file() {
+        eprintln!(
+            "error: {} is not a crosscheck report; nothing was accepted",
+            args.new.display()
+        );
+        return out.finish(ExitCode::from(2));
+    }
+    let code = match copy_report(&args.new, &args.base) {
+        Ok(()) => {
+            out.print(&format!(
+                "accepted: {} is now the baseline in {}\n",
+                args.new.display(),
+                args.base.display()
+            ));
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}; {} is unchanged", args.base.display());
+            ExitCode::FAILURE
+        }
+    };
+    out.finish(code)
+}
+
+/// Put a copy of the report in `source` in place of `target`'s, under `target`'s lock.
+pub(super) fn copy_report(source: &Path, target: &Path) -> Result<(), String> {
+    let target = staging::resolve_output(target).map_err(|e| e.to_string())?;
+    let _lock = staging::OutputLock::acquire(&target, true)
+        .map_err(|e| format!("cannot lock {}: {e}", target.display()))?;
+    staging::replace_report(source, &target, &report::ENTRIES)
+        .map_err(|e| format!("cannot put the report in {}: {e}", target.display()))
+}
+
+/// Before a run: the baseline `name` of the report at `target` must exist to be compared with
+/// (exit 2 otherwise, nothing run).
+pub(super) fn check_exists(target: &Path, name: Option<&str>) -> Result<(), ExitCode> {
+    let Some(name) = name else {
+        return Ok(());
+    };
+    let dir = path(target, name);
+    if dir.join("summary.json").is_file() {
+        return Ok(());
+    }
+    eprintln!(
+        "error: no baseline `{name}` ({} holds no report; save one with --save-baseline \
+         {name}); nothing was run",
+        dir.display()
+    );
+    Err(ExitCode::from(2))
+}
+
+/// After a run whose report is in place at `target`: compare it with the baseline `compare`
+/// (exit 1 when a tier fails, printing the comparison), then save it as `save`.
+pub(super) fn after_run(
+    target: &Path,
+    compare: Option<&str>,
+    save: Option<&str>,
+    stdout: &mut Stdout,
+) -> ExitCode {
+    let mut code = ExitCode::SUCCESS;
+    if let Some(name) = compare {
+        let base = path(target, name);
+        match pipeline::compare(&base, target, report::regression::DRIFT, false, None) {
+            Ok((text, failed)) => {
+                stdout.print(&format!("\nagainst the baseline `{name}`:\n{text}"));
+                if failed {
+                    code = ExitCode::FAILURE;
+                }
+            }
+            Err(why) => {
+                eprintln!("error: cannot compare with the baseline `{name}`: {why}");
+                code = ExitCode::FAILURE;
+            }
+        }
+    }
+    if let Some(name) = save {
+        let dir = path(target, name);
+        match copy_report(target, &dir) {
+            Ok(()) => stdout.print(&format!("baseline `{name}` saved: {}\n", dir.display())),
+            Err(e) => {
+                eprintln!("error: cannot save the baseline `{name}`: {e}");
+                code = ExitCode::FAILURE;
+            }
+        }
+    }
+    code
+}

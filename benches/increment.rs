@@ -29,8 +29,8 @@
 //! Run with `cargo bench --bench increment`; `BENCHMARKS.md` gives the table.
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use crosscheck::case;
+use crosscheck::engines::RunSettings;
 use crosscheck::engines::explicit::ExplicitEngine;
-use crosscheck::engines::{self, RunSettings};
 use crosscheck::run::floor::{DampedOscillator, PinnedBody};
 use crosscheck::run::matching;
 use crosscheck::scene::IncrementRule;
@@ -58,7 +58,7 @@ fn whole_runs(c: &mut Criterion, name: &str, refinement: f64, chosen: impl Fn(&s
         .warm_up_time(Duration::from_millis(300))
         .measurement_time(Duration::from_secs(2));
     for scene in seed_cases() {
-        for engine in engines::all() {
+        for engine in crosscheck::run::registry::all() {
             if engine.name() == "analytic" || !chosen(engine.name()) {
                 continue;
             }

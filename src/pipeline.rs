@@ -6,7 +6,7 @@
 use crate::comparison::stability::Map;
 use crate::comparison::summary::Summary;
 use crate::comparison::{self, discrepancy, work_precision};
-use crate::engines::{self, Engine, RunSettings};
+use crate::engines::{Engine, RunSettings};
 use crate::interrupt;
 use crate::report::data::DataError;
 use crate::report::staging::Staging;
@@ -274,12 +274,30 @@ pub fn exact_solutions(cases: Vec<Scene>) -> (Plan, Outcome) {
         cases,
         engines: ["analytic", "reference"]
             .iter()
-            .filter_map(|n| engines::named(n))
+            .filter_map(|n| crate::run::registry::named(n))
             .collect(),
         settings: RunSettings::default(),
     };
     let outcome = run::execute(&plan, false);
     (plan, outcome)
+}
+
+/// A study on its own (`crosscheck sweep`, `crosscheck stability`): the exact solutions of
+/// `cases`, the study's runs measured against them (`measure`), its files written into
+/// `staging` (`write`) and swapped into place. Stops (the previous files unchanged) when a
+/// signal asks it to or a file cannot be written.
+pub fn study<T>(
+    cases: Vec<Scene>,
+    staging: Staging,
+    measure: impl FnOnce(&Plan, &Outcome) -> T,
+    write: impl FnOnce(&Path, &Plan, &T) -> Result<(), DataError>,
+) -> Result<T, Stopped> {
+    let (plan, outcome) = exact_solutions(cases);
+    stop_if_interrupted()?;
+    let measured = measure(&plan, &outcome);
+    stop_if_interrupted()?;
+    put_in_place(staging, |dir| write(dir, &plan, &measured))?;
+    Ok(measured)
 }
 
 /// Write a study's files into the staging directory with `write`, then swap them into place;
@@ -389,7 +407,7 @@ pub fn judge(request: &JudgeRequest, dir: &Path) -> Result<(String, bool), Strin
     let text = std::fs::read_to_string(file)
         .map_err(|e| format!("{}: cannot read: {e}", file.display()))?;
     let external = judge::read(&scene, &text, file, &mapping).map_err(|e| e.to_string())?;
-    let engine = engines::named(request.against)
+    let engine = crate::run::registry::named(request.against)
         .ok_or_else(|| format!("no exact solution named {}", request.against))?;
     let exact = engine
         .run(&scene, &RunSettings::default())
@@ -430,6 +448,14 @@ pub fn compare(
         regression::read(new).map_err(|e| e.to_string())?,
     );
     let compared = regression::compare(&a, &b).map_err(|e| e.to_string())?;
+    let judged = compared.changes.iter().any(|c| c.physics.is_some());
+    if physics_only && !judged && compared.broken.is_empty() {
+        return Err(
+            "--physics-only: no cell has a verdict in both reports (no exact solution \
+                    judged it), so nothing was compared"
+                .to_string(),
+        );
+    }
     if let Some(path) = junit {
         let xml = regression::junit(&compared, threshold, physics_only);
         report::data::write_atomic(path, xml.as_bytes()).map_err(|e| e.to_string())?;
@@ -439,6 +465,7 @@ pub fn compare(
         .changes
         .iter()
         .any(regression::Change::newly_failing)
+        || !compared.broken.is_empty()
         || (!physics_only && (drifted || !compared.incomparable.is_empty()));
     Ok((
         regression::markdown(base, new, &compared, threshold),

@@ -5,7 +5,7 @@ mod common;
 use crosscheck::comparison::discrepancy::{self, Budget, JobBudget, Order};
 use crosscheck::report::data::{budget_path, csv_path, read_history};
 use crosscheck::run::refinement::Depth;
-use crosscheck::{case, contract, engines, run};
+use crosscheck::{case, contract, run};
 use std::sync::OnceLock;
 
 /// Every seed case with every engine, and each job's budget at the basic level and one level
@@ -16,7 +16,7 @@ fn budgets() -> &'static (run::Plan, run::Outcome, Vec<JobBudget>) {
         let cases = run::load_cases(&[], &case::cases_dir()).unwrap();
         let plan = run::Plan {
             cases,
-            engines: engines::all(),
+            engines: crosscheck::run::registry::all(),
             settings: Default::default(),
         };
         let outcome = run::execute(&plan, false);

@@ -154,6 +154,33 @@ fn reports_are_compared_over_what_they_share_and_refused_when_nothing() {
         );
     };
     refused(&a, &c, "the reports share no cell, so nothing was compared");
+
+    // A cell whose run now fails has no history and no verdict: a regression, not a cell
+    // "no longer run".
+    let broken = root.path().join("broken");
+    report(&broken, &["springs_grounded_a"]);
+    std::fs::remove_file(broken.join("data/springs_grounded_a/explicit.csv")).unwrap();
+    let results = std::fs::read_to_string(broken.join("results.csv")).unwrap();
+    let kept: Vec<&str> = results
+        .lines()
+        .filter(|l| !l.starts_with("springs_grounded_a,explicit,"))
+        .collect();
+    std::fs::write(broken.join("results.csv"), kept.join("\n") + "\n").unwrap();
+    let summary = std::fs::read_to_string(broken.join("summary.json")).unwrap();
+    let mut json: serde_json::Value = serde_json::from_str(&summary).unwrap();
+    for run in json["cases"][0]["runs"].as_array_mut().unwrap() {
+        if run["engine"] == "explicit" {
+            run["status"] = "failed".into();
+        }
+    }
+    std::fs::write(broken.join("summary.json"), json.to_string()).unwrap();
+    let out = compare(&b, &broken, &["--physics-only"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}");
+    assert!(
+        stdout.contains("springs_grounded_a / `explicit`: failed in the new report"),
+        "{stdout}"
+    );
     refused(&a, root.path(), "not a crosscheck report");
     let summary = b.join("summary.json");
     let text = std::fs::read_to_string(&summary).unwrap();
@@ -231,10 +258,13 @@ fn baselines_are_saved_compared_and_accepted() {
 
     // A run saves its report as a named baseline beside it, and a later run compares with it.
     let out_dir = root.path().join("report");
+    let saved_in = root.path().join("baselines");
     let run = |extra: &[&str]| {
         bin()
             .args(["run", "-q", "springs_grounded_a", "--out"])
             .arg(&out_dir)
+            .arg("--baseline-dir")
+            .arg(&saved_in)
             .args(extra)
             .output()
             .unwrap()
@@ -244,7 +274,7 @@ fn baselines_are_saved_compared_and_accepted() {
     assert!(String::from_utf8_lossy(&missing.stderr).contains("no baseline `main`"));
     assert!(!out_dir.exists(), "nothing run");
     assert_eq!(run(&["--save-baseline", "main"]).status.code(), Some(0));
-    let saved = root.path().join("baselines/main");
+    let saved = saved_in.join("main");
     assert!(saved.join(file).is_file());
     let again = run(&["--baseline", "main"]);
     let stdout = String::from_utf8_lossy(&again.stdout);

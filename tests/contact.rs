@@ -5,7 +5,7 @@
 //! rebounds, with their controls: `tests/fair.rs`).
 use crosscheck::case;
 use crosscheck::engines::explicit::space::{Planar, Space, Spatial};
-use crosscheck::engines::{self, History, RunOutput, RunSettings};
+use crosscheck::engines::{History, RunOutput, RunSettings};
 use crosscheck::scene::{Dimension, IncrementRule, PenaltyRule, Scene, Solid, solid_distance};
 use nalgebra::{Vector2, Vector3};
 
@@ -15,7 +15,7 @@ fn stress(id: &str) -> Scene {
 }
 
 fn run(scene: &Scene, engine: &str, settings: &RunSettings) -> RunOutput {
-    engines::named(engine)
+    crosscheck::run::registry::named(engine)
         .unwrap()
         .run(scene, settings)
         .unwrap_or_else(|e| panic!("{} / {engine}: {e}", scene.id))
@@ -231,7 +231,7 @@ fn a_node_that_would_go_through_a_thin_solid_is_refused_with_what_it_needs() {
     let path = dir.path().join("thin.toml");
     std::fs::write(&path, text).unwrap();
     let scene = case::load(&path).unwrap_or_else(|e| panic!("{e}"));
-    let Err(error) = engines::named("explicit")
+    let Err(error) = crosscheck::run::registry::named("explicit")
         .unwrap()
         .run(&scene, &RunSettings::default())
     else {
@@ -661,7 +661,7 @@ fn every_engine_reports_the_gap_it_moves_through() {
     let mut scene = stress("contact_drop_e1");
     for engine in ["reference", "explicit", "rapier_f64_default", "rapier_f64"]
         .into_iter()
-        .filter(|e| engines::named(e).is_some())
+        .filter(|e| crosscheck::run::registry::named(e).is_some())
     {
         let out = run(&scene, engine, &RunSettings::default());
         let (gap, x) = (column(&out.history, "gap"), column(&out.history, "ux_node"));

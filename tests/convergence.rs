@@ -321,12 +321,11 @@ fn step_boundary_order(text: &str) {
 /// the finite model's own compliance is 1.13× the small one's; 3 bounds it).
 #[test]
 fn the_finite_rotation_contact_start_does_not_ring_the_penalty_mode() {
-    use crosscheck::engines;
     use crosscheck::scene::PenaltyRule;
     let scene = scene("rigid2d_pin_lumped");
     let exact = |name: &str| {
         let h = run(
-            engines::named(name).unwrap().as_ref(),
+            crosscheck::run::registry::named(name).unwrap().as_ref(),
             &scene,
             RunSettings::default(),
         );
@@ -340,7 +339,11 @@ fn the_finite_rotation_contact_start_does_not_ring_the_penalty_mode() {
             ..Default::default()
         };
         let error = |name: &str, exact: &[f64]| {
-            let run = run(engines::named(name).unwrap().as_ref(), &scene, settings);
+            let run = run(
+                crosscheck::run::registry::named(name).unwrap().as_ref(),
+                &scene,
+                settings,
+            );
             max_diff(&col(&run, "contact_force"), exact) / peak(exact)
         };
         let finite = error("explicit", &reference);

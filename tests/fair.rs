@@ -12,7 +12,7 @@ use crosscheck::comparison::attribution;
 use crosscheck::comparison::verdict::cause::Flag;
 use crosscheck::comparison::{self, contact};
 use crosscheck::engines::rapier::{DEFAULT_INCREMENT, Precision, RapierEngine, controls, plan};
-use crosscheck::engines::{self, ControlKind, Engine, RunOutput, RunSettings};
+use crosscheck::engines::{ControlKind, Engine, RunOutput, RunSettings};
 use crosscheck::run::{self, Plan};
 use crosscheck::scene::{IncrementRule, Scene};
 use std::path::Path;
@@ -24,7 +24,7 @@ fn run(scene: &Scene, engine: &dyn Engine) -> RunOutput {
 }
 
 fn named(name: &str) -> Box<dyn Engine> {
-    engines::named(name).unwrap()
+    crosscheck::run::registry::named(name).unwrap()
 }
 
 /// The first rebound over the drop, as the report measures it.

@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 
 /// The engines that step in time and are studied (a discrepancy budget each).
 fn studied() -> usize {
-    crosscheck::engines::all()
+    crosscheck::run::registry::all()
         .iter()
         .filter(|e| e.stepping().is_some())
         .count()
@@ -59,7 +59,7 @@ fn previous_report() -> (tempfile::TempDir, PathBuf, BTreeMap<String, Vec<u8>>) 
     let stepping = studied();
     assert_eq!(
         before.len(),
-        2 * (crosscheck::engines::all().len() + stepping) + 2 * 3 + 2 + 2 + 3 + 6,
+        2 * (crosscheck::run::registry::all().len() + stepping) + 2 * 3 + 2 + 2 + 3 + 6,
         "CSVs, budget CSVs, case figures (histories, errors, sketch), budget figures per family, \
          case pages, summary, verdicts, timings, REPORT.md, results.csv, README.md and the three \
          question pages"
@@ -192,7 +192,7 @@ fn one_writer_per_output() {
     let after = snapshot(&out);
     assert_eq!(
         after.len(),
-        before.len() + crosscheck::engines::all().len() + studied() + 3 + 1, // CSVs, budget CSVs, 3 figures, its page
+        before.len() + crosscheck::run::registry::all().len() + studied() + 3 + 1, // CSVs, budget CSVs, 3 figures, its page
         "the new case's CSVs and figure"
     );
     for (name, bytes) in &before {
@@ -325,7 +325,7 @@ fn closed_or_full_stdout_is_an_error_not_a_panic() {
         let after = snapshot(&out);
         assert_eq!(
             after.len(),
-            before.len() + crosscheck::engines::all().len() + studied() + 3 + 1, // CSVs, budget CSVs, 3 figures, its page
+            before.len() + crosscheck::run::registry::all().len() + studied() + 3 + 1, // CSVs, budget CSVs, 3 figures, its page
             "the report is in place"
         );
     }
@@ -394,7 +394,7 @@ fn a_scene_with_nothing_free_to_move_runs_on_every_engine() {
     let stdout = String::from_utf8_lossy(&run.stdout);
     assert_eq!(run.status.code(), Some(0), "{stdout}");
     assert!(!stdout.contains("panicked"), "{stdout}");
-    for engine in crosscheck::engines::all() {
+    for engine in crosscheck::run::registry::all() {
         let stem = crosscheck::contract::file_stem(engine.name());
         let csv = out.join("data/held").join(format!("{stem}.csv"));
         let text = std::fs::read_to_string(&csv).unwrap_or_else(|e| panic!("{csv:?}: {e}"));

@@ -47,7 +47,7 @@ fn children_peak_rss() -> u64 {
 fn ten_million_increments_stay_under_50_mb() {
     const LIMIT: u64 = 50 * 1024 * 1024;
     let out = tempfile::tempdir().unwrap();
-    let built = |e: &&str| crosscheck::engines::named(e).is_some();
+    let built = |e: &&str| crosscheck::run::registry::named(e).is_some();
     for engine in ["explicit", "rapier_f64"].into_iter().filter(built) {
         let status = Command::new(env!("CARGO_BIN_EXE_crosscheck"))
             .current_dir(env!("CARGO_MANIFEST_DIR"))

@@ -7,7 +7,7 @@
 mod common;
 
 use crosscheck::comparison::{baseline, compare};
-use crosscheck::engines::{self, Engine, EngineError, RunSettings};
+use crosscheck::engines::{Engine, EngineError, RunSettings};
 use crosscheck::scene::{IncrementRule, Scene};
 
 const TOLERANCES: [f64; 4] = [1e-3, 1e-4, 1e-5, 1e-6];
@@ -66,7 +66,7 @@ fn achieved(
 fn exact_for(scene: &Scene, engine: &str) -> crosscheck::engines::History {
     let name = baseline(engine).unwrap();
     common::run(
-        engines::named(name).unwrap().as_ref(),
+        crosscheck::run::registry::named(name).unwrap().as_ref(),
         scene,
         Default::default(),
     )
@@ -76,7 +76,7 @@ fn exact_for(scene: &Scene, engine: &str) -> crosscheck::engines::History {
 /// on every seed case and every unseen scene, at every tolerance.
 #[test]
 fn explicit_small_meets_every_tolerance_within_a_decade() {
-    let engine = engines::named("explicit_small").unwrap();
+    let engine = crosscheck::run::registry::named("explicit_small").unwrap();
     for scene in common::all_scenes().iter().chain(&unseen()) {
         let exact = exact_for(scene, "explicit_small");
         for eps in TOLERANCES {
@@ -98,7 +98,7 @@ fn explicit_small_meets_every_tolerance_within_a_decade() {
 /// about 3e-5 of the peak on those cases, and it refused 1e-6 there.
 #[test]
 fn explicit_meets_every_tolerance() {
-    let engine = engines::named("explicit").unwrap();
+    let engine = crosscheck::run::registry::named("explicit").unwrap();
     for scene in common::all_scenes().iter().chain(&unseen()) {
         let exact = exact_for(scene, "explicit");
         for eps in TOLERANCES {
@@ -169,7 +169,7 @@ fn fast_mode_scenes() -> Vec<(Scene, Vec<f64>)> {
 /// refuses with the reason; it refuses only where it cannot do otherwise.
 #[test]
 fn explicit_small_meets_the_band_or_says_why_not_with_a_fast_mode() {
-    let engine = engines::named("explicit_small").unwrap();
+    let engine = crosscheck::run::registry::named("explicit_small").unwrap();
     for (scene, must) in fast_mode_scenes() {
         let exact = exact_for(&scene, "explicit_small");
         for eps in TOLERANCES {
@@ -200,7 +200,7 @@ fn explicit_small_meets_the_band_or_says_why_not_with_a_fast_mode() {
 /// `contact_reopen`, 0.015 and 0.064 ε on `contact_balls_oblique` at 1e-3 and 1e-4.
 #[test]
 fn explicit_meets_the_band_or_says_why_not_where_contact_strikes() {
-    let engine = engines::named("explicit").unwrap();
+    let engine = crosscheck::run::registry::named("explicit").unwrap();
     let cases: [(&str, &[f64]); 4] = [
         ("contact_drop_e1", &[1e-3, 1e-4]),
         ("contact_bounce_wedge", &[1e-3, 1e-4, 1e-5]),
@@ -234,7 +234,7 @@ fn explicit_meets_the_band_or_says_why_not_where_contact_strikes() {
 #[test]
 fn rapier_meets_a_tolerance_or_says_why_not() {
     for name in ["rapier_f64", "rapier_f64_default"] {
-        let engine = engines::named(name).unwrap();
+        let engine = crosscheck::run::registry::named(name).unwrap();
         for scene in common::all_scenes() {
             let exact = exact_for(&scene, name);
             for eps in [1e-3, 1e-4] {
@@ -271,7 +271,7 @@ fn a_case_file_can_ask_for_a_tolerance() {
         &[("increment = 5.0e-5", "tolerance = 1.0e-4")],
     );
     assert_eq!(scene.settings.increment, IncrementRule::Tolerance(1e-4));
-    let engine = engines::named("explicit").unwrap();
+    let engine = crosscheck::run::registry::named("explicit").unwrap();
     let exact = exact_for(&scene, "explicit");
     let out = engine.run(&scene, &RunSettings::default()).unwrap();
     let e = compare(&scene, &exact, &out.history)

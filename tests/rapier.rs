@@ -572,10 +572,10 @@ fn memory_is_independent_of_the_number_of_steps() {
 /// names the registry keeps for that are the rapier engines' own.
 #[test]
 fn the_rapier_names_kept_for_builds_without_rapier_are_its_engines_names() {
-    let built: Vec<String> = crosscheck::engines::all()
+    let built: Vec<String> = crosscheck::run::registry::all()
         .iter()
         .map(|e| e.name().to_string())
         .filter(|n| n.starts_with("rapier") && !crosscheck::contract::on_older_release(n))
         .collect();
-    assert_eq!(built, crosscheck::engines::registry::RAPIER_NAMES);
+    assert_eq!(built, crosscheck::run::registry::RAPIER_NAMES);
 }

@@ -2,7 +2,7 @@
 mod common;
 use common::*;
 use crosscheck::engines::explicit::ExplicitEngine;
-use crosscheck::engines::{self, Engine, RunSettings};
+use crosscheck::engines::{Engine, RunSettings};
 use crosscheck::run::{self, Plan};
 use crosscheck::scene::IncrementRule;
 use std::collections::BTreeMap;
@@ -45,7 +45,7 @@ fn a_failed_case_does_not_stop_the_others() {
     bad.settings.increment = IncrementRule::Forced(1e-3);
     let plan = Plan {
         cases: vec![bad, scene("springs_n2n_b")],
-        engines: engines::all(),
+        engines: crosscheck::run::registry::all(),
         settings: RunSettings::default(),
     };
     let outcome = run::execute(&plan, false);
@@ -182,7 +182,7 @@ fn runs_are_deterministic_across_thread_counts() {
     }
     // A CSV per case and engine, a budget CSV per case and studied stepping engine (all but the
     // closed form and the reference, and rapier's older releases), results.csv and the summary.
-    let stepping = engines::all()
+    let stepping = crosscheck::run::registry::all()
         .iter()
         .filter(|e| e.stepping().is_some())
         .count();
@@ -194,7 +194,7 @@ fn runs_are_deterministic_across_thread_counts() {
     let small_refused = 1;
     assert_eq!(
         snaps[0].len(),
-        35 * engines::all().len() - without_closed_form - small_refused
+        35 * crosscheck::run::registry::all().len() - without_closed_form - small_refused
             + (35 - without_closed_form) * stepping
             + 2
     );

@@ -5,7 +5,7 @@
 //! body that turns about one tilted axis after a free turn, against `reference`.
 #![cfg(feature = "rapier")]
 use crosscheck::case;
-use crosscheck::engines::{self, History, RunSettings};
+use crosscheck::engines::{History, RunSettings};
 use crosscheck::scene::IncrementRule;
 use nalgebra::{Matrix3, Vector3};
 
@@ -64,7 +64,7 @@ fn measure(case: &str, engine: &str, increment: Option<f64>) -> Measured {
         increment: increment.map(IncrementRule::Given),
         ..Default::default()
     };
-    let out = engines::named(engine)
+    let out = crosscheck::run::registry::named(engine)
         .unwrap()
         .run(&scene, &settings)
         .unwrap_or_else(|e| panic!("{case} / {engine}: {e}"));
@@ -297,7 +297,7 @@ fn a_turn_about_a_tilted_axis_after_a_free_one_follows_the_reference() {
     ] {
         let scene = tilted_turn(first_hold, first, hold, extra);
         let run = |engine: &str| {
-            engines::named(engine)
+            crosscheck::run::registry::named(engine)
                 .unwrap()
                 .run(&scene, &RunSettings::default())
                 .unwrap_or_else(|e| panic!("{what} / {engine}: {e}"))
@@ -389,7 +389,7 @@ stiffness = 5.0"#;
         spring,
     );
     for engine in ["rapier_f64", "rapier_f32"] {
-        match engines::named(engine)
+        match crosscheck::run::registry::named(engine)
             .unwrap()
             .run(&scene, &RunSettings::default())
         {
@@ -400,7 +400,7 @@ stiffness = 5.0"#;
         }
     }
     for engine in ["explicit", "reference"] {
-        let run = engines::named(engine)
+        let run = crosscheck::run::registry::named(engine)
             .unwrap()
             .run(&scene, &RunSettings::default());
         assert!(run.is_ok(), "{engine}: {:?}", run.err());

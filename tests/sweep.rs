@@ -4,7 +4,6 @@
 mod common;
 
 use crosscheck::comparison::work_precision::{self, CaseSweep};
-use crosscheck::engines;
 use crosscheck::run::{self, Plan, sweep};
 use std::process::Command;
 use std::sync::OnceLock;
@@ -15,7 +14,7 @@ fn exact_solutions(cases: Vec<crosscheck::scene::Scene>) -> (Plan, run::Outcome)
         cases,
         engines: ["analytic", "reference"]
             .iter()
-            .filter_map(|n| engines::named(n))
+            .filter_map(|n| crosscheck::run::registry::named(n))
             .collect(),
         settings: Default::default(),
     };
@@ -230,7 +229,7 @@ fn a_plateau_is_not_a_floor() {
 /// request asks the two explicit ones (rapier's pilot runs are too slow for the default run).
 #[test]
 fn the_studies_run_the_engines_that_say_they_step() {
-    let all = engines::all();
+    let all = crosscheck::run::registry::all();
     let stepping: Vec<&str> = all
         .iter()
         .filter(|e| e.stepping().is_some())

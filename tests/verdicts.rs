@@ -9,7 +9,7 @@ mod common;
 use crosscheck::comparison::compare;
 use crosscheck::comparison::invariance;
 use crosscheck::comparison::verdict;
-use crosscheck::engines::{self, History, RunSettings};
+use crosscheck::engines::{History, RunSettings};
 use crosscheck::run::{self, Plan};
 use nalgebra::{Rotation3, Vector3};
 use std::f64::consts::PI;
@@ -48,7 +48,9 @@ fn turned(h: &History, angle: f64, turns: f64) -> History {
 fn an_orientation_is_compared_as_a_rotation() {
     let scene = common::stress_scene("stress_spin_major");
     let exact = common::run(
-        engines::named("reference").unwrap().as_ref(),
+        crosscheck::run::registry::named("reference")
+            .unwrap()
+            .as_ref(),
         &scene,
         RunSettings::default(),
     );
@@ -72,7 +74,9 @@ fn an_orientation_is_compared_as_a_rotation() {
     // In 2D the angle is the orientation: a whole turn apart is no error.
     let pinned = common::scene("rigid2d_pin_lumped");
     let exact = common::run(
-        engines::named("analytic").unwrap().as_ref(),
+        crosscheck::run::registry::named("analytic")
+            .unwrap()
+            .as_ref(),
         &pinned,
         RunSettings::default(),
     );
@@ -97,7 +101,7 @@ fn a_parameter_the_exact_solution_ignores_is_run_at_both_values() {
         cases: vec![common::stress_scene("contact_slide_ball")],
         engines: ["reference", "explicit"]
             .iter()
-            .filter_map(|n| engines::named(n))
+            .filter_map(|n| crosscheck::run::registry::named(n))
             .collect(),
         settings: RunSettings::default(),
     };
@@ -127,7 +131,7 @@ mod rapier {
     use super::common;
     use crosscheck::comparison::stability::{self, Bound, Search};
     use crosscheck::comparison::verdict::growth;
-    use crosscheck::engines::{self, RunSettings};
+    use crosscheck::engines::RunSettings;
     use crosscheck::pipeline::exact_solutions;
     use crosscheck::run;
 
@@ -138,7 +142,7 @@ mod rapier {
     #[test]
     fn a_transient_that_decays_is_bounded_over_a_long_horizon() {
         let scene = common::stress_scene("stress_pair_zeta5");
-        let engine = engines::named("rapier_f64_default").unwrap();
+        let engine = crosscheck::run::registry::named("rapier_f64_default").unwrap();
         let stable = run::stability::explicit_stable(&scene).unwrap();
         for (ratio, least) in [(22.0, 2.0), (32.0, 4.0), (64.0, 25.0)] {
             let long = run::stability::continued(&scene, 10);
@@ -166,7 +170,7 @@ mod rapier {
     #[test]
     fn the_map_reaches_past_an_engines_own_step() {
         let (plan, outcome) = exact_solutions(vec![common::scene("rigid2d_pin_lumped")]);
-        let default = engines::named("rapier_f64_default").unwrap();
+        let default = crosscheck::run::registry::named("rapier_f64_default").unwrap();
         let map = stability::measure(&plan, &outcome, &[default.as_ref()], false);
         let c = &map.critical[0];
         assert_eq!(c.bound, Bound::AtLeast);

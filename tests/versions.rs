@@ -24,7 +24,7 @@ use crosscheck::contract::{History, file_stem};
 use crosscheck::engines::rapier::{
     Configuration, MatchedSettings, Precision, RapierEngine, Release,
 };
-use crosscheck::engines::{self, ControlKind, Engine, RunOutput, RunSettings};
+use crosscheck::engines::{ControlKind, Engine, RunOutput, RunSettings};
 use crosscheck::scene::Scene;
 
 fn run(scene: &Scene, engine: &RapierEngine) -> RunOutput {
@@ -77,7 +77,7 @@ fn every_release_is_an_engine_with_a_portable_file_name() {
         "rapier_f64@0.35",
         "rapier_f64_default@0.35",
     ] {
-        assert!(engines::named(name).is_some(), "{name}");
+        assert!(crosscheck::run::registry::named(name).is_some(), "{name}");
         let stem = file_stem(name);
         assert!(
             stem.chars()
@@ -210,7 +210,7 @@ fn rapier_0_34_loses_the_bounce_to_a_stiff_contact_and_0_35_does_not() {
     // softer (0.35 does not), it brings the rebound at e = 0.9 to e², and attribution names it
     // the cause of the cell's error against the reference.
     let s = stress_scene("contact_drop_e09");
-    let exact = engines::named("reference")
+    let exact = crosscheck::run::registry::named("reference")
         .unwrap()
         .run(&s, &RunSettings::default())
         .unwrap();
@@ -291,7 +291,7 @@ fn rapier_0_34_reports_one_substep_of_contact_impulse_too_many() {
     // one misses (2.49e-1 measured), against the reference (the exact solution of rapier's
     // model, finite rotations).
     let tolerance = comparison::verdict::tolerance(&s, "rapier_f64@0.34").unwrap();
-    let exact = engines::named("reference")
+    let exact = crosscheck::run::registry::named("reference")
         .unwrap()
         .run(&s, &RunSettings::default())
         .unwrap();
@@ -373,7 +373,7 @@ fn rapier_0_34_leaves_out_the_gyroscopic_torque_unless_asked() {
         ("stress_spin_minor", false),
     ] {
         let s = stress_scene(id);
-        let exact = engines::named("reference")
+        let exact = crosscheck::run::registry::named("reference")
             .unwrap()
             .run(&s, &RunSettings::default())
             .unwrap();

@@ -2,10 +2,10 @@
 //! them without a checkout.
 //!
 //! Where the cases come from ([`case_dir`]): `--cases DIR`, else the `CROSSCHECK_CASES`
-//! environment variable, else `cases/` in the working directory where it is a directory, else
-//! the shipped cases, written out once per content under the user's cache directory
-//! (`$XDG_CACHE_HOME/crosscheck/`, `~/.cache/crosscheck/`, or the temporary directory), so that
-//! every message names a file the user can open.
+//! environment variable, else `cases/` in the working directory where it holds case files,
+//! else the shipped cases, written out once per content under the user's cache directory
+//! (`$XDG_CACHE_HOME/crosscheck/`, `~/.cache/crosscheck/`, or the temporary directory), so
+//! that every message names a file the user can open.
 
 use std::io;
 use std::path::{Path, PathBuf};
@@ -49,8 +49,9 @@ pub fn case_dir(given: Option<PathBuf>) -> io::Result<CaseSource> {
     if let Some(dir) = std::env::var_os(ENV).filter(|v| !v.is_empty()) {
         return Ok(CaseSource::Environment(PathBuf::from(dir)));
     }
+    // A directory of case files: a report's `cases/` (its pages) is not one.
     let here = super::cases_dir();
-    if here.is_dir() {
+    if super::discover(&here).is_ok_and(|found| !found.is_empty()) {
         return Ok(CaseSource::WorkingDirectory(here));
     }
     write_out(&cache_root()).map(CaseSource::Shipped)
@@ -109,6 +110,11 @@ pub fn write_out(root: &Path) -> io::Result<PathBuf> {
         let path = fresh.join(name);
         std::fs::create_dir_all(path.parent().unwrap_or(&fresh))?;
         std::fs::write(&path, text)?;
+    }
+    if holds_shipped(&dir) {
+        // Another run put its copy in place meanwhile.
+        let _ = std::fs::remove_dir_all(&fresh);
+        return Ok(dir);
     }
     if dir.exists() {
         // Edited or incomplete: set aside, then removed once the fresh copy is in place.

@@ -1,6 +1,6 @@
 //! Baselines, as criterion and insta users expect them: `compare` (and `--accept`), and a
-//! run's `--baseline NAME` and `--save-baseline NAME`, kept in `baselines/NAME` beside the
-//! output directory.
+//! run's `--baseline NAME` and `--save-baseline NAME`, kept in `baselines/NAME` in the working
+//! directory (`--baseline-dir DIR`: `DIR/NAME`).
 
 use super::{CompareArgs, Stdout, outcome};
 use crate::pipeline;
@@ -23,14 +23,9 @@ pub(super) fn name(s: &str) -> Result<String, String> {
     Ok(s.to_string())
 }
 
-/// Where the baseline `name` of the report at `target` (a resolved output directory) is kept:
-/// `baselines/<name>` beside it.
-pub(super) fn path(target: &Path, name: &str) -> PathBuf {
-    target
-        .parent()
-        .unwrap_or(Path::new("."))
-        .join("baselines")
-        .join(name)
+/// Where the baseline `name` is kept in the baselines' directory `dir`.
+pub(super) fn path(dir: &Path, name: &str) -> PathBuf {
+    dir.join(name)
 }
 
 /// `crosscheck compare`: print the comparison (exit 1 when a tier fails, 2 when the reports
@@ -55,6 +50,15 @@ pub(super) fn compare_command(args: CompareArgs) -> ExitCode {
         eprintln!(
             "error: {} is not a crosscheck report; nothing was accepted",
             args.new.display()
+        );
+        return out.finish(ExitCode::from(2));
+    }
+    // Only a report (or nothing yet) is replaced: never a directory of the user's own files.
+    let base_empty = std::fs::read_dir(&args.base).map_or(true, |mut d| d.next().is_none());
+    if !base_empty && !args.base.join("summary.json").is_file() {
+        eprintln!(
+            "error: {} holds files and no crosscheck report; nothing was accepted",
+            args.base.display()
         );
         return out.finish(ExitCode::from(2));
     }
@@ -84,13 +88,13 @@ pub(super) fn copy_report(source: &Path, target: &Path) -> Result<(), String> {
         .map_err(|e| format!("cannot put the report in {}: {e}", target.display()))
 }
 
-/// Before a run: the baseline `name` of the report at `target` must exist to be compared with
-/// (exit 2 otherwise, nothing run).
-pub(super) fn check_exists(target: &Path, name: Option<&str>) -> Result<(), ExitCode> {
+/// Before a run: the baseline `name` in `baselines` must exist to be compared with (exit 2
+/// otherwise, nothing run).
+pub(super) fn check_exists(baselines: &Path, name: Option<&str>) -> Result<(), ExitCode> {
     let Some(name) = name else {
         return Ok(());
     };
-    let dir = path(target, name);
+    let dir = path(baselines, name);
     if dir.join("summary.json").is_file() {
         return Ok(());
     }
@@ -103,16 +107,17 @@ pub(super) fn check_exists(target: &Path, name: Option<&str>) -> Result<(), Exit
 }
 
 /// After a run whose report is in place at `target`: compare it with the baseline `compare`
-/// (exit 1 when a tier fails, printing the comparison), then save it as `save`.
+/// in `baselines` (exit 1 when a tier fails, printing the comparison), then save it there as
+/// `save`.
 pub(super) fn after_run(
     target: &Path,
-    compare: Option<&str>,
-    save: Option<&str>,
+    baselines: &Path,
+    (compare, save): (Option<&str>, Option<&str>),
     stdout: &mut Stdout,
 ) -> ExitCode {
     let mut code = ExitCode::SUCCESS;
     if let Some(name) = compare {
-        let base = path(target, name);
+        let base = path(baselines, name);
         match pipeline::compare(&base, target, report::regression::DRIFT, false, None) {
             Ok((text, failed)) => {
                 stdout.print(&format!("\nagainst the baseline `{name}`:\n{text}"));
@@ -127,7 +132,7 @@ pub(super) fn after_run(
         }
     }
     if let Some(name) = save {
-        let dir = path(target, name);
+        let dir = path(baselines, name);
         match copy_report(target, &dir) {
             Ok(()) => stdout.print(&format!("baseline `{name}` saved: {}\n", dir.display())),
             Err(e) => {

@@ -229,10 +229,13 @@ struct RunArgs {
     /// `crosscheck compare` does: exit 1 when a tier fails.
     #[arg(long, value_name = "NAME", value_parser = baseline::name)]
     baseline: Option<String>,
-    /// Save the finished report as the baseline NAME (`baselines/NAME` beside the output
-    /// directory; replaced where it exists), after any --baseline comparison.
+    /// Save the finished report as the baseline NAME (replaced where it exists), after any
+    /// --baseline comparison.
     #[arg(long, value_name = "NAME", value_parser = baseline::name)]
     save_baseline: Option<String>,
+    /// Where baselines are kept: `DIR/NAME`.
+    #[arg(long, value_name = "DIR", default_value = "baselines")]
+    baseline_dir: PathBuf,
 }
 
 /// Options of `crosscheck compare`.
@@ -354,6 +357,7 @@ impl RunArgs {
             junit: None,
             baseline: None,
             save_baseline: None,
+            baseline_dir: PathBuf::from("baselines"),
         }
     }
 
@@ -389,7 +393,7 @@ impl RunArgs {
 /// `extra` (a user's, after them in every table; a case file may declare their tolerances).
 pub fn main_with(extra: Vec<Box<dyn Engine>>) -> ExitCode {
     let extra_names: Vec<String> = extra.iter().map(|e| e.name().to_string()).collect();
-    let names = crate::engines::all()
+    let names = crate::run::registry::all()
         .iter()
         .map(|e| e.name().to_string())
         .chain(extra_names.iter().cloned())
@@ -404,6 +408,9 @@ pub fn main_with(extra: Vec<Box<dyn Engine>>) -> ExitCode {
     });
     let cli = Cli::from_arg_matches(&command.get_matches()).unwrap_or_else(|e| e.exit());
     interrupt::install();
+    if let Some(Command::Compare(args)) = cli.command {
+        return compare_command(args); // reads reports, not cases
+    }
     let dir = match case::embedded::case_dir(cli.cases_dir.clone()) {
         Ok(source) => source.dir().to_path_buf(),
         Err(e) => {

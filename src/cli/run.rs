@@ -16,7 +16,10 @@ pub(super) fn run_command(args: RunArgs, dir: &Path, extra: Vec<Box<dyn Engine>>
     let started = std::time::Instant::now();
     let names: Vec<String> = extra.iter().map(|e| e.name().to_string()).collect();
     let also: Vec<&str> = names.iter().map(String::as_str).collect();
-    let available = crate::engines::all().into_iter().chain(extra).collect();
+    let available = crate::run::registry::all()
+        .into_iter()
+        .chain(extra)
+        .collect();
     let engines = match run::select_among(available, &args.engines) {
         Ok(e) => e,
         Err(e) => {
@@ -32,7 +35,7 @@ pub(super) fn run_command(args: RunArgs, dir: &Path, extra: Vec<Box<dyn Engine>>
         Ok(g) => g,
         Err(code) => return code,
     };
-    if let Err(code) = baseline::check_exists(&target, args.baseline.as_deref()) {
+    if let Err(code) = baseline::check_exists(&args.baseline_dir, args.baseline.as_deref()) {
         return code;
     }
     let settings = args.settings();
@@ -74,7 +77,7 @@ pub(super) fn run_command(args: RunArgs, dir: &Path, extra: Vec<Box<dyn Engine>>
     let gate = gate(&finished, args.junit.as_deref(), gated.as_deref());
     let mut out = Stdout::default();
     let (compare, save) = (args.baseline.as_deref(), args.save_baseline.as_deref());
-    let baseline = baseline::after_run(&target, compare, save, &mut out);
+    let baseline = baseline::after_run(&target, &args.baseline_dir, (compare, save), &mut out);
     let baseline = out.finish(baseline);
     [code, gate, baseline]
         .into_iter()
@@ -157,7 +160,7 @@ fn gate(finished: &pipeline::Finished, junit: Option<&Path>, gated: Option<&[Str
     let judged = cells
         .iter()
         .filter(|c| engines.is_empty() || engines.contains(&c.engine))
-        .filter(|c| c.verdict != gate::Verdict::NoTolerance)
+        .filter(|c| c.tolerance.is_some() && c.verdict != gate::Verdict::Unjudged)
         .count();
     if judged == 0 {
         eprintln!(

@@ -209,40 +209,79 @@ pub(super) fn lock_and_stage(
     }
 }
 
-pub(super) fn sweep_command(args: SweepArgs, dir: &Path, extra: Vec<Box<dyn Engine>>) -> ExitCode {
-    use crate::report::work_precision as written;
-    let engines = match chosen_engines(&args.engines, "cannot be swept", extra) {
-        Ok(e) => e,
-        Err(code) => return code,
-    };
+/// What `sweep` and `stability` start from: the engines asked for among those that step in
+/// time, the cases, and the output locked and staged for the study's `entries`.
+struct Prepared {
+    engines: Vec<Box<dyn Engine>>,
+    cases: Vec<crate::scene::Scene>,
+    _lock: staging::OutputLock,
+    staging: staging::Staging,
+}
+
+/// [`Prepared`] for a study of `refusal` (what an engine that does not step cannot do), or
+/// the exit code of why not (said on standard error).
+#[allow(clippy::too_many_arguments)]
+fn prepare(
+    asked: &[String],
+    refusal: &str,
+    extra: Vec<Box<dyn Engine>>,
+    out: &Path,
+    cases: &[String],
+    dir: &Path,
+    wait: bool,
+    entries: &[&str],
+) -> Result<Prepared, ExitCode> {
+    let engines = chosen_engines(asked, refusal, extra)?;
     let names: Vec<String> = engines.iter().map(|e| e.name().to_string()).collect();
     let also: Vec<&str> = names.iter().map(String::as_str).collect();
-    let (target, cases) = match target_and_cases(&args.out, &args.cases, dir, &also) {
-        Ok(x) => x,
+    let (target, cases) = target_and_cases(out, cases, dir, &also)?;
+    let (lock, staging) = lock_and_stage(&target, wait, entries)?;
+    Ok(Prepared {
+        engines,
+        cases,
+        _lock: lock,
+        staging,
+    })
+}
+
+pub(super) fn sweep_command(args: SweepArgs, dir: &Path, extra: Vec<Box<dyn Engine>>) -> ExitCode {
+    use crate::report::work_precision as written;
+    let (refusal, entries) = ("cannot be swept", ["sweep.csv", "figures"]);
+    let study = prepare(
+        &args.engines,
+        refusal,
+        extra,
+        &args.out,
+        &args.cases,
+        dir,
+        !args.no_wait,
+        &entries,
+    );
+    let Prepared {
+        engines,
+        cases,
+        _lock,
+        staging,
+    } = match study {
+        Ok(p) => p,
         Err(code) => return code,
     };
-    let (_lock, staging) = match lock_and_stage(&target, !args.no_wait, &["sweep.csv", "figures"]) {
-        Ok(x) => x,
-        Err(code) => return code,
-    };
-    let (plan, outcome) = pipeline::exact_solutions(cases);
-    if interrupt::requested() {
-        return interrupted();
-    }
     let grid = sweep::Grid {
         repeat: args.repeat as usize,
         max_increments: args.max_increments,
         ..sweep::Grid::default()
     };
     let engines: Vec<&dyn Engine> = engines.iter().map(|e| e.as_ref()).collect();
-    let sweeps = work_precision::measure(&plan, &outcome, &engines, &grid, !args.quiet);
-    if interrupt::requested() {
-        return interrupted();
-    }
-    if let Err(e) = pipeline::put_in_place(staging, |dir| written::write(dir, &sweeps, &plan.cases))
-    {
-        return stopped("the sweep", e);
-    }
+    let sweeps = pipeline::study(
+        cases,
+        staging,
+        |plan, outcome| work_precision::measure(plan, outcome, &engines, &grid, !args.quiet),
+        |dir, plan, sweeps| written::write(dir, sweeps, &plan.cases),
+    );
+    let sweeps = match sweeps {
+        Ok(s) => s,
+        Err(e) => return stopped("the sweep", e),
+    };
     let mut out = Stdout::default();
     out.print(&written::text(&sweeps));
     out.print(&format!(
@@ -259,31 +298,34 @@ pub(super) fn stability_command(
     extra: Vec<Box<dyn Engine>>,
 ) -> ExitCode {
     use crate::report::stability as written;
-    let engines = match chosen_engines(&args.engines, "has no stability map", extra) {
-        Ok(e) => e,
+    let (refusal, entries) = ("has no stability map", ["stability.csv", "figures"]);
+    let study = prepare(
+        &args.engines,
+        refusal,
+        extra,
+        &args.out,
+        &args.cases,
+        dir,
+        !args.no_wait,
+        &entries,
+    );
+    let Prepared {
+        engines,
+        cases,
+        _lock,
+        staging,
+    } = match study {
+        Ok(p) => p,
         Err(code) => return code,
     };
-    let names: Vec<String> = engines.iter().map(|e| e.name().to_string()).collect();
-    let also: Vec<&str> = names.iter().map(String::as_str).collect();
-    let (target, cases) = match target_and_cases(&args.out, &args.cases, dir, &also) {
-        Ok(x) => x,
-        Err(code) => return code,
-    };
-    let (_lock, staging) =
-        match lock_and_stage(&target, !args.no_wait, &["stability.csv", "figures"]) {
-            Ok(x) => x,
-            Err(code) => return code,
-        };
-    let (plan, outcome) = pipeline::exact_solutions(cases);
-    if interrupt::requested() {
-        return interrupted();
-    }
     let engines: Vec<&dyn Engine> = engines.iter().map(|e| e.as_ref()).collect();
-    let map = comparison::stability::measure(&plan, &outcome, &engines, !args.quiet);
-    if interrupt::requested() {
-        return interrupted();
-    }
-    if let Err(e) = pipeline::put_in_place(staging, |dir| written::write(dir, &map)) {
+    let map = pipeline::study(
+        cases,
+        staging,
+        |plan, outcome| comparison::stability::measure(plan, outcome, &engines, !args.quiet),
+        |dir, _, map| written::write(dir, map),
+    );
+    if let Err(e) = map {
         return stopped("the stability map", e);
     }
     let mut out = Stdout::default();
@@ -300,7 +342,7 @@ pub(super) fn chosen_engines(
     refusal: &str,
     extra: Vec<Box<dyn Engine>>,
 ) -> Result<Vec<Box<dyn Engine>>, ExitCode> {
-    let allowed: Vec<Box<dyn Engine>> = crate::engines::all()
+    let allowed: Vec<Box<dyn Engine>> = crate::run::registry::all()
         .into_iter()
         .chain(extra)
         .filter(|e| e.stepping().is_some())

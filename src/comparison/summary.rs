@@ -363,7 +363,7 @@ impl Summary {
                 self.engines.push(e);
             }
         }
-        // Report order: cases by id, engines as `engines::all()` lists them.
+        // Report order: cases by id, engines as `crate::run::registry::all()` lists them.
         let canonical: Vec<String> = crate::run::engine_names();
         let order = |name: &str| {
             canonical

@@ -1,5 +1,6 @@
 //! Engines: each turns a [`Scene`] into time histories behind the one [`Engine`] trait; the
-//! list of engines is [`registry`]'s ([`all`], [`named`]).
+//! list of engines is kept by the run layer (its `registry`), so that no engine can reach
+//! another through it.
 //!
 //! Engines are cheap to run many times with different [`RunSettings`] (increment, penalty
 //! stiffness, damping treatment) and report what the run cost in [`RunInfo`].
@@ -9,9 +10,6 @@ pub mod explicit;
 #[cfg(feature = "rapier")]
 pub mod rapier;
 pub mod reference;
-pub mod registry;
-
-pub use registry::{all, known_names, named};
 
 pub use crate::contract::History;
 use crate::scene::{ContactStart, DampingTreatment, IncrementRule, PenaltyRule, Scene};

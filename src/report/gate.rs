@@ -21,6 +21,8 @@ pub enum Verdict {
     Failed,
     /// The case declares no tolerance for the engine: measured, not judged.
     NoTolerance,
+    /// A tolerance is declared, but no column has a peak to measure the error against.
+    Unjudged,
 }
 
 /// One judged cell.
@@ -63,11 +65,12 @@ pub fn cells(summary: &Summary) -> Vec<Cell> {
                 .find(|s| s.id == c.case)
                 .and_then(|s| s.runs.iter().find(|r| r.engine == c.engine));
             let status = run.map_or(Status::Ok, |r| r.status);
-            let verdict = match (c.met, status) {
-                (_, Status::Failed | Status::Unstable) => Verdict::Failed,
-                (None, _) => Verdict::NoTolerance,
-                (Some(true), _) => Verdict::Met,
-                (Some(false), _) => Verdict::Missed,
+            let verdict = match (c.tolerance, c.met, status) {
+                (_, _, Status::Failed | Status::Unstable) => Verdict::Failed,
+                (None, _, _) => Verdict::NoTolerance,
+                (Some(_), None, _) => Verdict::Unjudged,
+                (Some(_), Some(true), _) => Verdict::Met,
+                (Some(_), Some(false), _) => Verdict::Missed,
             };
             let cause = run
                 .and_then(|r| r.attribution.as_ref())
@@ -96,6 +99,7 @@ pub fn json(cells: &[Cell]) -> String {
         ("missed", count(Verdict::Missed)),
         ("failed", count(Verdict::Failed)),
         ("no_tolerance", count(Verdict::NoTolerance)),
+        ("unjudged", count(Verdict::Unjudged)),
     ]
     .into_iter()
     .collect();
@@ -110,7 +114,7 @@ pub fn fails_gate(cell: &Cell, engines: &[String]) -> bool {
     let missed = match cell.verdict {
         Verdict::Missed => true,
         Verdict::Failed => cell.tolerance.is_some(),
-        Verdict::Met | Verdict::NoTolerance => false,
+        Verdict::Met | Verdict::NoTolerance | Verdict::Unjudged => false,
     };
     gated && missed
 }
@@ -135,7 +139,7 @@ pub fn junit(cells: &[Cell], seconds: &dyn Fn(&str, &str) -> Option<f64>) -> Str
         );
         let mut status = match c.verdict {
             Verdict::Met => TestCaseStatus::success(),
-            Verdict::NoTolerance => TestCaseStatus::skipped(),
+            Verdict::NoTolerance | Verdict::Unjudged => TestCaseStatus::skipped(),
             Verdict::Missed => TestCaseStatus::non_success(NonSuccessKind::Failure),
             Verdict::Failed => TestCaseStatus::non_success(NonSuccessKind::Error),
         };
@@ -143,6 +147,9 @@ pub fn junit(cells: &[Cell], seconds: &dyn Fn(&str, &str) -> Option<f64>) -> Str
             Verdict::Met => {}
             Verdict::NoTolerance => {
                 status.set_message(format!("no tolerance declared; {said}"));
+            }
+            Verdict::Unjudged => {
+                status.set_message(format!("no column with a peak to judge; {said}"));
             }
             Verdict::Missed => {
                 status.set_message(said.clone());

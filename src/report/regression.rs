@@ -77,6 +77,8 @@ pub struct Report {
     pub dir: PathBuf,
     /// `results.csv`, by cell and column.
     pub verdicts: BTreeMap<Key, Verdict>,
+    /// Each run's status in `summary.json` (`ok`, `failed`, ...), by (case, engine).
+    pub statuses: BTreeMap<(String, String), String>,
 }
 
 /// One column's comparison.
@@ -116,9 +118,22 @@ pub fn read(dir: &Path) -> Result<Report, Unusable> {
             found,
         });
     }
+    let mut statuses = BTreeMap::new();
+    for case in json["cases"].as_array().into_iter().flatten() {
+        for run in case["runs"].as_array().into_iter().flatten() {
+            if let (Some(id), Some(engine), Some(status)) = (
+                case["id"].as_str(),
+                run["engine"].as_str(),
+                run["status"].as_str(),
+            ) {
+                statuses.insert((id.to_string(), engine.to_string()), status.to_string());
+            }
+        }
+    }
     Ok(Report {
         dir: dir.to_path_buf(),
         verdicts: read_results(&results)?,
+        statuses,
     })
 }
 
@@ -299,7 +314,7 @@ fn cell_changes(
 /// listed; `Err` where they share nothing to compare.
 pub fn compare(base: &Report, new: &Report) -> Result<Since, Unusable> {
     let compared = since(base, new);
-    if compared.changes.is_empty() && compared.incomparable.is_empty() {
+    if compared.changes.is_empty() && compared.broken.is_empty() {
         return Err(Unusable::Nothing {
             base: cells_of(base).len(),
             new: cells_of(new).len(),
@@ -317,8 +332,11 @@ pub struct Since {
     pub changes: Vec<Change>,
     /// Cells (case, engine) only the new report has.
     pub added: Vec<(String, String)>,
-    /// Cells only the previous report has.
+    /// Cells only the previous report has (not run in the new one).
     pub gone: Vec<(String, String)>,
+    /// Cells the previous report has whose run in the new one failed or went unstable (case,
+    /// engine, status): no history, no verdict, and a regression.
+    pub broken: Vec<(String, String, String)>,
     /// Cells both have whose histories cannot be compared (other columns or rows), and why.
     pub incomparable: Vec<String>,
     /// Why the two reports cannot be compared at all (a previous report of another schema
@@ -345,9 +363,18 @@ pub fn since(base: &Report, new: &Report) -> Since {
     let (a, b) = (cells_of(base), cells_of(new));
     let mut since = Since {
         added: b.iter().filter(|c| !a.contains(c)).cloned().collect(),
-        gone: a.iter().filter(|c| !b.contains(c)).cloned().collect(),
         ..Since::default()
     };
+    for cell in a.iter().filter(|c| !b.contains(c)) {
+        match new.statuses.get(cell).map(String::as_str) {
+            Some(status @ ("failed" | "unstable")) => {
+                since
+                    .broken
+                    .push((cell.0.clone(), cell.1.clone(), status.to_string()));
+            }
+            _ => since.gone.push(cell.clone()),
+        }
+    }
     for (case, engine) in a.iter().filter(|c| b.contains(c)) {
         match cell_changes(base, new, case, engine) {
             Ok(changes) => since.changes.extend(changes),
@@ -402,7 +429,8 @@ impl Since {
         moved.sort_by(|a, b| b.0.total_cmp(&a.0));
         let mut drifted: Vec<&Change> = self.changes.iter().filter(|c| c.drift > DRIFT).collect();
         drifted.sort_by(|a, b| b.drift.total_cmp(&a.drift));
-        let steady = flipped.is_empty() && moved.is_empty() && drifted.is_empty();
+        let steady =
+            flipped.is_empty() && moved.is_empty() && drifted.is_empty() && self.broken.is_empty();
         let mut parts = Vec::new();
         if !flipped.is_empty() {
             let shown: Vec<&str> = flipped.iter().take(3).map(String::as_str).collect();
@@ -436,6 +464,19 @@ impl Since {
                 "{} history columns moved by more than {} of their peak (most: {})",
                 drifted.len(),
                 sci(DRIFT),
+                shown.join("; ")
+            ));
+        }
+        if !self.broken.is_empty() {
+            let shown: Vec<String> = self
+                .broken
+                .iter()
+                .take(3)
+                .map(|(case, engine, status)| format!("{case} / `{engine}` ({status})"))
+                .collect();
+            parts.push(format!(
+                "{} cells whose run now fails ({})",
+                self.broken.len(),
                 shown.join("; ")
             ));
         }
@@ -506,6 +547,12 @@ pub fn markdown(base: &Path, new: &Path, compared: &Since, threshold: f64) -> St
         if !cells.is_empty() {
             let list: Vec<String> = cells.iter().map(|(c, e)| format!("{c} / `{e}`")).collect();
             let _ = writeln!(s, "\n{} cells {what}: {}.", cells.len(), list.join(", "));
+        }
+    }
+    if !compared.broken.is_empty() {
+        s += "\n## Runs that now fail (physics tier)\n\n";
+        for (case, engine, status) in &compared.broken {
+            let _ = writeln!(s, "- {case} / `{engine}`: {status} in the new report");
         }
     }
     if !compared.incomparable.is_empty() {
@@ -583,7 +630,7 @@ pub fn junit(compared: &Since, threshold: f64, physics_only: bool) -> String {
         suite
     };
     let mut report = Report::new("crosscheck compare");
-    report.add_test_suite(suite("physics", &physics, &|c: &Change| {
+    let mut physics_suite = suite("physics", &physics, &|c: &Change| {
         let (a, b) = c.physics.as_ref()?;
         c.newly_failing().then(|| {
             format!(
@@ -593,7 +640,15 @@ pub fn junit(compared: &Since, threshold: f64, physics_only: bool) -> String {
                 b.tolerance.map_or("–".into(), sci)
             )
         })
-    }));
+    });
+    for (case, engine, status) in &compared.broken {
+        let mut status_of = TestCaseStatus::non_success(NonSuccessKind::Failure);
+        status_of.set_message(format!("the run now fails: {status}"));
+        let mut test = TestCase::new("run", status_of);
+        test.set_classname(format!("{case}/{engine}"));
+        physics_suite.add_test_case(test);
+    }
+    report.add_test_suite(physics_suite);
     let mut machine = suite("machine", &all, &|c: &Change| {
         (!physics_only && c.drift > threshold).then(|| {
             format!(

@@ -397,7 +397,7 @@ pub fn write(out: &Path, map: &Map) -> Result<(), crate::report::data::DataError
     all.critical.retain(|c| !ran(&c.engine));
     all.points.extend(map.points.iter().cloned());
     all.critical.extend(map.critical.iter().cloned());
-    let known: Vec<String> = crate::engines::all()
+    let known: Vec<String> = crate::run::registry::all()
         .iter()
         .map(|e| e.name().to_string())
         .collect();

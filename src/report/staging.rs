@@ -341,7 +341,23 @@ pub fn replace_report(source: &Path, target: &Path, entries: &[&str]) -> io::Res
             link_tree(&from, &to)?;
         }
     }
-    staging.commit()
+    let entry_by_entry = staging.mode() == SwapMode::EntryByEntry;
+    staging.commit()?;
+    // Put in entry by entry (the target holds other files), the swap leaves an entry the
+    // source has not got: remove it, so that the target holds the source's report alone.
+    if entry_by_entry {
+        for e in entries {
+            let (from, left) = (source.join(e), target.join(e));
+            if fs::symlink_metadata(&from).is_err() {
+                match fs::symlink_metadata(&left) {
+                    Ok(m) if m.is_dir() => fs::remove_dir_all(&left)?,
+                    Ok(_) => fs::remove_file(&left)?,
+                    Err(_) => {}
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 impl Staging {

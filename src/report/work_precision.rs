@@ -440,7 +440,7 @@ pub fn reach_cell(rows: &[Row], engine: &str, target: f64, setting: bool) -> Str
 fn budget_shares(engines: &[&str], budget: f64) -> String {
     let mut groups: Vec<(String, Vec<String>)> = Vec::new();
     for e in engines {
-        let Some(stepping) = crate::engines::named(e).and_then(|e| e.stepping()) else {
+        let Some(stepping) = crate::run::registry::named(e).and_then(|e| e.stepping()) else {
             continue;
         };
         if stepping.budget_share >= 1.0 {

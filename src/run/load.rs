@@ -3,7 +3,7 @@
 
 use crate::case::{self, CaseError};
 use crate::engines::explicit::ExplicitEngine;
-use crate::engines::{self, Engine, RunSettings};
+use crate::engines::{Engine, RunSettings};
 use crate::scene::{IncrementRule, Scene, SceneError};
 use std::path::{Path, PathBuf};
 
@@ -16,7 +16,7 @@ pub fn check_scene(scene: &Scene) -> Result<(), SceneError> {
 /// [`check_scene`], with the names of engines beyond crosscheck's own (a user's) accepted in
 /// `[tolerances]`.
 pub fn check_scene_for(scene: &Scene, also: &[&str]) -> Result<(), SceneError> {
-    let mut names = engines::known_names();
+    let mut names = crate::run::registry::known_names();
     names.extend(also.iter().map(|n| n.to_string()));
     for engine in scene.tolerances.keys() {
         if !names.contains(engine) {
@@ -90,7 +90,7 @@ pub struct UnknownEngine {
 
 /// Every engine name, in report order.
 pub fn engine_names() -> Vec<String> {
-    engines::all()
+    crate::run::registry::all()
         .iter()
         .map(|e| e.name().to_string())
         .collect()
@@ -98,7 +98,7 @@ pub fn engine_names() -> Vec<String> {
 
 /// Engines by name, in the order given (duplicates dropped); every engine when `names` is empty.
 pub fn select_engines(names: &[String]) -> Result<Vec<Box<dyn Engine>>, UnknownEngine> {
-    select_among(engines::all(), names)
+    select_among(crate::run::registry::all(), names)
 }
 
 /// [`select_engines`] among `available` (crosscheck's engines and a user's, in report order).

@@ -4,11 +4,11 @@
 //! nothing; the report writes the files. The binary is a thin shell over it:
 //!
 //! ```no_run
-//! use crosscheck::{case, engines, run};
+//! use crosscheck::{case, run};
 //! let cases = run::load_cases(&[], &case::cases_dir()).expect("valid cases");
 //! let plan = run::Plan {
 //!     cases,
-//!     engines: engines::all(),
+//!     engines: run::registry::all(),
 //!     settings: Default::default(),
 //! };
 //! let outcome = run::execute(&plan, false);
@@ -39,6 +39,7 @@ pub mod load;
 pub mod matching;
 pub mod on_request;
 pub mod refinement;
+pub mod registry;
 pub mod scaling;
 pub mod stability;
 pub mod sweep;

@@ -114,7 +114,7 @@ pub fn study(max_n: usize, mut progress: impl FnMut(&str, usize)) -> Result<Stud
     let mut out = Study::default();
     // `rapier_f64` where the build has the rapier engines (the `rapier` feature).
     let engines: Vec<Box<dyn Engine>> = std::iter::once(Box::new(ExplicitEngine::finite()) as _)
-        .chain(crate::engines::named("rapier_f64"))
+        .chain(crate::run::registry::named("rapier_f64"))
         .collect();
     for engine in &engines {
         // Seconds of one point (all its runs) at the last N, and of its longer run.

@@ -10,7 +10,7 @@ use std::path::Path;
 
 /// The built-in engines that step in time, in report order: those the sweep and the stability
 /// map run, and every engine the report judges (`tests/sweep.rs` checks that
-/// [`crosscheck::engines::all`] says the same).
+/// [`crosscheck::run::registry::all`] says the same).
 #[cfg(feature = "rapier")]
 pub const STEPPING: [&str; 6] = [
     "explicit",
@@ -32,7 +32,7 @@ pub const ON_REQUEST: [&str; 2] = ["explicit", "explicit_small"];
 pub fn engines_named(names: &[&str]) -> Vec<Box<dyn Engine>> {
     names
         .iter()
-        .map(|n| crosscheck::engines::named(n).unwrap_or_else(|| panic!("no engine {n}")))
+        .map(|n| crosscheck::run::registry::named(n).unwrap_or_else(|| panic!("no engine {n}")))
         .collect()
 }
 

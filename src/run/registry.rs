@@ -1,8 +1,9 @@
-//! The list of engines crosscheck has, in report order, and finding one by name.
+//! The list of engines crosscheck has, in report order, and finding one by name. It lives in
+//! the run layer, not beside the engines, so that no engine can reach another through it.
 
 #[cfg(feature = "rapier")]
-use super::rapier;
-use super::{Engine, analytic, explicit, reference};
+use crate::engines::rapier;
+use crate::engines::{Engine, analytic, explicit, reference};
 
 /// Every engine crosscheck has, in report order (the rapier engines with the `rapier`
 /// feature, on by default).

@@ -113,11 +113,17 @@ enum Command {
 /// Options of `crosscheck stability`.
 #[derive(Debug, Args)]
 struct StabilityArgs {
-    /// Case ids from cases/ or paths to .toml case files (default: every case in cases/ and
-    /// cases/stress/).
+    #[command(flatten)]
+    study: StudyArgs,
+}
+
+/// What the studies that run on their own (`sweep`, `stability`) share.
+#[derive(Debug, Args)]
+struct StudyArgs {
+    /// Case ids or paths to .toml case files (default: every case).
     #[arg(value_name = "CASE")]
     cases: Vec<String>,
-    /// Comma-separated engines to map (default: every engine that steps in time).
+    /// Comma-separated engines (default: every engine that steps in time).
     #[arg(long, value_delimiter = ',', value_name = "NAMES")]
     engines: Vec<String>,
     /// Output directory.
@@ -134,27 +140,14 @@ struct StabilityArgs {
 /// Options of `crosscheck sweep`.
 #[derive(Debug, Args)]
 struct SweepArgs {
-    /// Case ids from cases/ or paths to .toml case files (default: every case in cases/).
-    #[arg(value_name = "CASE")]
-    cases: Vec<String>,
-    /// Comma-separated engines to sweep (default: every engine that steps in time).
-    #[arg(long, value_delimiter = ',', value_name = "NAMES")]
-    engines: Vec<String>,
-    /// Output directory.
-    #[arg(long, value_name = "DIR", default_value = "report")]
-    out: PathBuf,
+    #[command(flatten)]
+    study: StudyArgs,
     /// Runs per point (CPU time reported as min, median and max over them).
     #[arg(long, value_name = "N", default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..=100))]
     repeat: u64,
     /// Most increments one run of a point may take (rapier: a fifth of it, substeps counted).
     #[arg(long, value_name = "N", default_value_t = sweep::Grid::default().max_increments, value_parser = positive, allow_negative_numbers = true)]
     max_increments: f64,
-    /// Do not show the progress bar.
-    #[arg(long, short)]
-    quiet: bool,
-    /// Refuse (exit 2) when another run is writing the same output, instead of waiting.
-    #[arg(long)]
-    no_wait: bool,
 }
 
 #[derive(Debug, Args)]

@@ -1,7 +1,7 @@
 //! The studies' commands: `scaling`, `sweep`, `stability`.
 
 use super::cases::target_and_cases;
-use super::{ScalingStudy, StabilityArgs, Stdout, SweepArgs, interrupted, stopped};
+use super::{ScalingStudy, StabilityArgs, Stdout, StudyArgs, SweepArgs, interrupted, stopped};
 use crate::case;
 use crate::comparison::{self, work_precision};
 use crate::engines::Engine;
@@ -220,22 +220,18 @@ struct Prepared {
 
 /// [`Prepared`] for a study of `refusal` (what an engine that does not step cannot do), or
 /// the exit code of why not (said on standard error).
-#[allow(clippy::too_many_arguments)]
 fn prepare(
-    asked: &[String],
+    args: &StudyArgs,
     refusal: &str,
     extra: Vec<Box<dyn Engine>>,
-    out: &Path,
-    cases: &[String],
     dir: &Path,
-    wait: bool,
     entries: &[&str],
 ) -> Result<Prepared, ExitCode> {
-    let engines = chosen_engines(asked, refusal, extra)?;
+    let engines = chosen_engines(&args.engines, refusal, extra)?;
     let names: Vec<String> = engines.iter().map(|e| e.name().to_string()).collect();
     let also: Vec<&str> = names.iter().map(String::as_str).collect();
-    let (target, cases) = target_and_cases(out, cases, dir, &also)?;
-    let (lock, staging) = lock_and_stage(&target, wait, entries)?;
+    let (target, cases) = target_and_cases(&args.out, &args.cases, dir, &also)?;
+    let (lock, staging) = lock_and_stage(&target, !args.no_wait, entries)?;
     Ok(Prepared {
         engines,
         cases,
@@ -246,23 +242,13 @@ fn prepare(
 
 pub(super) fn sweep_command(args: SweepArgs, dir: &Path, extra: Vec<Box<dyn Engine>>) -> ExitCode {
     use crate::report::work_precision as written;
-    let (refusal, entries) = ("cannot be swept", ["sweep.csv", "figures"]);
-    let study = prepare(
-        &args.engines,
-        refusal,
-        extra,
-        &args.out,
-        &args.cases,
-        dir,
-        !args.no_wait,
-        &entries,
-    );
+    let entries = ["sweep.csv", "figures"];
     let Prepared {
         engines,
         cases,
         _lock,
         staging,
-    } = match study {
+    } = match prepare(&args.study, "cannot be swept", extra, dir, &entries) {
         Ok(p) => p,
         Err(code) => return code,
     };
@@ -272,22 +258,24 @@ pub(super) fn sweep_command(args: SweepArgs, dir: &Path, extra: Vec<Box<dyn Engi
         ..sweep::Grid::default()
     };
     let engines: Vec<&dyn Engine> = engines.iter().map(|e| e.as_ref()).collect();
+    let progress = !args.study.quiet;
     let sweeps = pipeline::study(
         cases,
         staging,
-        |plan, outcome| work_precision::measure(plan, outcome, &engines, &grid, !args.quiet),
+        |plan, outcome| work_precision::measure(plan, outcome, &engines, &grid, progress),
         |dir, plan, sweeps| written::write(dir, sweeps, &plan.cases),
     );
     let sweeps = match sweeps {
         Ok(s) => s,
         Err(e) => return stopped("the sweep", e),
     };
+    let out_dir = &args.study.out;
     let mut out = Stdout::default();
     out.print(&written::text(&sweeps));
     out.print(&format!(
         "written: {} and {}\n",
-        args.out.join("sweep.csv").display(),
-        args.out.join("figures").display()
+        out_dir.join("sweep.csv").display(),
+        out_dir.join("figures").display()
     ));
     out.finish(ExitCode::SUCCESS)
 }
@@ -298,31 +286,22 @@ pub(super) fn stability_command(
     extra: Vec<Box<dyn Engine>>,
 ) -> ExitCode {
     use crate::report::stability as written;
-    let (refusal, entries) = ("has no stability map", ["stability.csv", "figures"]);
-    let study = prepare(
-        &args.engines,
-        refusal,
-        extra,
-        &args.out,
-        &args.cases,
-        dir,
-        !args.no_wait,
-        &entries,
-    );
+    let entries = ["stability.csv", "figures"];
     let Prepared {
         engines,
         cases,
         _lock,
         staging,
-    } = match study {
+    } = match prepare(&args.study, "has no stability map", extra, dir, &entries) {
         Ok(p) => p,
         Err(code) => return code,
     };
     let engines: Vec<&dyn Engine> = engines.iter().map(|e| e.as_ref()).collect();
+    let progress = !args.study.quiet;
     let map = pipeline::study(
         cases,
         staging,
-        |plan, outcome| comparison::stability::measure(plan, outcome, &engines, !args.quiet),
+        |plan, outcome| comparison::stability::measure(plan, outcome, &engines, progress),
         |dir, _, map| written::write(dir, map),
     );
     if let Err(e) = map {
@@ -330,7 +309,7 @@ pub(super) fn stability_command(
     }
     let mut out = Stdout::default();
     let mut text = String::new();
-    written::overview(&mut text, &written::read_all(&args.out));
+    written::overview(&mut text, &written::read_all(&args.study.out));
     out.print(&text);
     out.finish(ExitCode::SUCCESS)
 }

@@ -472,3 +472,104 @@ pub fn compare(
         failed,
     ))
 }
+
+/// One shard of a run split across machines: `run --partition k/n` (nextest's convention:
+/// shard `k` of `n`, from 1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Partition {
+    /// This shard, 1 ≤ k ≤ n.
+    pub k: usize,
+    /// How many shards.
+    pub n: usize,
+}
+
+impl std::str::FromStr for Partition {
+    type Err = String;
+
+    /// `k/n` (or nextest's `count:k/n`), 1 ≤ k ≤ n.
+    fn from_str(s: &str) -> Result<Self, String> {
+        let text = s.strip_prefix("count:").unwrap_or(s);
+        let parsed = text
+            .split_once('/')
+            .and_then(|(k, n)| Some((k.trim().parse().ok()?, n.trim().parse().ok()?)));
+        match parsed {
+            Some((k, n)) if 1 <= k && k <= n => Ok(Partition { k, n }),
+            _ => Err(format!("`{s}`: expected k/n with 1 ≤ k ≤ n (e.g. 2/4)")),
+        }
+    }
+}
+
+/// The share of `cases` (sorted by id) that shard `part` runs. Cases the report measures
+/// together stay together: equivalent cases (the same closed form) form a group, since the
+/// sweep checks a group's cost on its first case only and the summary measures each member
+/// against that one. The groups, in the order of their first case, are dealt out round-robin;
+/// the closed forms that find them are computed here (they are cheap), whatever the shard.
+pub fn partition(cases: Vec<Scene>, part: Partition) -> Vec<Scene> {
+    let plan = Plan {
+        cases,
+        engines: run::registry::named(comparison::CLOSED_FORM)
+            .into_iter()
+            .collect(),
+        settings: RunSettings::default(),
+    };
+    let outcome = run::execute(&plan, false);
+    let closed = |case: &str, engine: &str| outcome.history(case, engine).cloned();
+    let pairs = comparison::equivalence::measure(&plan.cases, &[], closed);
+    let index = |id: &str| plan.cases.iter().position(|s| s.id == id);
+    // Each case's group: the first case (by id) it is joined to through the pairs.
+    let mut group: Vec<usize> = (0..plan.cases.len()).collect();
+    let root = |group: &[usize], mut i: usize| {
+        while group[i] != i {
+            i = group[i];
+        }
+        i
+    };
+    for e in &pairs {
+        if let (Some(a), Some(b)) = (index(&e.case), index(&e.same_as)) {
+            let (ra, rb) = (root(&group, a), root(&group, b));
+            group[ra.max(rb)] = ra.min(rb);
+        }
+    }
+    let roots: Vec<usize> = (0..plan.cases.len()).map(|i| root(&group, i)).collect();
+    let mut firsts: Vec<usize> = roots.clone();
+    firsts.sort_unstable();
+    firsts.dedup();
+    let shard_of = |i: usize| {
+        let g = firsts.iter().position(|f| *f == roots[i]).unwrap_or(0);
+        g % part.n + 1
+    };
+    plan.cases
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| shard_of(*i) == part.k)
+        .map(|(_, s)| s)
+        .collect()
+}
+
+/// Merge the shards' reports into `staging` (its carried entries removed first: the merged
+/// report is the shards' alone) and put it in place.
+pub fn merge(
+    shards: &[std::path::PathBuf],
+    staging: Staging,
+) -> Result<Summary, report::merge::MergeError> {
+    use report::merge::MergeError;
+    for entry in report::ENTRIES {
+        let path = staging.path().join(entry);
+        let removed = match std::fs::symlink_metadata(&path) {
+            Ok(m) if m.is_dir() => std::fs::remove_dir_all(&path),
+            Ok(_) => std::fs::remove_file(&path),
+            Err(_) => Ok(()),
+        };
+        removed.map_err(|source| DataError::Io { path, source })?;
+    }
+    let summary = report::merge::merge(shards, staging.path(), staging.target())?;
+    if interrupt::checkpoint("swap").is_err() {
+        return Err(MergeError::Data(DataError::Interrupted));
+    }
+    let target = staging.target().to_path_buf();
+    staging.commit().map_err(|source| DataError::Io {
+        path: target,
+        source,
+    })?;
+    Ok(summary)
+}

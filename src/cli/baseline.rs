@@ -1,6 +1,7 @@
-//! Baselines, as criterion and insta users expect them: `compare` (and `--accept`), and a
-//! run's `--baseline NAME` and `--save-baseline NAME`, kept in `baselines/NAME` in the working
-//! directory (`--baseline-dir DIR`: `DIR/NAME`).
+//! The commands between reports: baselines, as criterion and insta users expect them
+//! (`compare` and its `--accept`, a run's `--baseline NAME` and `--save-baseline NAME`, kept in
+//! `baselines/NAME` in the working directory or `--baseline-dir DIR`), and `merge`, which
+//! joins the reports of a partitioned run's shards.
 
 use super::{CompareArgs, Stdout, outcome};
 use crate::pipeline;
@@ -142,4 +143,43 @@ pub(super) fn after_run(
         }
     }
     code
+}
+
+/// `crosscheck merge SHARD... --out DIR`: the shards' reports joined into one, put in place
+/// (exit 2 when they are not shards of one run, 1 when it cannot be written).
+pub(super) fn merge_command(shards: &[PathBuf], out: &Path, wait: bool) -> ExitCode {
+    use crate::report::merge::MergeError;
+    let target = match staging::resolve_output(out) {
+        Ok(t) => t,
+        Err(e) => {
+            eprintln!("error: {e}; nothing was merged");
+            return ExitCode::from(2);
+        }
+    };
+    let (_lock, staged) = match super::studies::lock_and_stage(&target, wait, &report::ENTRIES) {
+        Ok(x) => x,
+        Err(code) => return code,
+    };
+    let mut stdout = Stdout::default();
+    let code = match pipeline::merge(shards, staged) {
+        Ok(summary) => {
+            stdout.print(&format!(
+                "merged {} shard(s), {} cases: {}\n",
+                shards.len(),
+                summary.cases.len(),
+                report::report_path(out).display()
+            ));
+            ExitCode::SUCCESS
+        }
+        Err(MergeError::Data(report::data::DataError::Interrupted)) => super::interrupted(),
+        Err(e @ MergeError::Data(_)) => {
+            eprintln!("error: {e}; the previous report is unchanged");
+            ExitCode::FAILURE
+        }
+        Err(e) => {
+            eprintln!("error: {e}; nothing was merged");
+            ExitCode::from(2)
+        }
+    };
+    stdout.finish(code)
 }

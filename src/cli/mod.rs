@@ -28,7 +28,7 @@ mod cases;
 mod run;
 mod studies;
 
-use baseline::compare_command;
+use baseline::{compare_command, merge_command};
 use cases::{check, judge, list};
 use run::run_command;
 use studies::{scaling, stability_command, sweep_command};
@@ -93,6 +93,19 @@ enum Command {
     /// row by row; a column that moved by more than the threshold of its peak has drifted).
     /// Exit 0 when neither fails, 1 when one does, 2 when they cannot be compared.
     Compare(CompareArgs),
+    /// Merge the reports of a partitioned run's shards (`run --partition k/n`, each into a
+    /// directory of its own) into the report one run over all their cases writes.
+    Merge {
+        /// The shards' report directories.
+        #[arg(value_name = "SHARD", required = true)]
+        shards: Vec<PathBuf>,
+        /// Output directory.
+        #[arg(long, value_name = "DIR", default_value = "report")]
+        out: PathBuf,
+        /// Refuse (exit 2) when another run is writing the same output, instead of waiting.
+        #[arg(long)]
+        no_wait: bool,
+    },
     /// Validate case files without running them (the same validation every `run` does first).
     Check {
         /// Case ids or paths to .toml case files (default: every case).
@@ -229,6 +242,10 @@ struct RunArgs {
     /// Where baselines are kept: `DIR/NAME`.
     #[arg(long, value_name = "DIR", default_value = "baselines")]
     baseline_dir: PathBuf,
+    /// Run shard k of n of the cases (nextest's convention; equivalent cases stay in one
+    /// shard) into its own --out; `crosscheck merge` joins the shards' reports.
+    #[arg(long, value_name = "k/n")]
+    partition: Option<pipeline::Partition>,
 }
 
 /// Options of `crosscheck compare`.
@@ -351,6 +368,7 @@ impl RunArgs {
             baseline: None,
             save_baseline: None,
             baseline_dir: PathBuf::from("baselines"),
+            partition: None,
         }
     }
 
@@ -401,8 +419,15 @@ pub fn main_with(extra: Vec<Box<dyn Engine>>) -> ExitCode {
     });
     let cli = Cli::from_arg_matches(&command.get_matches()).unwrap_or_else(|e| e.exit());
     interrupt::install();
-    if let Some(Command::Compare(args)) = cli.command {
-        return compare_command(args); // reads reports, not cases
+    match cli.command {
+        // These read reports, not cases.
+        Some(Command::Compare(args)) => return compare_command(args),
+        Some(Command::Merge {
+            shards,
+            out,
+            no_wait,
+        }) => return merge_command(&shards, &out, !no_wait),
+        _ => {}
     }
     let dir = match case::embedded::case_dir(cli.cases_dir.clone()) {
         Ok(source) => source.dir().to_path_buf(),
@@ -423,6 +448,7 @@ pub fn main_with(extra: Vec<Box<dyn Engine>>) -> ExitCode {
         Some(Command::Check { files }) => check(files, &dir, also),
         Some(Command::Judge(args)) => judge(args, &dir),
         Some(Command::Compare(args)) => compare_command(args),
+        Some(Command::Merge { shards, out, .. }) => merge_command(&shards, &out, true),
         Some(Command::Scaling {
             study,
             max_n,

@@ -31,6 +31,22 @@ pub(super) fn run_command(args: RunArgs, dir: &Path, extra: Vec<Box<dyn Engine>>
         Ok(x) => x,
         Err(code) => return code,
     };
+    let cases = match args.partition {
+        Some(part) => {
+            let all = cases.len();
+            let share = pipeline::partition(cases, part);
+            if share.is_empty() {
+                eprintln!(
+                    "shard {}/{}: no case (the {all} cases make fewer groups than shards); \
+                     nothing to run",
+                    part.k, part.n
+                );
+                return ExitCode::SUCCESS;
+            }
+            share
+        }
+        None => cases,
+    };
     let gated = match gated_engines(&args, &engines) {
         Ok(g) => g,
         Err(code) => return code,

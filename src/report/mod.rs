@@ -6,6 +6,7 @@
 //!   them ([`crate::comparison::summary`]; deterministic: the same inputs give the same bytes);
 //! - [`gate`]: `verdicts.json`, each judged cell's error, tolerance, verdict and cause, and the
 //!   same as JUnit XML for a pipeline;
+//! - [`merge`]: the reports of a partitioned run's shards as one run's;
 //! - `timings.json`: wall-clock seconds per case and engine (the one thing that varies);
 //! - [`figures`]: `figures/<case>.svg`, each case's histories drawn, and its errors over time;
 //! - [`sketch`]: `figures/<case>.sketch.svg`, each scene drawn from the `Scene` itself;
@@ -28,6 +29,7 @@ pub mod format;
 pub mod gate;
 pub mod judge;
 pub mod markdown;
+pub mod merge;
 pub mod on_request;
 #[cfg(feature = "figures")]
 pub mod palette;
@@ -155,40 +157,68 @@ pub fn write(
         }
     }
     #[cfg(feature = "figures")]
-    write_figures(out, plan, &summary)?;
+    write_case_figures(out, plan, &summary)?;
+    #[cfg(feature = "figures")]
+    write_summary_figures(out, &summary)?;
+    let previous = Previous {
+        dir: previous,
+        settings: &plan.settings,
+        parts: &study.parts,
+    };
+    publish(out, &summary, &timings, &previous)?;
+    Ok(summary)
+}
+
+/// What the pages say of how the report came to be: the report it replaces (for "since the
+/// previous report"), the settings it was run with, and how long each stage took.
+pub struct Previous<'a> {
+    /// The directory of the report being replaced.
+    pub dir: &'a Path,
+    /// The run's settings.
+    pub settings: &'a crate::engines::RunSettings,
+    /// Seconds per stage, in order (empty where unknown: a merge of shards).
+    pub parts: &'a [(&'static str, f64)],
+}
+
+/// The files written from the judged summary, by a run and by a merge alike:
+/// `summary.json`, `verdicts.json`, `results.csv`, `timings.json` and the pages (which also
+/// read the study CSVs already in `out`).
+pub fn publish(
+    out: &Path,
+    summary: &Summary,
+    timings: &Timings,
+    previous: &Previous,
+) -> Result<(), data::DataError> {
     data::write_atomic(&summary_path(out), summary.to_json().as_bytes())?;
-    let verdicts = gate::json(&gate::cells(&summary));
+    let verdicts = gate::json(&gate::cells(summary));
     data::write_atomic(&gate::json_path(out), verdicts.as_bytes())?;
-    data::write_atomic(&results::csv_path(out), results::csv(&summary).as_bytes())?;
-    let json = serde_json::to_string_pretty(&timings).expect("timings serialise") + "\n";
+    data::write_atomic(&results::csv_path(out), results::csv(summary).as_bytes())?;
+    let json = serde_json::to_string_pretty(timings).expect("timings serialise") + "\n";
     data::write_atomic(&timings_path(out), json.as_bytes())?;
     checkpoint("report")?;
     // Both tiers of `crosscheck compare`, this report's files against the previous report's.
-    let since = regression::since_dirs(previous, out);
+    let since = regression::since_dirs(previous.dir, out);
     let pages = markdown::render(
-        &summary,
+        summary,
         &markdown::Inputs {
-            timings: &timings,
-            provenance: &provenance::Provenance::gather(&plan.settings),
+            timings,
+            provenance: &provenance::Provenance::gather(previous.settings),
             sweeps: &work_precision::read_all(out),
             maps: &stability::read_all(out),
             requests: &on_request::read(out),
-            parts: &study.parts,
+            parts: previous.parts,
             since: since.as_ref(),
         },
     );
     let mut pages = pages;
-    versions::section(&mut pages.report, &summary, out);
-    write_pages(out, &pages)?;
-    Ok(summary)
+    versions::section(&mut pages.report, summary, out);
+    write_pages(out, &pages)
 }
 
-/// The figures of a run: per case its histories, its sketch and its errors; the discrepancy
-/// budget per family; the rebounds.
+/// The figures of a run's cases: per case its histories, its sketch and its errors.
 #[cfg(feature = "figures")]
-fn write_figures(out: &Path, plan: &Plan, summary: &Summary) -> Result<(), data::DataError> {
+fn write_case_figures(out: &Path, plan: &Plan, summary: &Summary) -> Result<(), data::DataError> {
     use crate::contract::{self, History};
-    use crate::scene::Family;
     for case in &summary.cases {
         // An older release of rapier is drawn nowhere: its tables are the versions section.
         let histories: Vec<(&str, History)> = summary
@@ -228,6 +258,13 @@ fn write_figures(out: &Path, plan: &Plan, summary: &Summary) -> Result<(), data:
             data::write_atomic(&figures::errors_figure_path(out, &case.id), svg.as_bytes())?;
         }
     }
+    Ok(())
+}
+
+/// The figures drawn from the whole summary: the discrepancy budget per family, the rebounds.
+#[cfg(feature = "figures")]
+pub fn write_summary_figures(out: &Path, summary: &Summary) -> Result<(), data::DataError> {
+    use crate::scene::Family;
     for family in [Family::RigidBody, Family::Springs] {
         let bars: Vec<figures::BudgetBar> = summary
             .cases

@@ -397,16 +397,56 @@ pub fn write(out: &Path, map: &Map) -> Result<(), crate::report::data::DataError
     all.critical.retain(|c| !ran(&c.engine));
     all.points.extend(map.points.iter().cloned());
     all.critical.extend(map.critical.iter().cloned());
-    let known: Vec<String> = crate::run::registry::all()
-        .iter()
-        .map(|e| e.name().to_string())
-        .collect();
-    // The registry's engines in its order, then any other (a user's) in the order met.
-    let order = |e: &str| known.iter().position(|x| x == e).unwrap_or(known.len());
+    let order = engine_order();
     all.points.sort_by_key(|p| order(&p.engine));
     all.critical.sort_by_key(|c| order(&c.engine));
     write_atomic(&csv_path(out), csv(&all).as_bytes())?;
     #[cfg(feature = "figures")]
+    write_figures(out, map)?;
+    Ok(())
+}
+
+/// A report's engines in order: the registry's in its order, then any other (a user's) in
+/// the order met (a stable sort keeps that).
+fn engine_order() -> impl Fn(&str) -> usize {
+    let known: Vec<String> = crate::run::registry::all()
+        .iter()
+        .map(|e| e.name().to_string())
+        .collect();
+    move |e: &str| known.iter().position(|x| x == e).unwrap_or(known.len())
+}
+
+/// Maps of disjoint cases (the shards of a partitioned run) as one map in the order one run
+/// over all their cases writes: by engine, then by case id, each pair's runs as run.
+pub fn merged(maps: Vec<Map>) -> Map {
+    let mut all = Map::default();
+    for m in maps {
+        all.points.extend(m.points);
+        all.critical.extend(m.critical);
+    }
+    let order = engine_order();
+    all.points
+        .sort_by(|a, b| (order(&a.engine), &a.case).cmp(&(order(&b.engine), &b.case)));
+    all.critical
+        .sort_by(|a, b| (order(&a.engine), &a.case).cmp(&(order(&b.engine), &b.case)));
+    all
+}
+
+/// Write a whole map (no previous rows kept): `stability.csv` and each engine's figure.
+pub fn write_whole(out: &Path, map: &Map) -> Result<(), crate::report::data::DataError> {
+    use crate::report::data::write_atomic;
+    if map.points.is_empty() {
+        return Ok(());
+    }
+    write_atomic(&csv_path(out), csv(map).as_bytes())?;
+    #[cfg(feature = "figures")]
+    write_figures(out, map)?;
+    Ok(())
+}
+
+/// Each engine's figure of `map`.
+#[cfg(feature = "figures")]
+fn write_figures(out: &Path, map: &Map) -> Result<(), crate::report::data::DataError> {
     for engine in crate::report::in_order_met(map.points.iter().map(|p| p.engine.as_str())) {
         let mine: Vec<&Point> = map.points.iter().filter(|p| p.engine == engine).collect();
         if mine.is_empty() {
@@ -414,7 +454,7 @@ pub fn write(out: &Path, map: &Map) -> Result<(), crate::report::data::DataError
         }
         let critical: Vec<&Critical> = map.critical.iter().filter(|c| c.engine == engine).collect();
         if let Some(svg) = render(engine, &mine, &critical) {
-            write_atomic(&figure_path(out, engine), svg.as_bytes())?;
+            crate::report::data::write_atomic(&figure_path(out, engine), svg.as_bytes())?;
         }
     }
     Ok(())

@@ -309,7 +309,7 @@ fn remove_stale(dir: &Path, prefix: &str) -> io::Result<()> {
 }
 
 /// Hard-link (or copy, across devices) every file under `from` into `to`.
-fn link_tree(from: &Path, to: &Path) -> io::Result<()> {
+pub(crate) fn link_tree(from: &Path, to: &Path) -> io::Result<()> {
     if !fs::symlink_metadata(from)?.is_dir() {
         if fs::hard_link(from, to).is_err() {
             fs::copy(from, to)?;

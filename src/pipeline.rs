@@ -20,7 +20,7 @@ use std::path::Path;
 use std::time::Instant;
 
 /// The studies a run makes beyond the jobs, their discrepancy budgets and their causes.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct Studies {
     /// The sweep (what accuracy costs), each setting timed `repeat` times; `None`: not run.
     pub sweep: Option<usize>,
@@ -28,6 +28,8 @@ pub struct Studies {
     pub stability: bool,
     /// Accuracy on request.
     pub on_request: bool,
+    /// The shard this run is, where it is one of a partitioned run (`run --partition k/n`).
+    pub shard: Option<crate::comparison::summary::Shard>,
 }
 
 /// When each stage of a run ended, seconds after it started.
@@ -118,6 +120,7 @@ pub fn run(
         plan, &outcome, cases_dir, studies, progress, &lap, &mut times,
     )?;
     let study = Study {
+        shard: studies.shard.as_ref(),
         budgets: &budgets,
         attributions: &attributions,
         invariances: &invariances,

@@ -152,6 +152,36 @@ fn merged_shards_equal_one_run() {
         assert!(merged.join(format!("cases/{case}.md")).is_file());
         assert!(merged.join(format!("data/{case}/explicit.csv")).is_file());
     }
+    // A shard's directory must be its own; a missing shard, or a whole run's report, is no
+    // set of shards of one run.
+    let again = bin(root.path())
+        .args([
+            "run",
+            "-q",
+            "springs_n2n_b",
+            "--partition",
+            "1/2",
+            "--out",
+            "one",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(again.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&again.stderr).contains("a directory of its own"));
+    for (shards, said) in [
+        (&["one"][..], "a shard is missing"),
+        (&["whole"][..], "a whole run's report, not a shard"),
+    ] {
+        let out = bin(root.path())
+            .arg("merge")
+            .args(shards)
+            .args(["--out", "bad"])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains(said), "{stderr}");
+    }
     // Shards that overlap are not shards of one run.
     let overlap = bin(root.path())
         .args(["merge", "one", "whole", "--out", "bad"])

@@ -447,8 +447,8 @@ pub fn main_with(extra: Vec<Box<dyn Engine>>) -> ExitCode {
         Some(Command::Run(args)) => run_command(args, &dir, extra),
         Some(Command::Check { files }) => check(files, &dir, also),
         Some(Command::Judge(args)) => judge(args, &dir),
-        Some(Command::Compare(args)) => compare_command(args),
-        Some(Command::Merge { shards, out, .. }) => merge_command(&shards, &out, true),
+        Some(Command::Compare(_)) => unreachable!("compare reads reports and is dispatched first"),
+        Some(Command::Merge { .. }) => unreachable!("merge reads reports and is dispatched first"),
         Some(Command::Scaling {
             study,
             max_n,

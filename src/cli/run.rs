@@ -3,6 +3,7 @@
 use super::cases::target_and_cases;
 use super::studies::lock_and_stage;
 use super::{RunArgs, Stdout, baseline, interrupted, stopped};
+use crate::comparison::summary::Shard;
 use crate::engines::Engine;
 use crate::report::gate;
 use crate::run::{self, Plan, budget};
@@ -31,21 +32,9 @@ pub(super) fn run_command(args: RunArgs, dir: &Path, extra: Vec<Box<dyn Engine>>
         Ok(x) => x,
         Err(code) => return code,
     };
-    let cases = match args.partition {
-        Some(part) => {
-            let all = cases.len();
-            let share = pipeline::partition(cases, part);
-            if share.is_empty() {
-                eprintln!(
-                    "shard {}/{}: no case (the {all} cases make fewer groups than shards); \
-                     nothing to run",
-                    part.k, part.n
-                );
-                return ExitCode::SUCCESS;
-            }
-            share
-        }
-        None => cases,
+    let (cases, shard) = match shard_of(&args, &target, cases, &engines) {
+        Ok(x) => x,
+        Err(code) => return code,
     };
     let gated = match gated_engines(&args, &engines) {
         Ok(g) => g,
@@ -76,6 +65,15 @@ pub(super) fn run_command(args: RunArgs, dir: &Path, extra: Vec<Box<dyn Engine>>
     if interrupt::checkpoint("load").is_err() {
         return interrupted();
     }
+    if let Some(s) = shard.as_ref().filter(|_| plan.cases.is_empty()) {
+        eprintln!(
+            "shard {}/{}: no case (the {} cases make fewer groups than shards); nothing to run",
+            s.k,
+            s.n,
+            s.cases.len()
+        );
+        return ExitCode::SUCCESS;
+    }
     let (_lock, staging) = match lock_and_stage(&target, !args.no_wait, &report::ENTRIES) {
         Ok(x) => x,
         Err(code) => return code,
@@ -84,6 +82,7 @@ pub(super) fn run_command(args: RunArgs, dir: &Path, extra: Vec<Box<dyn Engine>>
         sweep: args.sweep.then_some(args.repeat as usize),
         stability: args.stability,
         on_request: args.on_request,
+        shard,
     };
     let finished = match pipeline::run(&plan, dir, &studies, staging, started, !args.quiet) {
         Ok(finished) => finished,
@@ -99,6 +98,49 @@ pub(super) fn run_command(args: RunArgs, dir: &Path, extra: Vec<Box<dyn Engine>>
         .into_iter()
         .find(|c| *c != ExitCode::SUCCESS)
         .unwrap_or(ExitCode::SUCCESS)
+}
+
+/// With `--partition k/n`: this shard's share of `cases` and what it says of the whole run;
+/// refused (exit 2) with overrides of the cases' settings (the merged report states the
+/// cases' own) or into a directory that holds files (a shard's report must be its cases'
+/// alone, not joined with a report already there).
+fn shard_of(
+    args: &RunArgs,
+    target: &Path,
+    cases: Vec<crate::scene::Scene>,
+    engines: &[Box<dyn Engine>],
+) -> Result<(Vec<crate::scene::Scene>, Option<Shard>), ExitCode> {
+    let Some(part) = args.partition else {
+        return Ok((cases, None));
+    };
+    let settings = args.settings();
+    let overridden = settings.increment.is_some()
+        || settings.penalty.is_some()
+        || settings.damping.is_some()
+        || settings.contact_start.is_some();
+    if overridden {
+        eprintln!(
+            "error: --partition runs each case with its own settings: drop --increment, \
+             --penalty, --tolerance, --increment-ratio, --damping and --contact-start; nothing \
+             was run"
+        );
+        return Err(ExitCode::from(2));
+    }
+    if std::fs::read_dir(target).is_ok_and(|mut d| d.next().is_some()) {
+        eprintln!(
+            "error: --partition writes each shard into a directory of its own, and {} holds \
+             files (remove them, or give another --out); nothing was run",
+            target.display()
+        );
+        return Err(ExitCode::from(2));
+    }
+    let shard = Shard {
+        k: part.k,
+        n: part.n,
+        cases: cases.iter().map(|s| s.id.clone()).collect(),
+        engines: engines.iter().map(|e| e.name().to_string()).collect(),
+    };
+    Ok((pipeline::partition(cases, part), Some(shard)))
 }
 
 /// The engines `--fail-on-miss` gates on (every engine of the run where it names none), or

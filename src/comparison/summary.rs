@@ -39,6 +39,24 @@ pub struct Summary {
     /// ([`crate::comparison::reach`]).
     #[serde(default)]
     pub checks: Vec<crate::comparison::reach::Check>,
+    /// The shard of a partitioned run this report is (`run --partition k/n`); absent in a
+    /// whole run's report.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shard: Option<Shard>,
+}
+
+/// What a shard of a partitioned run says of the whole it is part of, for the merge to check
+/// that its shards make one run.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Shard {
+    /// This shard, from 1.
+    pub k: usize,
+    /// How many shards.
+    pub n: usize,
+    /// Every case of the whole run, by id.
+    pub cases: Vec<String>,
+    /// The run's engines, in its order.
+    pub engines: Vec<String>,
 }
 
 /// The layout of `summary.json` this build writes. 1: `schema_version`, `cost_to_accuracy`
@@ -304,6 +322,7 @@ impl Summary {
             equivalences: equivalence::measure(&plan.cases, &engines, history),
             invariances: Vec::new(),
             checks: Vec::new(),
+            shard: None,
             engines,
             cases,
         }

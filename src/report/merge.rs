@@ -40,6 +40,9 @@ pub enum MergeError {
     /// No shard given.
     #[error("no shard to merge")]
     Empty,
+    /// Reports that are not the shards of one partitioned run, or not all of them.
+    #[error("{0}")]
+    NotShards(String),
     /// A file could not be copied or written.
     #[error(transparent)]
     Data(#[from] DataError),
@@ -72,7 +75,60 @@ fn summaries(shards: &[PathBuf]) -> Result<Vec<Summary>, MergeError> {
         }
         read.push(summary);
     }
+    whole(shards, &read)?;
     Ok(read)
+}
+
+/// Whether the shards make one partitioned run, whole: each says it is a shard, all of the
+/// same run (the same shard count, cases and engines), and together they hold every case of
+/// it (a shard with no case writes no report).
+fn whole(shards: &[PathBuf], read: &[Summary]) -> Result<(), MergeError> {
+    let mut first: Option<&crate::comparison::summary::Shard> = None;
+    for (dir, summary) in shards.iter().zip(read) {
+        let Some(shard) = &summary.shard else {
+            return Err(MergeError::NotShards(format!(
+                "{} is a whole run's report, not a shard of one (run --partition k/n)",
+                dir.display()
+            )));
+        };
+        match first {
+            None => first = Some(shard),
+            Some(f) if (f.n, &f.cases, &f.engines) != (shard.n, &shard.cases, &shard.engines) => {
+                return Err(MergeError::NotShards(format!(
+                    "{} is a shard of another run than {} (its shard count, cases or engines \
+                     differ)",
+                    dir.display(),
+                    shards[0].display()
+                )));
+            }
+            Some(_) => {}
+        }
+    }
+    let Some(run) = first else {
+        return Err(MergeError::Empty);
+    };
+    let held = |id: &String| read.iter().any(|s| s.cases.iter().any(|c| c.id == *id));
+    let missing: Vec<&str> = run
+        .cases
+        .iter()
+        .filter(|id| !held(id))
+        .map(String::as_str)
+        .collect();
+    if !missing.is_empty() {
+        return Err(MergeError::NotShards(format!(
+            "{} of the run's {} cases are in no shard given (a shard is missing: {}{})",
+            missing.len(),
+            run.cases.len(),
+            missing
+                .iter()
+                .take(5)
+                .copied()
+                .collect::<Vec<_>>()
+                .join(", "),
+            if missing.len() > 5 { ", …" } else { "" }
+        )));
+    }
+    Ok(())
 }
 
 /// Link (or copy) a shard's files of one case into `out`: its histories and budgets, and its
@@ -128,22 +184,28 @@ fn study_files(shards: &[PathBuf], out: &Path) -> Result<(), DataError> {
 /// `previous` is the report it will replace (for "since the previous report"). Returns the
 /// joined summary.
 pub fn merge(shards: &[PathBuf], out: &Path, previous: &Path) -> Result<Summary, MergeError> {
-    let mut read = summaries(shards)?.into_iter();
-    let mut summary = read.next().ok_or(MergeError::Empty)?;
-    for other in read {
-        summary.merge_previous(other);
-    }
-    // One run checks the sweep's costs case by case, in case order.
-    summary.checks.sort_by(|a, b| a.case.cmp(&b.case));
-    for shard in shards {
-        let held: Summary = super::read_json(&super::summary_path(shard))
-            .ok_or_else(|| MergeError::NotAReport(shard.clone()))?;
+    let read = summaries(shards)?;
+    for (shard, held) in shards.iter().zip(&read) {
         for case in &held.cases {
             case_files(shard, &case.id, out).map_err(|source| DataError::Io {
                 path: shard.join("data").join(&case.id),
                 source,
             })?;
         }
+    }
+    let mut read = read.into_iter();
+    let mut summary = read.next().ok_or(MergeError::Empty)?;
+    let engines = summary.shard.take().map(|s| s.engines).unwrap_or_default();
+    for other in read {
+        summary.merge_previous(other);
+    }
+    // As one run writes them: the sweep's cost checks case by case, the engines in the run's
+    // order (that of `--engines`).
+    summary.checks.sort_by(|a, b| a.case.cmp(&b.case));
+    let order = |e: &str| engines.iter().position(|x| x == e).unwrap_or(engines.len());
+    summary.engines.sort_by_key(|e| order(e));
+    for case in &mut summary.cases {
+        case.runs.sort_by_key(|r| order(&r.engine));
     }
     study_files(shards, out)?;
     let mut timings = Timings::new();

@@ -91,6 +91,8 @@ pub struct Study<'a> {
     pub requests: &'a [crate::run::on_request::Request],
     /// How long each part of the run took (name, wall seconds), in order.
     pub parts: Vec<(&'static str, f64)>,
+    /// The shard this run is of a partitioned run, where it is one.
+    pub shard: Option<&'a crate::comparison::summary::Shard>,
 }
 
 /// A map that did not run.
@@ -109,6 +111,7 @@ impl Default for Study<'_> {
             stability: &NO_MAP,
             requests: &[],
             parts: Vec::new(),
+            shard: None,
         }
     }
 }
@@ -148,6 +151,7 @@ pub fn write(
     if let Some(old) = &old {
         summary.merge_previous(old.clone());
     }
+    summary.shard = study.shard.cloned();
     for job in &outcome.jobs {
         if let Ok(s) = &job.result {
             timings

@@ -23,7 +23,10 @@ pub const PAUSE_VARIABLE: &str = "CROSSCHECK_PAUSE_AT";
 /// The exit code of an interrupted run.
 pub const EXIT_CODE: u8 = 130;
 
-/// Install the handler: the first signal sets the flag, a second one exits with 130.
+/// Install the handler: the first signal sets the flag, a second one exits with 130 (with the
+/// `cli` feature, which brings the signal handling; a library embedding crosscheck sets the
+/// flag from its own).
+#[cfg(feature = "cli")]
 pub fn install() {
     let _ = ctrlc::set_handler(|| {
         if REQUESTED.swap(true, Ordering::SeqCst) {

@@ -20,6 +20,7 @@
 //!   ([`cli::main_with`]: every subcommand, for crosscheck's engines and a user's).
 
 pub mod case;
+#[cfg(feature = "cli")]
 pub mod cli;
 pub mod comparison;
 pub mod contract;

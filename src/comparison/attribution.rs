@@ -162,7 +162,7 @@ fn run_all(
     cells: &[Cell],
     work: &[(usize, Planned)],
     combined: bool,
-    bar: &indicatif::ProgressBar,
+    bar: &crate::run::progress::Progress,
 ) -> Vec<(usize, ControlRun)> {
     use rayon::prelude::*;
     work.par_iter()

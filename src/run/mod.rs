@@ -38,6 +38,7 @@ pub mod floor;
 pub mod load;
 pub mod matching;
 pub mod on_request;
+pub mod progress;
 pub mod refinement;
 pub mod registry;
 pub mod scaling;
@@ -52,8 +53,7 @@ pub use load::{
 use crate::contract::{self, History};
 use crate::engines::{EngineError, RunInfo, RunOutput};
 use crate::scene::{IncrementRule, Scene};
-use indicatif::{ProgressBar, ProgressStyle};
-use std::io::IsTerminal;
+pub use progress::Progress;
 use std::panic::{self, AssertUnwindSafe};
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering as AtomicOrdering};
@@ -322,19 +322,9 @@ fn estimated_cost(scene: &Scene, engine: &dyn Engine, settings: &RunSettings) ->
 }
 
 /// A progress bar on stderr for `len` tasks, hidden unless `progress` is set and stderr is a
-/// terminal.
-pub fn progress_bar(len: usize, progress: bool) -> ProgressBar {
-    let bar = if progress && std::io::stderr().is_terminal() {
-        ProgressBar::new(len as u64)
-    } else {
-        ProgressBar::hidden()
-    };
-    bar.set_style(
-        ProgressStyle::with_template("[{elapsed_precise}] {bar:30} {pos}/{len} {msg}")
-            .expect("valid progress template")
-            .progress_chars("=> "),
-    );
-    bar
+/// terminal (and drawn only with the `cli` feature).
+pub fn progress_bar(len: usize, progress: bool) -> Progress {
+    Progress::new(len, progress)
 }
 
 /// Run one job: its settings, the engine, the contract check.

@@ -2,7 +2,7 @@
 //! and measured and predicted ns per increment) and `DIR/figures/elements.svg` (measured
 //! against predicted, log–log, with the line of equality and the band of 1.5× either way).
 
-use crate::report::format::csv_finite as number;
+use crate::report::format::{csv_finite as number, csv_table};
 #[cfg(feature = "figures")]
 use crate::report::palette;
 use crate::run::element_cost::{Origin, Study, TERMS};
@@ -22,7 +22,7 @@ pub const COLUMNS: [&str; 14] = [
     "dashpots",
     "contacts",
     "loads",
-    "increment",
+    "increment_s",
     "passes",
     "ns_per_increment",
     "ns_per_element",
@@ -55,10 +55,9 @@ fn dimension(d: Dimension) -> &'static str {
 
 /// The study as CSV text.
 pub fn csv(study: &Study) -> String {
-    let mut s = COLUMNS.join(",") + "\n";
-    for (p, ratio) in study.ratios() {
+    let rows = study.ratios().map(|(p, ratio)| {
         let e = &p.elements;
-        let fields = [
+        vec![
             p.case.clone(),
             origin(p.origin).to_string(),
             dimension(p.dimension).to_string(),
@@ -73,10 +72,9 @@ pub fn csv(study: &Study) -> String {
             number(p.ns_per_increment),
             number(p.ns_per_element()),
             number(p.ns_per_increment / ratio),
-        ];
-        s += &(fields.join(",") + "\n");
-    }
-    s
+        ]
+    });
+    csv_table(&COLUMNS, rows)
 }
 
 /// The fitted models and how well they predict, as markdown: one row per term and dimension,

@@ -54,6 +54,16 @@ pub fn csv_finite(x: f64) -> String {
     }
 }
 
+/// A CSV table: the header, then one record per row (quoted where a field needs it).
+pub fn csv_table(columns: &[&str], rows: impl IntoIterator<Item = Vec<String>>) -> String {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let _ = w.write_record(columns);
+    for row in rows {
+        let _ = w.write_record(&row);
+    }
+    String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default()
+}
+
 /// A ratio as tables print it: two significant digits below 10, whole numbers to 1000, then
 /// scientific (0.25, 1.5, 21, 376, 1.5e3).
 pub fn ratio(x: f64) -> String {

@@ -2,7 +2,7 @@
 //! `DIR/figures/scaling.svg` (ns per increment against N, log–log, with each engine's fitted
 //! exponent and the memory-bandwidth limit).
 
-use crate::report::format::csv_finite as number;
+use crate::report::format::{csv_finite as number, csv_table};
 use crate::run::scaling::{Study, fitted_exponent};
 #[cfg(feature = "figures")]
 use plotters::prelude::*;
@@ -38,9 +38,8 @@ pub fn figure_path(out: &Path) -> PathBuf {
 
 /// The study as CSV text (numbers in Rust's shortest round-trip form; nothing non-finite).
 pub fn csv(study: &Study) -> String {
-    let mut s = COLUMNS.join(",") + "\n";
-    for p in &study.points {
-        let fields = [
+    let rows = study.points.iter().map(|p| {
+        vec![
             p.engine.clone(),
             p.n.to_string(),
             p.steps.to_string(),
@@ -51,10 +50,9 @@ pub fn csv(study: &Study) -> String {
             number(p.error),
             number(p.limit_ns_per_dof_step),
             number(p.predicted_error),
-        ];
-        s += &(fields.join(",") + "\n");
-    }
-    s
+        ]
+    });
+    csv_table(&COLUMNS, rows)
 }
 
 /// The study as a text table: one row per point, then the points not run and the fitted

@@ -451,6 +451,11 @@ pub fn compare(
         regression::read(new).map_err(|e| e.to_string())?,
     );
     let compared = regression::compare(&a, &b).map_err(|e| e.to_string())?;
+    if let Some(why) = compared.machine_tier_missing().filter(|_| !physics_only) {
+        return Err(format!(
+            "{why}; `crosscheck compare --physics-only` compares the verdicts alone"
+        ));
+    }
     let judged = compared.changes.iter().any(|c| c.physics.is_some());
     if physics_only && !judged && compared.broken.is_empty() {
         return Err(
@@ -463,7 +468,7 @@ pub fn compare(
         let xml = regression::junit(&compared, threshold, physics_only);
         report::data::write_atomic(path, xml.as_bytes()).map_err(|e| e.to_string())?;
     }
-    let drifted = compared.changes.iter().any(|c| c.drift > threshold);
+    let drifted = compared.changes.iter().any(|c| c.drifted(threshold));
     let failed = compared
         .changes
         .iter()

@@ -120,6 +120,40 @@ fn two_runs_compare_clean_and_a_perturbed_history_is_named() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert_eq!(out.status.code(), Some(1), "{stdout}");
     assert!(stdout.contains("## Newly failing"), "{stdout}");
+
+    // A base kept without its histories (as the committed report is): the machine tier has
+    // nothing to compare, so the full comparison is refused and --physics-only says so.
+    std::fs::remove_dir_all(a.join("data")).unwrap();
+    let out = compare(&a, &b, &[]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("the machine tier compared no history: the base report does not keep them")
+            && stderr.contains("--physics-only"),
+        "{stderr}"
+    );
+    let junit = root.path().join("physics.xml");
+    let out = compare(
+        &a,
+        &b,
+        &["--physics-only", "--junit", junit.to_str().unwrap()],
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}");
+    assert!(
+        stdout.contains("machine tier: no history compared (the base report does not keep them")
+            && stdout.contains("## Newly failing")
+            && !stdout.contains("in the new report only"),
+        "{stdout}"
+    );
+    // The machine suite holds no test case: no history was compared.
+    let xml = std::fs::read_to_string(&junit).unwrap();
+    let doc = roxmltree::Document::parse(&xml).expect("JUnit XML parses");
+    let machine = doc
+        .descendants()
+        .find(|n| n.has_tag_name("testsuite") && n.attribute("name") == Some("machine"))
+        .unwrap();
+    assert_eq!(machine.attribute("tests"), Some("0"), "{xml}");
 }
 
 /// Reports that hold different cases are compared over the cells both hold, the others
@@ -295,6 +329,19 @@ fn baselines_are_saved_compared_and_accepted() {
         "{stdout}"
     );
     assert!(run(&["--baseline", "bad/name"]).status.code() == Some(2));
+    // A baseline kept without its histories is compared by its verdicts, and says so.
+    std::fs::remove_dir_all(saved.join("data")).unwrap();
+    let verdicts = run(&["--baseline", "main"]);
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&verdicts.stdout),
+        String::from_utf8_lossy(&verdicts.stderr),
+    );
+    assert_eq!(verdicts.status.code(), Some(0), "{stdout}{stderr}");
+    assert!(
+        stderr.contains("the baseline `main` keeps no histories")
+            && stdout.contains("machine tier: no history compared"),
+        "{stdout}{stderr}"
+    );
 }
 
 /// The main command says what changed since the report it replaces, with `compare`'s two
@@ -325,6 +372,28 @@ fn the_main_command_says_what_changed_since_the_previous_report() {
     assert!(
         text.contains("1 history columns moved by more than 1.00e-9 of their peak")
             && text.contains("springs_grounded_a / `explicit` u_end by 9.09e-2"),
+        "{text}"
+    );
+    // A previous report that keeps one history less, then none: the verdicts compared, and
+    // said so.
+    std::fs::remove_file(out.join("data/springs_grounded_a/explicit.csv")).unwrap();
+    report(&out, &cases);
+    let text = first_screen();
+    assert!(
+        text.contains(
+            "and no history by more than 1.00e-9 of its peak; the histories of 1 cells \
+                       not compared (the previous report does not keep them)"
+        ),
+        "{text}"
+    );
+    std::fs::remove_dir_all(out.join("data")).unwrap();
+    report(&out, &cases);
+    let text = first_screen();
+    assert!(
+        text.contains(
+            "no verdict changed, no error moved by more than 1 %; histories not compared (the \
+             previous report does not keep them)"
+        ),
         "{text}"
     );
     // A previous report of another schema version is said to be incomparable, not skipped.

@@ -119,7 +119,16 @@ pub(super) fn after_run(
     let mut code = ExitCode::SUCCESS;
     if let Some(name) = compare {
         let base = path(baselines, name);
-        match pipeline::compare(&base, target, report::regression::DRIFT, false, None) {
+        // A baseline kept without its histories (accepted from a report that leaves `data/`
+        // out) is compared by its verdicts, and says so.
+        let physics_only = !base.join("data").is_dir();
+        if physics_only {
+            eprintln!(
+                "note: the baseline `{name}` keeps no histories (no data/): its verdicts alone \
+                 are compared"
+            );
+        }
+        match pipeline::compare(&base, target, report::regression::DRIFT, physics_only, None) {
             Ok((text, failed)) => {
                 stdout.print(&format!("\nagainst the baseline `{name}`:\n{text}"));
                 if failed {

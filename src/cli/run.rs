@@ -7,6 +7,7 @@ use crate::comparison::summary::Shard;
 use crate::engines::Engine;
 use crate::report::gate;
 use crate::run::{self, Plan, budget};
+use crate::scene::Scene;
 use crate::{interrupt, pipeline, report};
 use std::path::Path;
 use std::process::ExitCode;
@@ -21,16 +22,17 @@ pub(super) fn run_command(args: RunArgs, dir: &Path, extra: Vec<Box<dyn Engine>>
         .into_iter()
         .chain(extra)
         .collect();
+    let (target, cases) = match target_and_cases(&args.out, &args.cases, dir, &also) {
+        Ok(x) => x,
+        Err(code) => return code,
+    };
+    note_missing_exact_solutions(&args.engines, &target, &cases);
     let engines = match run::select_among(available, &args.engines) {
         Ok(e) => e,
         Err(e) => {
             eprintln!("error: {e}");
             return ExitCode::from(2);
         }
-    };
-    let (target, cases) = match target_and_cases(&args.out, &args.cases, dir, &also) {
-        Ok(x) => x,
-        Err(code) => return code,
     };
     let (cases, shard) = match shard_of(&args, &target, cases, &engines) {
         Ok(x) => x,
@@ -141,6 +143,44 @@ fn shard_of(
         engines: engines.iter().map(|e| e.name().to_string()).collect(),
     };
     Ok((pipeline::partition(cases, part), Some(shard)))
+}
+
+/// Say which exact solutions the named engines are judged against that neither run nor lie in
+/// `target` for every case (a run of some engines is judged against the exact solutions on
+/// disk; a new directory, or a report kept without its histories, holds none): the cells of
+/// those cases get no verdict. The closed form judges every engine but itself; the reference,
+/// the engines judged against it.
+fn note_missing_exact_solutions(named: &[String], target: &Path, cases: &[Scene]) {
+    use crate::comparison::{CLOSED_FORM, EXACT_SOLUTIONS, baseline};
+    let named: Vec<&str> = named.iter().map(|n| n.trim()).collect();
+    let needed = |exact: &str| {
+        !named.contains(&exact)
+            && named
+                .iter()
+                .any(|n| *n != exact && (exact == CLOSED_FORM || baseline(n) == Some(exact)))
+    };
+    let missing = |exact: &str| {
+        let cases = cases.iter();
+        cases
+            .filter(|c| !report::data::csv_path(target, &c.id, exact).is_file())
+            .count()
+    };
+    for exact in EXACT_SOLUTIONS
+        .iter()
+        .filter(|e| !named.is_empty() && needed(e))
+    {
+        let n = missing(exact);
+        if n > 0 {
+            eprintln!(
+                "note: `{exact}` is not in --engines and {} holds its history for {} of the {} \
+                 cases: their cells that are judged against it get no verdict (add it to \
+                 --engines)",
+                target.display(),
+                cases.len() - n,
+                cases.len()
+            );
+        }
+    }
 }
 
 /// The engines `--fail-on-miss` gates on (every engine of the run where it names none), or

@@ -90,11 +90,17 @@ pub struct Change {
     /// energy column).
     pub physics: Option<(Verdict, Verdict)>,
     /// The machine tier: the largest difference between the two histories over the base
-    /// column's peak (absolute where the peak is 0).
-    pub drift: f64,
+    /// column's peak (absolute where the peak is 0); `None` where a report does not keep the
+    /// cell's history ([`Since::not_kept`]).
+    pub drift: Option<f64>,
 }
 
 impl Change {
+    /// Its history moved by more than `threshold` of its peak.
+    pub fn drifted(&self, threshold: f64) -> bool {
+        self.drift.is_some_and(|d| d > threshold)
+    }
+
     /// Passed in the base report and fails in the new one.
     pub fn newly_failing(&self) -> bool {
         matches!(&self.physics, Some((a, b)) if a.pass == Some(true) && b.pass == Some(false))
@@ -230,8 +236,9 @@ pub fn drift_between(
     drift_of(&file(base), &file(new))
 }
 
-/// The (case, engine) cells of a report, in order: those `results.csv` judges and those with a
-/// history in `data/` (an engine compared with no exact solution has a history and no verdict).
+/// The (case, engine) cells of a report, in order: those `results.csv` judges, those with a
+/// history in `data/` (an engine compared with no exact solution has a history and no verdict)
+/// and those whose run succeeded (a report may be kept without its histories).
 fn cells_of(report: &Report) -> Vec<(String, String)> {
     let mut c: Vec<(String, String)> = report
         .verdicts
@@ -239,6 +246,8 @@ fn cells_of(report: &Report) -> Vec<(String, String)> {
         .map(|k| (k.0.clone(), k.1.clone()))
         .collect();
     c.extend(histories_of(&report.dir));
+    let ran = report.statuses.iter().filter(|(_, s)| *s == "ok");
+    c.extend(ran.map(|(cell, _)| cell.clone()));
     c.sort();
     c.dedup();
     c
@@ -267,31 +276,58 @@ fn histories_of(dir: &Path) -> Vec<(String, String)> {
     out
 }
 
-/// Both tiers of one cell, every column of its history.
+/// Which reports do not keep a cell's history though its run succeeded there.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NotKept {
+    /// The base (previous) report.
+    Base,
+    /// The new one.
+    New,
+    /// Neither keeps it.
+    Both,
+}
+
+/// Both tiers of one cell, every column of its history; with the report that does not keep
+/// the history where one does not (then the verdicts alone are compared).
 fn cell_changes(
     base: &Report,
     new: &Report,
     case: &str,
     engine: &str,
-) -> Result<Vec<Change>, Unusable> {
+) -> Result<(Vec<Change>, Option<NotKept>), Unusable> {
     let file = |r: &Report| crate::report::data::csv_path(&r.dir, case, engine);
-    let drifts = if file(base).is_file() != file(new).is_file() {
-        let side = if file(base).is_file() { "base" } else { "new" };
-        return Err(Unusable::Mismatch {
-            what: "histories".into(),
-            list: format!("{case} / {engine}: a history in the {side} report only"),
-        });
-    } else if file(base).is_file() {
-        drift_of(&file(base), &file(new))?
-    } else {
+    let ran = |r: &Report| {
+        r.statuses
+            .get(&(case.to_string(), engine.to_string()))
+            .map(String::as_str)
+            == Some("ok")
+    };
+    let not_kept = match (file(base).is_file(), file(new).is_file()) {
+        (true, true) => None,
+        (false, true) if ran(base) => Some(NotKept::Base),
+        (true, false) if ran(new) => Some(NotKept::New),
+        (false, false) if ran(base) || ran(new) => Some(NotKept::Both),
         // No history on either side (a run that failed in both): the verdicts alone.
+        (false, false) => None,
+        (has_base, _) => {
+            let side = if has_base { "base" } else { "new" };
+            return Err(Unusable::Mismatch {
+                what: "histories".into(),
+                list: format!("{case} / {engine}: a history in the {side} report only"),
+            });
+        }
+    };
+    let drifts: Vec<(String, Option<f64>)> = if file(base).is_file() && file(new).is_file() {
+        let drifts = drift_of(&file(base), &file(new))?;
+        drifts.into_iter().map(|(c, d)| (c, Some(d))).collect()
+    } else {
         base.verdicts
             .keys()
             .filter(|k| k.0 == case && k.1 == engine)
-            .map(|k| (k.2.clone(), 0.0))
+            .map(|k| (k.2.clone(), None))
             .collect()
     };
-    Ok(drifts
+    let changes = drifts
         .into_iter()
         .map(|(column, drift)| {
             let key = (case.to_string(), engine.to_string(), column);
@@ -306,12 +342,14 @@ fn cell_changes(
                 drift,
             }
         })
-        .collect())
+        .collect();
+    Ok((changes, not_kept))
 }
 
 /// Compare two reports: both tiers of every column of the cells both hold (every history
-/// both hold, whether or not an exact solution judged it), the cells either holds alone
-/// listed; `Err` where they share nothing to compare.
+/// both keep, whether or not an exact solution judged it; the verdicts alone where a report
+/// does not keep the history), the cells either holds alone listed; `Err` where they share
+/// nothing to compare.
 pub fn compare(base: &Report, new: &Report) -> Result<Since, Unusable> {
     let compared = since(base, new);
     if compared.changes.is_empty() && compared.broken.is_empty() {
@@ -342,6 +380,11 @@ pub struct Since {
     /// Why the two reports cannot be compared at all (a previous report of another schema
     /// version, an unreadable file), where they cannot.
     pub unusable: Option<String>,
+    /// Cells whose run succeeded in both but whose history a report does not keep (`data/`
+    /// left out, as the committed report leaves it): their verdicts alone are compared.
+    pub not_kept: Vec<(String, String, NotKept)>,
+    /// Cells whose histories were compared.
+    pub histories_compared: usize,
 }
 
 /// What changed from the report in `previous` to the one in `new`: `None` where `previous`
@@ -377,7 +420,15 @@ pub fn since(base: &Report, new: &Report) -> Since {
     }
     for (case, engine) in a.iter().filter(|c| b.contains(c)) {
         match cell_changes(base, new, case, engine) {
-            Ok(changes) => since.changes.extend(changes),
+            Ok((changes, not_kept)) => {
+                if changes.iter().any(|c| c.drift.is_some()) {
+                    since.histories_compared += 1;
+                }
+                since.changes.extend(changes);
+                if let Some(side) = not_kept {
+                    since.not_kept.push((case.clone(), engine.clone(), side));
+                }
+            }
             Err(e) => since.incomparable.push(e.to_string()),
         }
     }
@@ -427,8 +478,8 @@ impl Since {
             })
             .collect();
         moved.sort_by(|a, b| b.0.total_cmp(&a.0));
-        let mut drifted: Vec<&Change> = self.changes.iter().filter(|c| c.drift > DRIFT).collect();
-        drifted.sort_by(|a, b| b.drift.total_cmp(&a.drift));
+        let mut drifted: Vec<&Change> = self.changes.iter().filter(|c| c.drifted(DRIFT)).collect();
+        drifted.sort_by(|a, b| b.drift.unwrap_or(0.0).total_cmp(&a.drift.unwrap_or(0.0)));
         let steady =
             flipped.is_empty() && moved.is_empty() && drifted.is_empty() && self.broken.is_empty();
         let mut parts = Vec::new();
@@ -458,7 +509,7 @@ impl Since {
             let shown: Vec<String> = drifted
                 .iter()
                 .take(3)
-                .map(|c| format!("{} by {}", cell(c), sci(c.drift)))
+                .map(|c| format!("{} by {}", cell(c), sci(c.drift.unwrap_or(0.0))))
                 .collect();
             parts.push(format!(
                 "{} history columns moved by more than {} of their peak (most: {})",
@@ -500,26 +551,71 @@ impl Since {
         if let Some(why) = &self.unusable {
             return format!("{head} it cannot be compared with this one: {why}.\n");
         }
-        if parts.is_empty() {
-            return format!(
-                "{head} no verdict changed, no error moved by more than {:.0} % and no \
-                 history by more than {} of its peak.\n",
-                MOVED * 100.0,
+        let moved_none = format!(
+            "no verdict changed, no error moved by more than {:.0} %",
+            MOVED * 100.0
+        );
+        let steady_line = if self.histories_compared == 0 && !self.not_kept.is_empty() {
+            format!(
+                "{moved_none}; histories not compared ({})",
+                self.kept_by("previous")
+            )
+        } else {
+            if !self.not_kept.is_empty() {
+                parts.push(format!(
+                    "the histories of {} cells not compared ({})",
+                    self.not_kept.len(),
+                    self.kept_by("previous")
+                ));
+            }
+            format!(
+                "{moved_none} and no history by more than {} of its peak",
                 sci(DRIFT)
-            );
+            )
+        };
+        if parts.is_empty() {
+            return format!("{head} {steady_line}.\n");
         }
         if steady && !self.changes.is_empty() {
-            parts.insert(
-                0,
-                format!(
-                    "in the cells both hold, no verdict changed, no error moved by more than \
-                     {:.0} % and no history by more than {} of its peak",
-                    MOVED * 100.0,
-                    sci(DRIFT)
-                ),
-            );
+            parts.insert(0, format!("in the cells both hold, {steady_line}"));
+        } else if self.histories_compared == 0 && !self.not_kept.is_empty() {
+            parts.push(format!(
+                "histories not compared ({})",
+                self.kept_by("previous")
+            ));
         }
         format!("{head} {}.\n", parts.join("; "))
+    }
+
+    /// Which report does not keep the histories of [`Self::not_kept`], in words (the base
+    /// report called `base_name`): "the previous report keeps none of them", "…keeps them in
+    /// neither".
+    fn kept_by(&self, base_name: &str) -> String {
+        let count = |side: NotKept| self.not_kept.iter().filter(|c| c.2 == side).count();
+        let mut said = Vec::new();
+        for (side, report) in [
+            (NotKept::Base, format!("the {base_name} report")),
+            (NotKept::New, "the new report".to_string()),
+            (NotKept::Both, "either report".to_string()),
+        ] {
+            match count(side) {
+                0 => {}
+                n if n == self.not_kept.len() => said.push(format!("{report} does not keep them")),
+                n => said.push(format!("{report} does not keep {n}")),
+            }
+        }
+        said.join(", ")
+    }
+
+    /// Why the machine tier compared nothing, where a report keeps no history of the cells
+    /// both hold (they were compared by their verdicts alone).
+    pub fn machine_tier_missing(&self) -> Option<String> {
+        (self.histories_compared == 0 && !self.not_kept.is_empty()).then(|| {
+            format!(
+                "the machine tier compared no history: {} (`data/`)",
+                self.kept_by("base")
+            )
+        })
     }
 }
 
@@ -528,18 +624,47 @@ impl Since {
 pub fn markdown(base: &Path, new: &Path, compared: &Since, threshold: f64) -> String {
     let changes = &compared.changes;
     let failing: Vec<&Change> = changes.iter().filter(|c| c.newly_failing()).collect();
-    let mut drifted: Vec<&Change> = changes.iter().filter(|c| c.drift > threshold).collect();
-    drifted.sort_by(|a, b| b.drift.total_cmp(&a.drift));
+    let mut drifted: Vec<&Change> = changes.iter().filter(|c| c.drifted(threshold)).collect();
+    drifted.sort_by(|a, b| b.drift.unwrap_or(0.0).total_cmp(&a.drift.unwrap_or(0.0)));
+    let machine = match compared.machine_tier_missing() {
+        Some(_) => format!(
+            "no history compared ({}, `data/`)",
+            compared.kept_by("base")
+        ),
+        None => format!(
+            "{} drifted by more than {} of their peak",
+            drifted.len(),
+            sci(threshold)
+        ),
+    };
     let mut s = format!(
-        "# {} → {}\n\n{} columns compared: {} newly failing their tolerance (physics), {} drifted \
-         by more than {} of their peak (machine).\n",
+        "# {} → {}\n\n{} columns compared: {} newly failing their tolerance (physics); machine \
+         tier: {machine}.\n",
         base.display(),
         new.display(),
         changes.len(),
         failing.len(),
-        drifted.len(),
-        sci(threshold)
     );
+    if !compared.not_kept.is_empty() && compared.histories_compared > 0 {
+        let cells: Vec<String> = compared
+            .not_kept
+            .iter()
+            .take(5)
+            .map(|(c, e, _)| format!("{c} / `{e}`"))
+            .collect();
+        let _ = writeln!(
+            s,
+            "\nThe histories of {} cells are not compared ({}): {}{}.",
+            compared.not_kept.len(),
+            compared.kept_by("base"),
+            cells.join(", "),
+            if compared.not_kept.len() > 5 {
+                ", …"
+            } else {
+                ""
+            }
+        );
+    }
     for (cells, what) in [
         (&compared.added, "in the new report only (not compared)"),
         (&compared.gone, "in the base report only (not compared)"),
@@ -597,7 +722,7 @@ pub fn markdown(base: &Path, new: &Path, compared: &Since, threshold: f64) -> St
                 c.key.0,
                 c.key.1,
                 c.key.2,
-                sci(c.drift)
+                sci(c.drift.unwrap_or(0.0))
             );
         }
     }
@@ -611,7 +736,8 @@ pub fn junit(compared: &Since, threshold: f64, physics_only: bool) -> String {
     use quick_junit::{NonSuccessKind, Report, TestCase, TestCaseStatus, TestSuite};
     let changes = &compared.changes;
     let physics: Vec<&Change> = changes.iter().filter(|c| c.physics.is_some()).collect();
-    let all: Vec<&Change> = changes.iter().collect();
+    // The machine tier's cases: the columns whose histories both reports keep.
+    let all: Vec<&Change> = changes.iter().filter(|c| c.drift.is_some()).collect();
     let suite = |name: &str, cases: &[&Change], fails: &dyn Fn(&Change) -> Option<String>| {
         let mut suite = TestSuite::new(name);
         suite.add_test_cases(cases.iter().map(|c| {
@@ -650,10 +776,10 @@ pub fn junit(compared: &Since, threshold: f64, physics_only: bool) -> String {
     }
     report.add_test_suite(physics_suite);
     let mut machine = suite("machine", &all, &|c: &Change| {
-        (!physics_only && c.drift > threshold).then(|| {
+        (!physics_only && c.drifted(threshold)).then(|| {
             format!(
                 "drifted by {} of the peak (threshold {})",
-                sci(c.drift),
+                sci(c.drift.unwrap_or(0.0)),
                 sci(threshold)
             )
         })

@@ -278,7 +278,9 @@ fn conditions(layout: &Layout, step: &Step) -> (Vec<bool>, Vec<(usize, f64)>) {
     (held, prescribed)
 }
 
-/// Solve a linear scene without contact exactly.
+/// Solve a linear scene without contact exactly: the equations assembled once, the steps taken
+/// in order (a static one solved for its equilibrium, a dynamic one by the exponential of its
+/// state matrix at each output time it reports), then the probes read at every output time.
 pub fn solve(scene: &Scene) -> Result<History, EngineError> {
     if !scene.contacts.is_empty() {
         return unsupported("the linear solver does not do contact");
@@ -294,9 +296,63 @@ pub fn solve(scene: &Scene) -> Result<History, EngineError> {
         ));
     }
     let layout = Layout::new(scene);
-    let n = layout.len();
+    let equations = Equations::assemble(scene, &layout);
+    let mut motion = Motion::new(scene, &layout, &equations);
+    for step in &scene.steps {
+        let (held, prescribed) = conditions(&layout, step);
+        match step.kind {
+            StepKind::Static => motion.equilibrium(&held, &prescribed)?,
+            StepKind::Dynamic { duration } => motion.dynamic(&held, duration)?,
+        }
+    }
+    Ok(motion.history())
+}
 
-    // Mass.
+/// M q̈ + C q̇ + K q = Q over every coordinate, and the initial velocities projected on them.
+struct Equations {
+    mass: DMatrix<f64>,
+    stiffness: DMatrix<f64>,
+    damping: DMatrix<f64>,
+    load: DVector<f64>,
+    v_initial: DVector<f64>,
+}
+
+impl Equations {
+    fn assemble(scene: &Scene, layout: &Layout) -> Self {
+        let n = layout.len();
+        let mut stiffness = DMatrix::zeros(n, n);
+        let mut damping = DMatrix::zeros(n, n);
+        for (list, target) in [
+            (&scene.springs, &mut stiffness),
+            (&scene.dashpots, &mut damping),
+        ] {
+            for e in list {
+                let g = layout.elongation(e);
+                *target += g.transpose() * g * e.coefficient;
+            }
+        }
+        let mut load = DVector::zeros(n);
+        for l in &scene.loads {
+            load += layout.point(l.node).transpose() * l.force;
+        }
+        Equations {
+            mass: mass_matrix(scene, layout),
+            stiffness,
+            damping,
+            load,
+            v_initial: initial_velocity(scene, layout),
+        }
+    }
+
+    /// Q_f − K_fh q_h: the loads on the free coordinates less the held ones' spring forces.
+    fn free_force(&self, q: &DVector<f64>, free: &[usize], fixed: &[usize]) -> DVector<f64> {
+        pick_vec(&self.load, free) - pick(&self.stiffness, free, fixed) * pick_vec(q, fixed)
+    }
+}
+
+/// M = Σ_particles m JᵀJ + Σ_bodies [T; R]ᵀ M_b [T; R].
+fn mass_matrix(scene: &Scene, layout: &Layout) -> DMatrix<f64> {
+    let n = layout.len();
     let mut mass = DMatrix::zeros(n, n);
     for (id, node) in scene.nodes.iter().enumerate() {
         if node.attachment == Attachment::Free && node.mass > 0.0 {
@@ -318,24 +374,13 @@ pub fn solve(scene: &Scene) -> Result<History, EngineError> {
         let mb = DMatrix::from_iterator(6, 6, mb.iter().copied());
         mass += tr.transpose() * mb * tr;
     }
-    // Stiffness, damping, loads.
-    let mut stiffness = DMatrix::zeros(n, n);
-    let mut damping = DMatrix::zeros(n, n);
-    for (list, target) in [
-        (&scene.springs, &mut stiffness),
-        (&scene.dashpots, &mut damping),
-    ] {
-        for e in list {
-            let g = layout.elongation(e);
-            *target += g.transpose() * g * e.coefficient;
-        }
-    }
-    let mut load = DVector::zeros(n);
-    for l in &scene.loads {
-        load += layout.point(l.node).transpose() * l.force;
-    }
-    // Initial velocities, projected on the coordinates.
-    let mut v_initial = DVector::zeros(n);
+    mass
+}
+
+/// The scene's initial velocities (translational and, at a reference node, angular) projected
+/// on the coordinates.
+fn initial_velocity(scene: &Scene, layout: &Layout) -> DVector<f64> {
+    let mut v_initial = DVector::zeros(layout.len());
     for iv in &scene.initial_velocities {
         let frame = scene.nodes[iv.node].frame;
         for i in 0..layout.translations {
@@ -349,80 +394,156 @@ pub fn solve(scene: &Scene) -> Result<History, EngineError> {
             }
         }
     }
+    v_initial
+}
 
-    // Output times, each reported by the last dynamic step starting at or before it.
-    let times = scene.output_times();
-    let tol = 1e-12 * scene.duration().max(f64::MIN_POSITIVE);
-    let mut starts = Vec::new();
-    let mut t0 = 0.0;
-    for step in &scene.steps {
-        if let StepKind::Dynamic { duration } = step.kind {
-            starts.push(t0);
-            t0 += duration;
+/// The coordinates and their rates through the steps, and the state at every output time.
+struct Motion<'a> {
+    scene: &'a Scene,
+    layout: &'a Layout<'a>,
+    eq: &'a Equations,
+    times: Vec<f64>,
+    /// Each dynamic step's start time.
+    starts: Vec<f64>,
+    /// The dynamic step that reports each output time: the last starting at or before it.
+    owner: Vec<usize>,
+    q: DVector<f64>,
+    qd: DVector<f64>,
+    states: Vec<Option<(DVector<f64>, DVector<f64>)>>,
+    dynamic_index: usize,
+}
+
+impl<'a> Motion<'a> {
+    fn new(scene: &'a Scene, layout: &'a Layout<'a>, eq: &'a Equations) -> Self {
+        let times = scene.output_times();
+        let tol = 1e-12 * scene.duration().max(f64::MIN_POSITIVE);
+        let mut starts = Vec::new();
+        let mut t0 = 0.0;
+        for step in &scene.steps {
+            if let StepKind::Dynamic { duration } = step.kind {
+                starts.push(t0);
+                t0 += duration;
+            }
+        }
+        let owner: Vec<usize> = times
+            .iter()
+            .map(|&t| starts.iter().rposition(|&s| s <= t + tol).unwrap_or(0))
+            .collect();
+        let n = layout.len();
+        Motion {
+            scene,
+            layout,
+            eq,
+            states: vec![None; times.len()],
+            times,
+            starts,
+            owner,
+            q: DVector::zeros(n),
+            qd: DVector::zeros(n),
+            dynamic_index: 0,
         }
     }
-    let owner: Vec<usize> = times
-        .iter()
-        .map(|&t| starts.iter().rposition(|&s| s <= t + tol).unwrap_or(0))
-        .collect();
 
-    let mut q = DVector::zeros(n);
-    let mut qd = DVector::zeros(n);
-    let mut states: Vec<Option<(DVector<f64>, DVector<f64>)>> = vec![None; times.len()];
-    let mut dynamic_index = 0;
-    for step in &scene.steps {
-        let (held, prescribed) = conditions(&layout, step);
+    /// A static step: the prescribed DOFs set, the free ones solved from K_ff q_f = Q_f − K_fp
+    /// q_p (velocities untouched).
+    fn equilibrium(
+        &mut self,
+        held: &[bool],
+        prescribed: &[(usize, f64)],
+    ) -> Result<(), EngineError> {
+        let n = self.layout.len();
         let free: Vec<usize> = (0..n).filter(|&k| !held[k]).collect();
         let fixed: Vec<usize> = (0..n).filter(|&k| held[k]).collect();
-        let duration = match step.kind {
-            StepKind::Static => {
-                for &(k, v) in &prescribed {
-                    q[k] = v;
-                }
-                if free.is_empty() {
-                    continue;
-                }
-                let kff = pick(&stiffness, &free, &free);
-                if singular(&kff) {
-                    return unsupported(
-                        "static step: the free DOFs are not restrained (singular stiffness)",
-                    );
-                }
-                let rhs =
-                    pick_vec(&load, &free) - pick(&stiffness, &free, &fixed) * pick_vec(&q, &fixed);
-                let qf = kff.lu().solve(&rhs).ok_or_else(|| {
-                    EngineError::Unsupported("analytic: static step: singular stiffness".into())
-                })?;
-                for (i, &k) in free.iter().enumerate() {
-                    q[k] = qf[i];
-                }
-                continue;
-            }
-            StepKind::Dynamic { duration } => duration,
-        };
-        if dynamic_index == 0 {
-            qd.copy_from(&v_initial);
+        for &(k, v) in prescribed {
+            self.q[k] = v;
+        }
+        if free.is_empty() {
+            return Ok(());
+        }
+        let kff = pick(&self.eq.stiffness, &free, &free);
+        if singular(&kff) {
+            return unsupported(
+                "static step: the free DOFs are not restrained (singular stiffness)",
+            );
+        }
+        let rhs = self.eq.free_force(&self.q, &free, &fixed);
+        let qf = kff.lu().solve(&rhs).ok_or_else(|| {
+            EngineError::Unsupported("analytic: static step: singular stiffness".into())
+        })?;
+        for (i, &k) in free.iter().enumerate() {
+            self.q[k] = qf[i];
+        }
+        Ok(())
+    }
+
+    /// A dynamic step of `duration`: the held DOFs frozen, the free ones by the exponential of
+    /// the augmented state matrix, at each output time the step reports and at its end.
+    fn dynamic(&mut self, held: &[bool], duration: f64) -> Result<(), EngineError> {
+        let n = self.layout.len();
+        let free: Vec<usize> = (0..n).filter(|&k| !held[k]).collect();
+        let fixed: Vec<usize> = (0..n).filter(|&k| held[k]).collect();
+        if self.dynamic_index == 0 {
+            self.qd.copy_from(&self.eq.v_initial);
         }
         for &k in &fixed {
-            qd[k] = 0.0;
+            self.qd[k] = 0.0;
         }
-        let here: Vec<usize> = (0..times.len())
-            .filter(|&i| owner[i] == dynamic_index)
+        let here: Vec<usize> = (0..self.times.len())
+            .filter(|&i| self.owner[i] == self.dynamic_index)
             .collect();
-        let start = starts[dynamic_index];
-        dynamic_index += 1;
+        let start = self.starts[self.dynamic_index];
+        self.dynamic_index += 1;
         let nf = free.len();
         if nf == 0 {
             for &i in &here {
-                states[i] = Some((q.clone(), qd.clone()));
+                self.states[i] = Some((self.q.clone(), self.qd.clone()));
             }
-            continue;
+            return Ok(());
         }
-        let mff = pick(&mass, &free, &free);
-        if let Some(k) = free.iter().find(|&&k| mass[(k, k)] <= 0.0) {
+        let a = self.state_matrix(&free, &fixed)?;
+        let mut s0 = DVector::zeros(2 * nf + 1);
+        for (i, &k) in free.iter().enumerate() {
+            s0[i] = self.q[k];
+            s0[nf + i] = self.qd[k];
+        }
+        s0[2 * nf] = 1.0;
+        // Each output time from the step's start, then the step's end (the next step's start).
+        let offsets: Vec<f64> = here
+            .iter()
+            .map(|&i| self.times[i] - start)
+            .chain(std::iter::once(duration))
+            .collect();
+        let solved = exponential_states(&a, &s0, &offsets)?;
+        let expand = |s: &DVector<f64>| {
+            let (mut qq, mut vv) = (self.q.clone(), self.qd.clone());
+            for (i, &k) in free.iter().enumerate() {
+                qq[k] = s[i];
+                vv[k] = s[nf + i];
+            }
+            (qq, vv)
+        };
+        let at_times: Vec<_> = here
+            .iter()
+            .zip(&solved)
+            .map(|(&i, s)| (i, expand(s)))
+            .collect();
+        let end = expand(solved.last().expect("the end state"));
+        for (i, state) in at_times {
+            self.states[i] = Some(state);
+        }
+        (self.q, self.qd) = end;
+        Ok(())
+    }
+
+    /// A = [[0, 1, 0], [−M_ff⁻¹K_ff, −M_ff⁻¹C_ff, M_ff⁻¹(Q_f − K_fh q_h)], [0, 0, 0]]; a free
+    /// DOF without mass, or a singular mass matrix, is refused.
+    fn state_matrix(&self, free: &[usize], fixed: &[usize]) -> Result<DMatrix<f64>, EngineError> {
+        let (eq, nf) = (self.eq, free.len());
+        let mff = pick(&eq.mass, free, free);
+        if let Some(k) = free.iter().find(|&&k| eq.mass[(k, k)] <= 0.0) {
             return unsupported(format!(
                 "{} is free in a dynamic step but has no mass",
-                layout.describe(*k)
+                self.layout.describe(*k)
             ));
         }
         if singular(&mff) {
@@ -431,75 +552,57 @@ pub fn solve(scene: &Scene) -> Result<History, EngineError> {
         let chol = mff.cholesky().ok_or_else(|| {
             EngineError::Unsupported("analytic: the mass matrix is not positive definite".into())
         })?;
-        let force = pick_vec(&load, &free) - pick(&stiffness, &free, &fixed) * pick_vec(&q, &fixed);
+        let force = eq.free_force(&self.q, free, fixed);
         let mut a = DMatrix::zeros(2 * nf + 1, 2 * nf + 1);
         a.view_mut((0, nf), (nf, nf)).fill_with_identity();
         a.view_mut((nf, 0), (nf, nf))
-            .copy_from(&-chol.solve(&pick(&stiffness, &free, &free)));
+            .copy_from(&-chol.solve(&pick(&eq.stiffness, free, free)));
         a.view_mut((nf, nf), (nf, nf))
-            .copy_from(&-chol.solve(&pick(&damping, &free, &free)));
+            .copy_from(&-chol.solve(&pick(&eq.damping, free, free)));
         a.view_mut((nf, 2 * nf), (nf, 1))
             .copy_from(&chol.solve(&force));
-        let mut s0 = DVector::zeros(2 * nf + 1);
-        for (i, &k) in free.iter().enumerate() {
-            s0[i] = q[k];
-            s0[nf + i] = qd[k];
-        }
-        s0[2 * nf] = 1.0;
-        // Each output time from the step's start, then the step's end (the next step's start).
-        let offsets: Vec<f64> = here
-            .iter()
-            .map(|&i| times[i] - start)
-            .chain(std::iter::once(duration))
-            .collect();
-        let solved = exponential_states(&a, &s0, &offsets)?;
-        let expand = |s: &DVector<f64>| {
-            let (mut qq, mut vv) = (q.clone(), qd.clone());
-            for (i, &k) in free.iter().enumerate() {
-                qq[k] = s[i];
-                vv[k] = s[nf + i];
-            }
-            (qq, vv)
-        };
-        for (&i, s) in here.iter().zip(&solved) {
-            states[i] = Some(expand(s));
-        }
-        (q, qd) = expand(solved.last().expect("the end state"));
+        Ok(a)
     }
 
-    // Probes.
-    let maps: Vec<Option<ProbeMap>> = scene
-        .columns
-        .iter()
-        .map(|c| match &c.probe {
-            Probe::Displacement { node, direction } => {
-                Some((layout.point(*node), *direction, false))
-            }
-            Probe::Velocity { node, direction } => Some((layout.point(*node), *direction, true)),
-            Probe::Rotation { body, axis } => Some((layout.rotation(*body), *axis, false)),
-            Probe::Zero { .. } | Probe::ContactForce { .. } | Probe::Gap { .. } => None,
-        })
-        .collect();
-    let rows = times
-        .iter()
-        .zip(states)
-        .map(|(&t, state)| {
-            let (q, qd) = state.expect("every output time lies in a dynamic step");
-            std::iter::once(t)
-                .chain(maps.iter().map(|m| match m {
-                    Some((j, d, velocity)) => {
-                        let u = j * if *velocity { &qd } else { &q };
-                        d.dot(&Vector3::new(u[0], u[1], u[2]))
-                    }
-                    None => 0.0,
-                }))
-                .chain(std::iter::once(1.0))
-                .collect()
-        })
-        .collect();
-    let columns = std::iter::once("t".to_string())
-        .chain(scene.columns.iter().map(|c| c.name.clone()))
-        .chain(std::iter::once(VALID_COLUMN.to_string()))
-        .collect();
-    Ok(History { columns, rows })
+    /// The history: each probe read from the state at every output time.
+    fn history(self) -> History {
+        let (scene, layout) = (self.scene, self.layout);
+        let maps: Vec<Option<ProbeMap>> = scene
+            .columns
+            .iter()
+            .map(|c| match &c.probe {
+                Probe::Displacement { node, direction } => {
+                    Some((layout.point(*node), *direction, false))
+                }
+                Probe::Velocity { node, direction } => {
+                    Some((layout.point(*node), *direction, true))
+                }
+                Probe::Rotation { body, axis } => Some((layout.rotation(*body), *axis, false)),
+                Probe::Zero { .. } | Probe::ContactForce { .. } | Probe::Gap { .. } => None,
+            })
+            .collect();
+        let rows = self
+            .times
+            .iter()
+            .zip(self.states)
+            .map(|(&t, state)| {
+                let (q, qd) = state.expect("every output time lies in a dynamic step");
+                std::iter::once(t)
+                    .chain(maps.iter().map(|m| match m {
+                        Some((j, d, velocity)) => {
+                            let u = j * if *velocity { &qd } else { &q };
+                            d.dot(&Vector3::new(u[0], u[1], u[2]))
+                        }
+                        None => 0.0,
+                    }))
+                    .chain(std::iter::once(1.0))
+                    .collect()
+            })
+            .collect();
+        let columns = std::iter::once("t".to_string())
+            .chain(scene.columns.iter().map(|c| c.name.clone()))
+            .chain(std::iter::once(VALID_COLUMN.to_string()))
+            .collect();
+        History { columns, rows }
+    }
 }

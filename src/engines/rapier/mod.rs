@@ -4,8 +4,9 @@
 //! verification problems.
 //!
 //! One generic builder ([`plan`]) maps any scene onto rapier bodies, joints and colliders; one
-//! macro-generated backend ([`backend`]) per rapier crate builds and steps the world (2D scenes
-//! in `rapier2d`/`rapier2d-f64`, 3D ones in `rapier3d`/`rapier3d-f64`, and the older releases'
+//! simulation ([`backend::simulate`]), written once over the [`backend::World`] trait, builds
+//! and steps the world of whichever rapier crate implements it (`world`: 2D scenes in
+//! `rapier2d`/`rapier2d-f64`, 3D ones in `rapier3d`/`rapier3d-f64`, and the older releases'
 //! f64 crates); one recorder ([`record`]) turns the stepped states into the output contract.
 //! See [`plan`] for the mapping.
 //!
@@ -66,6 +67,7 @@ pub mod controls;
 pub mod plan;
 pub mod record;
 pub mod steps;
+mod world;
 
 use super::{
     Coarsest, Control, Engine, EngineError, Needs, RunInfo, RunOutput, RunSettings, Stepping,
@@ -486,18 +488,18 @@ impl RapierEngine {
         use Dimension::{Three, Two};
         use Precision::{F32, F64};
         match (self.release, dimension, self.precision) {
-            (Release::Current, Two, F32) => backend::r2_f32::simulate(plan, run, sink),
-            (Release::Current, Two, F64) => backend::r2_f64::simulate(plan, run, sink),
-            (Release::Current, Three, F32) => backend::r3_f32::simulate(plan, run, sink),
-            (Release::Current, Three, F64) => backend::r3_f64::simulate(plan, run, sink),
+            (Release::Current, Two, F32) => backend::simulate::<world::R2F32>(plan, run, sink),
+            (Release::Current, Two, F64) => backend::simulate::<world::R2F64>(plan, run, sink),
+            (Release::Current, Three, F32) => backend::simulate::<world::R3F32>(plan, run, sink),
+            (Release::Current, Three, F64) => backend::simulate::<world::R3F64>(plan, run, sink),
             #[cfg(feature = "rapier-versions")]
-            (Release::V0_34, Two, _) => backend::r2_f64_v0_34::simulate(plan, run, sink),
+            (Release::V0_34, Two, _) => backend::simulate::<world::R2F64V034>(plan, run, sink),
             #[cfg(feature = "rapier-versions")]
-            (Release::V0_34, Three, _) => backend::r3_f64_v0_34::simulate(plan, run, sink),
+            (Release::V0_34, Three, _) => backend::simulate::<world::R3F64V034>(plan, run, sink),
             #[cfg(feature = "rapier-versions")]
-            (Release::V0_35, Two, _) => backend::r2_f64_v0_35::simulate(plan, run, sink),
+            (Release::V0_35, Two, _) => backend::simulate::<world::R2F64V035>(plan, run, sink),
             #[cfg(feature = "rapier-versions")]
-            (Release::V0_35, Three, _) => backend::r3_f64_v0_35::simulate(plan, run, sink),
+            (Release::V0_35, Three, _) => backend::simulate::<world::R3F64V035>(plan, run, sink),
         }
     }
 }

@@ -14,6 +14,7 @@ pub mod on_request;
 pub mod rows;
 pub mod space;
 pub mod start;
+pub mod state;
 pub mod velocity;
 
 use super::{Coarsest, Engine, EngineError, RunInfo, RunOutput, RunSettings, Stepping};

@@ -1,0 +1,203 @@
+//! The state an increment works on: the configuration (displacements from t = 0 and the
+//! bodies' orientations), rates (velocities or accelerations), the forces of one pass, how
+//! contact is evaluated, and the counters of what a run evaluated.
+
+use super::space::{BodyInertia, Lin, Space};
+
+/// Configuration, as displacements from t = 0 (so round-off is relative to the motion, not to
+/// the coordinates: the penalty multiplies position errors by k_p).
+#[derive(Debug, Clone)]
+pub struct Config<S: Space> {
+    /// Particle displacements.
+    pub u: Vec<S::V>,
+    /// Reference node displacements.
+    pub bu: Vec<S::V>,
+    /// Body orientations (finite rotation).
+    pub br: Vec<S::R>,
+    /// The rounding carry of each orientation's components (compensated summation of the
+    /// increments' turns).
+    pub br_carry: Vec<S::Carry>,
+    /// Body rotation vectors (small rotation).
+    pub bth: Vec<S::W>,
+    /// Mass properties of each body at this configuration (centre in world axes, inertia in
+    /// the body's axes with the orientation), kept in step with `br` by every method that
+    /// rotates a body (finite rotation; the unrotated ones under small rotation).
+    pub inertia: Vec<BodyInertia<S>>,
+}
+
+/// Velocities or accelerations of every particle and body.
+#[derive(Debug, Clone)]
+pub struct Rates<S: Space> {
+    /// Particles.
+    pub p: Vec<S::V>,
+    /// Body reference nodes.
+    pub b: Vec<S::V>,
+    /// Body angular.
+    pub w: Vec<S::W>,
+}
+
+impl<S: Space> Rates<S> {
+    /// All zero.
+    pub fn zeros(particles: usize, bodies: usize) -> Self {
+        Self {
+            p: vec![S::V::zero(); particles],
+            b: vec![S::V::zero(); bodies],
+            w: vec![S::W::zero(); bodies],
+        }
+    }
+    /// `self + s · other`.
+    pub fn plus(&self, s: f64, other: &Self) -> Self {
+        let mut out = self.clone();
+        out.set_plus(self, s, other);
+        out
+    }
+    /// In place: `self = a + s · b`.
+    pub fn set_plus(&mut self, a: &Self, s: f64, b: &Self) {
+        for (o, (x, y)) in self.p.iter_mut().zip(a.p.iter().zip(&b.p)) {
+            *o = *x + *y * s;
+        }
+        self.set_plus_bodies(a, s, b);
+    }
+    /// [`Rates::set_plus`] for the bodies alone.
+    #[inline(always)]
+    pub fn set_plus_bodies(&mut self, a: &Self, s: f64, b: &Self) {
+        for (o, (x, y)) in self.b.iter_mut().zip(a.b.iter().zip(&b.b)) {
+            *o = *x + *y * s;
+        }
+        for (o, (x, y)) in self.w.iter_mut().zip(a.w.iter().zip(&b.w)) {
+            *o = *x + *y * s;
+        }
+    }
+    /// Whether every component is finite.
+    pub fn is_finite(&self) -> bool {
+        self.p.iter().chain(&self.b).all(|a| a.dot(a).is_finite())
+            && self.w.iter().all(|a| a.dot(a).is_finite())
+    }
+    /// Largest Euclidean norm of any particle's, body's or angular difference, and the largest
+    /// such norm of `self` (square roots taken once, of the maxima).
+    pub fn max_difference(&self, other: &Self) -> (f64, f64) {
+        let mut d: f64 = 0.0;
+        let mut m: f64 = 0.0;
+        for (a, b) in self
+            .p
+            .iter()
+            .zip(&other.p)
+            .chain(self.b.iter().zip(&other.b))
+        {
+            let e = *a - *b;
+            d = d.max(e.dot(&e));
+            m = m.max(a.dot(a));
+        }
+        for (a, b) in self.w.iter().zip(&other.w) {
+            let e = *a - *b;
+            d = d.max(e.dot(&e));
+            m = m.max(a.dot(a));
+        }
+        (d.sqrt(), m.sqrt())
+    }
+}
+
+/// Forces on particles and wrenches on bodies (about their reference nodes), plus what the
+/// same pass measured.
+#[derive(Debug, Clone)]
+pub struct Forces<S: Space> {
+    /// Particle forces.
+    pub p: Vec<S::V>,
+    /// Body forces.
+    pub b: Vec<S::V>,
+    /// Body moments about the reference node.
+    pub m: Vec<S::W>,
+    /// Elastic energy of springs and penalty.
+    pub elastic: f64,
+    /// Dissipation power of dashpots.
+    pub dissipation: f64,
+    /// Normal force per contact pair (compressive positive).
+    pub contact: Vec<f64>,
+    /// Signed gap per contact pair where the pass evaluated contact (negative: penetration).
+    pub gap: Vec<f64>,
+    /// Whether `p` is all zero already: the pass that consumed the particle forces
+    /// ([`Model::step_particles`]) cleared them as it read them, so [`Forces::clear`] need not
+    /// stream through them again.
+    pub(super) particles_cleared: bool,
+}
+
+impl<S: Space> Forces<S> {
+    pub(super) fn zeros(particles: usize, bodies: usize, contacts: usize) -> Self {
+        Self {
+            p: vec![S::V::zero(); particles],
+            b: vec![S::V::zero(); bodies],
+            m: vec![S::W::zero(); bodies],
+            elastic: 0.0,
+            dissipation: 0.0,
+            contact: vec![0.0; contacts],
+            gap: vec![0.0; contacts],
+            particles_cleared: false,
+        }
+    }
+    /// Copy another force set into this one (same shape).
+    pub fn copy_from(&mut self, other: &Self) {
+        self.p.copy_from_slice(&other.p);
+        self.b.copy_from_slice(&other.b);
+        self.m.copy_from_slice(&other.m);
+        self.contact.copy_from_slice(&other.contact);
+        self.gap.copy_from_slice(&other.gap);
+        self.elastic = other.elastic;
+        self.dissipation = other.dissipation;
+        self.particles_cleared = other.particles_cleared;
+    }
+    /// Reset to zero, keeping the allocation.
+    pub fn clear(&mut self) {
+        if !self.particles_cleared {
+            fill_zero(&mut self.p, S::V::zero());
+        }
+        self.particles_cleared = false;
+        fill_zero(&mut self.b, S::V::zero());
+        fill_zero(&mut self.m, S::W::zero());
+        fill_zero(&mut self.contact, 0.0);
+        self.elastic = 0.0;
+        self.dissipation = 0.0;
+    }
+}
+
+/// Set every element of `xs` to `zero`, through an opaque copy of it, so that the compiler
+/// does not turn the loop into a `memset` call. A `memset` that clears a short slice with one
+/// masked AVX-512 store does not forward it to the loads that follow: the force pass that adds
+/// into the cleared forces would wait for it to retire.
+#[inline(always)]
+pub fn fill_zero<T: Copy>(xs: &mut [T], zero: T) {
+    let zero = std::hint::black_box(zero);
+    for x in xs {
+        *x = zero;
+    }
+}
+
+/// How contact is evaluated.
+#[derive(Debug, Clone, Copy)]
+pub enum ContactMode<'a> {
+    /// Penalty, compression only (the simulation).
+    Unilateral,
+    /// Penalty acting in tension too (the linearisation about a closed contact).
+    Bilateral,
+    /// No contact force (the structure alone).
+    Off,
+    /// Given normal forces instead of the penalty (the consistent start).
+    Given(&'a [f64]),
+}
+
+/// Work counters: they prove what a run did and did not evaluate.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Counters {
+    /// Position-dependent force passes.
+    pub force_evaluations: u64,
+    /// Contact pair evaluations.
+    pub contact_evaluations: u64,
+    /// Dashpot passes.
+    pub damping_evaluations: u64,
+    /// Body orientation updates.
+    pub rotation_updates: u64,
+    /// Rigid-body acceleration solves (one per load solved against a body's factorisation).
+    pub body_solves: u64,
+    /// Increments that added a force balancing an impact's work ([`super::impacts`]).
+    pub impact_balances: u64,
+}
+

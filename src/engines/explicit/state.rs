@@ -200,4 +200,3 @@ pub struct Counters {
     /// Increments that added a force balancing an impact's work ([`super::impacts`]).
     pub impact_balances: u64,
 }
-

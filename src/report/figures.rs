@@ -109,6 +109,66 @@ fn within(points: &[(f64, f64)], lo: f64, hi: f64) -> Vec<Vec<(f64, f64)>> {
     runs
 }
 
+/// How far, in pixels, a dropped point of a drawn line may lie from the line drawn instead: a
+/// quarter pixel, below what the SVG's whole-pixel coordinates resolve.
+pub const DRAWN_TOLERANCE: f64 = 0.25;
+
+/// The points of a polyline that show at the figure's resolution (Ramer–Douglas–Peucker): a
+/// point is dropped where the line between the points kept on either side passes within
+/// `tolerance` pixels of it. `scale` turns a data difference into pixels along each axis. A
+/// history of thousands of rows draws as the few hundred points that bend it; a line with a
+/// non-finite point is kept whole.
+pub fn simplified(points: &[(f64, f64)], scale: (f64, f64), tolerance: f64) -> Vec<(f64, f64)> {
+    let n = points.len();
+    let finite = points.iter().all(|p| p.0.is_finite() && p.1.is_finite());
+    if n < 3 || !finite || !(scale.0.is_finite() && scale.1.is_finite()) {
+        return points.to_vec();
+    }
+    let pixel = |i: usize| (points[i].0 * scale.0, points[i].1 * scale.1);
+    let mut keep = vec![false; n];
+    (keep[0], keep[n - 1]) = (true, true);
+    let mut spans = vec![(0, n - 1)];
+    while let Some((a, b)) = spans.pop() {
+        let ((ax, ay), (bx, by)) = (pixel(a), pixel(b));
+        let (dx, dy) = (bx - ax, by - ay);
+        let length = dx.hypot(dy);
+        let distance = |i: usize| {
+            let (x, y) = pixel(i);
+            if length > 0.0 {
+                ((x - ax) * dy - (y - ay) * dx).abs() / length
+            } else {
+                (x - ax).hypot(y - ay)
+            }
+        };
+        let farthest = (a + 1..b)
+            .map(|i| (distance(i), i))
+            .max_by(|p, q| p.0.total_cmp(&q.0));
+        if let Some((_, i)) = farthest.filter(|(d, _)| *d > tolerance) {
+            keep[i] = true;
+            spans.push((a, i));
+            spans.push((i, b));
+        }
+    }
+    points
+        .iter()
+        .zip(keep)
+        .filter_map(|(p, k)| k.then_some(*p))
+        .collect()
+}
+
+#[cfg(feature = "figures")]
+/// The pixels per data unit of a chart's x and y axes (`x` and `y` the spans drawn).
+fn pixels_per_unit<DB: DrawingBackend, X: Ranged, Y: Ranged>(
+    chart: &ChartContext<DB, Cartesian2d<X, Y>>,
+    (x, y): (f64, f64),
+) -> (f64, f64) {
+    let (xs, ys) = chart.plotting_area().get_pixel_range();
+    (
+        f64::from(xs.end - xs.start) / x,
+        f64::from(ys.end - ys.start) / y,
+    )
+}
+
 #[cfg(feature = "figures")]
 /// Render a case's figure: one panel per column in `columns` (name and unit) whose values are
 /// not all zero, every available engine's history as a line (the exact solutions thick and
@@ -245,7 +305,7 @@ fn panel_lines<'a, DB: DrawingBackend>(
         .y_desc(format!("{column} [{unit}]"))
         .x_label_formatter(&|x| tick(*x, x_span))
         .y_label_formatter(&|y| tick(*y, y_span))
-        .light_line_style(WHITE)
+        .max_light_lines(0)
         .draw()
         .ok()?;
     let mut leaves = Vec::new();
@@ -255,8 +315,10 @@ fn panel_lines<'a, DB: DrawingBackend>(
         .count()
         .max(1);
     let mut k = 0;
+    let scale = pixels_per_unit(&chart, (x_span, y_span));
     for (engine, colour, points) in series {
         for run in within(points, lo, hi) {
+            let run = simplified(&run, scale, DRAWN_TOLERANCE);
             chart
                 .draw_series(LineSeries::new(run, colour.stroke_width(stroke(engine))))
                 .ok()?;
@@ -363,12 +425,20 @@ fn log_panel<DB: DrawingBackend>(
         .y_desc(y_desc)
         .x_label_formatter(&|x| tick(*x, x_span))
         .y_label_formatter(&|y| tick(*y, 0.0))
-        .light_line_style(WHITE)
+        .max_light_lines(0)
         .draw()
         .ok()?;
+    // The log axis is linear in log10: lines are simplified there and drawn back.
+    let decades = hi.log10() - lo.log10();
+    let scale = pixels_per_unit(&chart, (x_span, decades));
     for (row, (label, colour, points)) in series.iter().enumerate() {
         let clipped = points.iter().any(|(_, y)| *y > hi);
-        let drawn = points.iter().map(|(t, y)| (*t, y.clamp(lo, hi)));
+        let logged: Vec<(f64, f64)> = points
+            .iter()
+            .map(|(t, y)| (*t, y.clamp(lo, hi).log10()))
+            .collect();
+        let drawn = simplified(&logged, scale, DRAWN_TOLERANCE);
+        let drawn = drawn.into_iter().map(|(t, e)| (t, 10f64.powf(e)));
         chart
             .draw_series(LineSeries::new(drawn, colour.stroke_width(1)))
             .ok()?;
@@ -636,6 +706,55 @@ fn padded(lo: f64, hi: f64) -> Option<(f64, f64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The distance in pixels from `p` to the polyline `line` (segment by segment).
+    fn distance_to(line: &[(f64, f64)], p: (f64, f64), scale: (f64, f64)) -> f64 {
+        let px = |q: (f64, f64)| (q.0 * scale.0, q.1 * scale.1);
+        let (x, y) = px(p);
+        line.windows(2)
+            .map(|w| {
+                let ((ax, ay), (bx, by)) = (px(w[0]), px(w[1]));
+                let (dx, dy) = (bx - ax, by - ay);
+                let s = (((x - ax) * dx + (y - ay) * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
+                (x - ax - s * dx).hypot(y - ay - s * dy)
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// A straight line keeps its ends alone; a damped oscillation of 2001 rows on an 800 × 200
+    /// pixel panel keeps every row within the tolerance of the line drawn, with far fewer
+    /// points; a line with a NaN is kept whole.
+    #[test]
+    fn lines_are_simplified_within_a_quarter_pixel() {
+        let straight: Vec<(f64, f64)> = (0..1000).map(|i| (i as f64, 2.0 * i as f64)).collect();
+        assert_eq!(simplified(&straight, (1.0, 1.0), 0.25).len(), 2);
+        let rows: Vec<(f64, f64)> = (0..=2000)
+            .map(|i| {
+                let t = i as f64 * 1e-3;
+                (t, (-0.5 * t).exp() * (20.0 * t).cos())
+            })
+            .collect();
+        let scale = (800.0 / 2.0, 200.0 / 2.0);
+        let drawn = simplified(&rows, scale, DRAWN_TOLERANCE);
+        assert!(
+            drawn.len() < rows.len() / 4,
+            "{} of {}",
+            drawn.len(),
+            rows.len()
+        );
+        assert_eq!((drawn[0], drawn[drawn.len() - 1]), (rows[0], rows[2000]));
+        let worst = rows
+            .iter()
+            .map(|p| distance_to(&drawn, *p, scale))
+            .fold(0.0, f64::max);
+        assert!(worst <= DRAWN_TOLERANCE, "{worst}");
+        let mut broken = rows.clone();
+        broken[7].1 = f64::NAN;
+        assert_eq!(
+            simplified(&broken, scale, DRAWN_TOLERANCE).len(),
+            rows.len()
+        );
+    }
 
     #[test]
     fn columns_have_their_units() {

@@ -78,7 +78,7 @@ pub fn render(points: &[(String, f64, f64)]) -> Option<String> {
             .y_desc("rebound height / drop height")
             .x_label_formatter(&|x| tick(*x, 1.0))
             .y_label_formatter(&|y| tick(*y, 1.0))
-            .light_line_style(WHITE)
+            .max_light_lines(0)
             .draw()
             .ok()?;
         let curve = (0..=100).map(|i| {

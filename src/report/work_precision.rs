@@ -161,7 +161,7 @@ pub fn render(sweep: &CaseSweep, tolerances: &BTreeMap<String, f64>) -> Option<S
             .y_desc("CPU seconds per simulated second")
             .x_label_formatter(&|x| tick(*x, 0.0))
             .y_label_formatter(&|y| tick(*y, 0.0))
-            .light_line_style(WHITE)
+            .max_light_lines(0)
             .draw()
             .ok()?;
         // Tolerances.

@@ -84,10 +84,13 @@ struct Kinematics<'a> {
     origin: Vector3<f64>,
     /// The free coordinates' indices among (u_x, u_y, θ).
     free: Vec<usize>,
-    /// The contact node N, its free direction e, the face's normal n and N's Jacobian.
+    /// The contact node N.
     node: NodeId,
+    /// N's one free direction e.
     e: Vector2<f64>,
+    /// The face's normal n.
     n: Vector2<f64>,
+    /// N's Jacobian J_N: u_N = J_N q.
     j_node: Matrix2x3<f64>,
 }
 

@@ -168,7 +168,8 @@ fn largest_change(a: &History, b: &History) -> f64 {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum ContactEvent {
     /// The gap reached zero: an impact with this approach speed, after which the contact
-    /// closed (plastic, or an approach below [`solve::RESTING_SPEED`]) or rebounded.
+    /// closed (plastic, or an approach below a millionth of the fastest met so far) or
+    /// rebounded.
     Impact {
         /// Pair index.
         contact: usize,

@@ -150,31 +150,40 @@ struct Solver<'a> {
     times: Vec<f64>,
     /// Two times closer than this are the same (a row on a step's boundary).
     tol: f64,
-    /// The longest leg: a fraction of the output interval ([`EVENT_CHECKS_PER_ROW`]).
+    /// A leg's length: a fraction of the output interval ([`EVENT_CHECKS_PER_ROW`]); the last
+    /// leg to a target within 1.5 of it goes there in one.
     check: f64,
     /// The scene's largest coordinate (the static steps' length scale).
     length: f64,
-    /// The placement and the full velocity at the start of the next step.
+    /// The placement at the start of the next step.
     at: Placement,
+    /// The full velocity there.
     u: DVector<f64>,
     /// Which contact pairs are closed.
     active: Vec<bool>,
+    /// The contact events so far, in time order.
     events: Vec<ContactEvent>,
     /// The fastest approach met so far (resting impacts are judged against it).
     fastest: f64,
-    first_dynamic: bool,
     /// The start of the next step.
     t0: f64,
     /// The next output row.
     next: usize,
+    /// Dynamic steps begun (the initial velocity is taken at the first).
     dynamic_index: usize,
+    /// Dynamic steps in the scene (the last reports every output time left).
     dynamic_count: usize,
+    /// The rows written.
     rows: Vec<Vec<f64>>,
+    /// The first pair's contact force at each row.
     contact_history: Vec<f64>,
     /// Each rotation column's last value (rotations are unwrapped row to row).
     previous_rotation: Vec<f64>,
+    /// The largest departure of a closed pair's gap from zero at a row.
     drift: f64,
+    /// Accepted integration steps.
     steps: u64,
+    /// Evaluations of the equations of motion.
     evaluations: u64,
 }
 
@@ -198,7 +207,6 @@ impl<'a> Solver<'a> {
             active: mechanism.initially_closed(),
             events: Vec::new(),
             fastest: 0.0,
-            first_dynamic: true,
             t0: 0.0,
             next: 0,
             dynamic_index: 0,
@@ -232,7 +240,7 @@ impl<'a> Solver<'a> {
             }
             StepKind::Dynamic { duration } => duration,
         };
-        if self.first_dynamic {
+        if self.dynamic_index == 0 {
             self.first_motion(&basis);
         }
         let w = m
@@ -273,7 +281,6 @@ impl<'a> Solver<'a> {
     fn first_motion(&mut self, basis: &DMatrix<f64>) {
         let m = self.mechanism;
         self.u = m.initial_velocity(self.scene);
-        self.first_dynamic = false;
         let w = basis.transpose() * &self.u;
         let full = basis * &w;
         for (k, a) in self.active.iter_mut().enumerate() {
@@ -304,8 +311,8 @@ impl<'a> Solver<'a> {
         }
     }
 
-    /// Integrate from `(t, y)` to `target` in legs of at most [`Self::check`], each event on
-    /// the way located and resolved.
+    /// Integrate from `(t, y)` to `target` in legs of [`Self::check`] (the last within 1.5 of
+    /// it in one), each event on the way located and resolved.
     fn advance(
         &mut self,
         leg: &mut Leg,

@@ -34,7 +34,7 @@ pub struct Run {
     /// experiment (`None`: rapier's own).
     pub default_softness: Option<f64>,
     /// Step by a length of 0 before the contact pairs are registered, as on 0.34, where it is
-    /// needed (a control experiment on the other releases; see [`release_helpers`]).
+    /// needed (a control experiment on the other releases; see [`World::ZERO_STEP_ALWAYS`]).
     pub zero_step_first: bool,
     /// What the reported contact impulses are multiplied by (1, or a control experiment's
     /// reading of them).

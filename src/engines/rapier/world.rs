@@ -2,9 +2,10 @@
 //! `rapier3d` and `rapier3d-f64` 0.36, and with the `rapier-versions` feature `rapier2d-f64`
 //! and `rapier3d-f64` 0.34 and 0.35. The crates share their API, so one implementation is
 //! written once and instantiated for each (`world!`); what differs between dimensions is in
-//! `dimension_helpers!`, between releases in `release_helpers!`. Each converts the plan's f64
-//! to the crate's `Real` and back, and nothing else: the simulation is
-//! [`simulate`](super::backend::simulate), written once.
+//! `dimension_helpers!`, between releases in `release_helpers!`. Each implementation converts
+//! the plan's f64 to the crate's `Real` and back and builds the crate's own objects (bodies,
+//! colliders, joints, integration parameters, the release's contact detection); what is done
+//! with them, in which order, is [`simulate`](super::backend::simulate), written once.
 
 macro_rules! dimension_helpers {
     (2) => {
@@ -389,9 +390,9 @@ macro_rules! world {
                 }
 
                 fn velocities(&self) -> Vec<(Vector3<f64>, Vector3<f64>)> {
-                    let bodies = self.world.bodies.iter();
+                    let bodies = self.bodies.iter().map(|h| &self.world.bodies[*h]);
                     bodies
-                        .map(|(_, b)| (unvector(b.linvel()), unangular(b.angvel())))
+                        .map(|b| (unvector(b.linvel()), unangular(b.angvel())))
                         .collect()
                 }
 

@@ -3,6 +3,7 @@
 
 use super::body_solve::BodyOperator;
 use super::model::*;
+use super::runs::{ParticleKernel, free_axis, runs};
 use super::space::{Lin, Space};
 use crate::scene::{BoundaryCondition, Dof, Step};
 
@@ -18,6 +19,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             held_sets: Vec::new(),
             motions: Vec::new(),
             particle_motion: Vec::new(),
+            particle_runs: Vec::new(),
             body_held_t: vec![Vec::new(); nb],
             body_held_r: vec![Vec::new(); nb],
             body_free_r: vec![Vec::new(); nb],
@@ -73,6 +75,11 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             })
             .collect();
         c.motions = distinct.iter().map(|h| Motion::of(h, S::DIM)).collect();
+        let kernels: Vec<ParticleKernel> = distinct
+            .iter()
+            .map(|h| free_axis(h, S::DIM).map_or(ParticleKernel::General, ParticleKernel::Along))
+            .collect();
+        c.particle_runs = runs(&c.particle_motion, |m| kernels[*m as usize]);
         c.held_sets = distinct.into_iter().map(<[S::V]>::to_vec).collect();
         for b in 0..nb {
             c.body_free_r[b] = S::free_rotations(&c.body_held_r[b]);
@@ -224,7 +231,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 (s.direction, s.length0)
             }
         };
-        for s in &self.line_springs {
+        for s in &self.line_springs.all {
             let [a, b] = s.ends();
             add(&mut stiffness, [&a, &b], &s.direction, s.c, 0.0);
         }

@@ -31,8 +31,8 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         out.clear();
         counters.force_evaluations += 1;
         let elastic = self.grounded_spring_forces::<ENERGY>(cfg, out);
-        let (line, u) = (&self.line_springs, &cfg.u);
-        let mut elastic = line_spring_forces::<S, ENERGY>(line, u, &mut out.p, elastic);
+        let line = &self.line_springs;
+        let mut elastic = line.add_forces::<ENERGY>(&cfg.u, &mut out.p, elastic);
         for s in &self.springs {
             let stretch = self.displacement(cfg, &s.b) - self.displacement(cfg, &s.a);
             let (e, dir) = if s.axial && FINITE {
@@ -268,38 +268,4 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             })
             .sum()
     }
-}
-
-/// Add the forces of line springs at particle displacements `u` to the particle forces `p`;
-/// `elastic` with their elastic energy added term by term (unchanged unless `ENERGY`). The
-/// arithmetic of the general two-point pass, on the compact layout: ends as indices, the
-/// ground a displacement of zero.
-#[inline(always)]
-fn line_spring_forces<S: Space, const ENERGY: bool>(
-    springs: &[LineSpring<S>],
-    u: &[S::V],
-    p: &mut [S::V],
-    mut elastic: f64,
-) -> f64 {
-    let at = |i: u32| {
-        if i == GROUND {
-            S::V::zero()
-        } else {
-            u[i as usize]
-        }
-    };
-    for s in springs {
-        let e = s.direction.dot(&(at(s.b) - at(s.a)));
-        if ENERGY {
-            elastic += 0.5 * s.c * e * e;
-        }
-        let f = s.direction * (s.c * e);
-        if s.a != GROUND {
-            p[s.a as usize] += f;
-        }
-        if s.b != GROUND {
-            p[s.b as usize] += -f;
-        }
-    }
-    elastic
 }

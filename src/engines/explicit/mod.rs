@@ -12,6 +12,7 @@ pub mod model;
 pub mod motion;
 pub mod on_request;
 pub mod rows;
+pub mod runs;
 pub mod space;
 pub mod start;
 pub mod state;

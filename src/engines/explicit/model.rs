@@ -6,6 +6,7 @@
 //! small-rotation idealisation (`explicit_small`); it is resolved at compile time.
 
 use super::body_solve::{BodyOperator, BodySolve};
+use super::runs::{LineSprings, ParticleKernel, Run};
 use super::space::{BodyInertia, Lin, Space};
 pub use super::state::{Config, ContactMode, Counters, Forces, Rates, fill_zero};
 use crate::scene::{
@@ -175,6 +176,8 @@ pub struct Constraints<S: Space> {
     /// Each particle's projection, as an index into `motions` (4 bytes per particle streamed
     /// by the time loop instead of a projection's 40 or 56).
     pub particle_motion: Vec<u32>,
+    /// The particles in runs by the kernel that steps them ([`super::runs`]).
+    pub particle_runs: Vec<Run<ParticleKernel>>,
     /// Held translation axes per body.
     pub body_held_t: Vec<Vec<S::V>>,
     /// Held rotation axes per body.
@@ -318,7 +321,7 @@ pub struct Model<S: Space, const FINITE: bool> {
     pub(super) grounded_springs: Vec<Grounded<S>>,
     pub(super) grounded_dashpots: Vec<Grounded<S>>,
     /// Springs of fixed direction between particles or a particle and the ground.
-    pub(super) line_springs: Vec<LineSpring<S>>,
+    pub(super) line_springs: LineSprings<S>,
     /// Every other two-point spring (axial, or with an end on a body).
     pub(super) springs: Vec<TwoPoint<S>>,
     pub(super) dashpots: Vec<TwoPoint<S>>,
@@ -584,7 +587,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             bodies,
             grounded_springs,
             grounded_dashpots,
-            line_springs,
+            line_springs: LineSprings::new(line_springs),
             springs,
             dashpots,
             contacts,

@@ -4,6 +4,7 @@
 
 use super::body_solve::project;
 use super::model::*;
+use super::runs::{ParticleKernel, on_axis, step_along};
 use super::space::{BodyInertia, Lin, Space, compensated_add};
 
 impl<S: Space, const FINITE: bool> Model<S, FINITE> {
@@ -139,17 +140,38 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         v_half: &mut Rates<S>,
         acc: &mut Rates<S>,
     ) {
-        let motions = &held.motions;
-        let state = (cfg.u.iter_mut().zip(carry.p.iter_mut())).zip(v_half.p.iter_mut());
-        let data = (forces.p.iter_mut().zip(&self.inverse_masses)).zip(&held.particle_motion);
-        for (i, (((x, c), v), ((f, inverse_mass), motion))) in state.zip(data).enumerate() {
-            let a = motions[*motion as usize].project(*f * *inverse_mass);
-            *f = S::V::zero();
-            if STORE_ACC {
-                acc.p[i] = a;
+        for run in &held.particle_runs {
+            let r = run.range.clone();
+            let state = (&mut cfg.u[r.clone()], &mut carry.p[r.clone()]);
+            let (v, f) = (&mut v_half.p[r.clone()], &mut forces.p[r.clone()]);
+            let inverse_masses = &self.inverse_masses[r.clone()];
+            let acc = &mut acc.p[r.clone()];
+            match run.kernel {
+                ParticleKernel::Along(k) => on_axis(k, |k| {
+                    let state = (state.0.iter_mut().zip(state.1.iter_mut())).zip(v.iter_mut());
+                    let data = f.iter_mut().zip(inverse_masses);
+                    for (i, (((x, c), v), (f, m))) in state.zip(data).enumerate() {
+                        let a = step_along(k, (x, c, v), f, *m, h);
+                        if STORE_ACC {
+                            acc[i] = a;
+                        }
+                    }
+                }),
+                ParticleKernel::General => {
+                    let motions = (&held.motions, &held.particle_motion[r]);
+                    let state = (state.0.iter_mut().zip(state.1.iter_mut())).zip(v.iter_mut());
+                    let data = (f.iter_mut().zip(inverse_masses)).zip(motions.1);
+                    for (i, (((x, c), v), ((f, m), motion))) in state.zip(data).enumerate() {
+                        let a = motions.0[*motion as usize].project(*f * *m);
+                        *f = S::V::zero();
+                        if STORE_ACC {
+                            acc[i] = a;
+                        }
+                        *v += a * h;
+                        compensated_add(x, c, *v * h);
+                    }
+                }
             }
-            *v += a * h;
-            compensated_add(x, c, *v * h);
         }
         forces.particles_cleared = true;
     }

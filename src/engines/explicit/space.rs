@@ -25,6 +25,10 @@ pub trait Lin:
     fn zero() -> Self;
     /// Inner product.
     fn dot(&self, other: &Self) -> f64;
+    /// Component `k` (`k` below the dimension).
+    fn component(&self, k: usize) -> f64;
+    /// Component `k`, to write (`k` below the dimension).
+    fn component_mut(&mut self, k: usize) -> &mut f64;
 }
 
 impl Lin for f64 {
@@ -33,6 +37,12 @@ impl Lin for f64 {
     }
     fn dot(&self, other: &Self) -> f64 {
         self * other
+    }
+    fn component(&self, _: usize) -> f64 {
+        *self
+    }
+    fn component_mut(&mut self, _: usize) -> &mut f64 {
+        self
     }
 }
 
@@ -44,6 +54,14 @@ macro_rules! lin_vector {
             }
             fn dot(&self, other: &Self) -> f64 {
                 nalgebra::Matrix::dot(self, other)
+            }
+            #[inline(always)]
+            fn component(&self, k: usize) -> f64 {
+                self[k]
+            }
+            #[inline(always)]
+            fn component_mut(&mut self, k: usize) -> &mut f64 {
+                &mut self[k]
             }
         }
     };

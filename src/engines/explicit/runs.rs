@@ -1,0 +1,248 @@
+//! Runs: consecutive line springs, and consecutive particles, that one kernel steps.
+//!
+//! A line spring whose direction is a coordinate axis stretches by that component of its ends'
+//! displacements alone and pushes along it alone; a particle held along every coordinate axis
+//! but one moves along that one alone. Their kernels read and write that one component of each
+//! vector, where the general ones form dot products and projections whose other terms are exact
+//! zeros: the same arithmetic on the component that moves, bit for bit (a product with an exact
+//! 1 or 0 changes nothing), with half the instructions in 2D and a third in 3D. The runs keep
+//! the scene's order, so every force is summed in the order the general pass sums it.
+
+use super::model::{GROUND, LineSpring};
+use super::space::{Lin, Space, compensated_add};
+use std::ops::Range;
+
+/// Consecutive items that one kernel takes.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Run<K> {
+    /// The items' indices.
+    pub range: Range<usize>,
+    /// Their kernel.
+    pub kernel: K,
+}
+
+/// The runs of `items` under `kernel`, in order: each as long as the kernel stays the same.
+pub fn runs<T, K: PartialEq>(items: &[T], kernel: impl Fn(&T) -> K) -> Vec<Run<K>> {
+    let mut out: Vec<Run<K>> = Vec::new();
+    for (i, item) in items.iter().enumerate() {
+        let k = kernel(item);
+        match out.last_mut() {
+            Some(run) if run.kernel == k => run.range.end = i + 1,
+            _ => out.push(Run {
+                range: i..i + 1,
+                kernel: k,
+            }),
+        }
+    }
+    out
+}
+
+/// The coordinate axis `d` is, if it is exactly one (components 1 and 0).
+pub fn axis_of<V: Lin>(d: &V, dim: usize) -> Option<usize> {
+    (0..dim).find(|&k| (0..dim).all(|j| d.component(j) == if j == k { 1.0 } else { 0.0 }))
+}
+
+/// The one coordinate axis a particle holding `held` moves along, if it holds exactly every
+/// other axis.
+pub fn free_axis<V: Lin>(held: &[V], dim: usize) -> Option<usize> {
+    if held.len() + 1 != dim {
+        return None;
+    }
+    let axes: Vec<usize> = held
+        .iter()
+        .map(|d| axis_of(d, dim))
+        .collect::<Option<_>>()?;
+    let free: Vec<usize> = (0..dim).filter(|k| !axes.contains(k)).collect();
+    match free[..] {
+        [k] => Some(k),
+        _ => None,
+    }
+}
+
+/// `body(k)` with `k` a constant in each arm, so that an inlined kernel indexes one component
+/// without a runtime index.
+#[inline(always)]
+pub fn on_axis<R>(k: usize, mut body: impl FnMut(usize) -> R) -> R {
+    match k {
+        0 => body(0),
+        1 => body(1),
+        _ => body(2),
+    }
+}
+
+/// How a run of line springs is taken.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LineKernel {
+    /// Along coordinate axis `k`, both ends particles.
+    Axis(usize),
+    /// Along coordinate axis `k`, an end on the ground.
+    AxisGrounded(usize),
+    /// Any other direction.
+    General,
+}
+
+/// The line springs, in the scene's order, and their runs.
+#[derive(Debug, Clone)]
+pub(super) struct LineSprings<S: Space> {
+    /// Every line spring.
+    pub(super) all: Vec<LineSpring<S>>,
+    /// Their runs by kernel.
+    pub(super) runs: Vec<Run<LineKernel>>,
+}
+
+impl<S: Space> LineSprings<S> {
+    /// The springs and their runs.
+    pub(super) fn new(all: Vec<LineSpring<S>>) -> Self {
+        let runs = runs(&all, |s| match axis_of(&s.direction, S::DIM) {
+            Some(k) if s.a != GROUND && s.b != GROUND => LineKernel::Axis(k),
+            Some(k) => LineKernel::AxisGrounded(k),
+            None => LineKernel::General,
+        });
+        Self { all, runs }
+    }
+
+    /// Add the springs' forces at particle displacements `u` to the particle forces `p`;
+    /// `elastic` with their elastic energy added term by term (unchanged unless `ENERGY`).
+    #[inline(always)]
+    pub(super) fn add_forces<const ENERGY: bool>(
+        &self,
+        u: &[S::V],
+        p: &mut [S::V],
+        mut elastic: f64,
+    ) -> f64 {
+        for run in &self.runs {
+            let springs = &self.all[run.range.clone()];
+            elastic = match run.kernel {
+                LineKernel::Axis(k) => on_axis(k, |k| {
+                    along_axis::<S, ENERGY, false>(springs, k, u, p, elastic)
+                }),
+                LineKernel::AxisGrounded(k) => on_axis(k, |k| {
+                    along_axis::<S, ENERGY, true>(springs, k, u, p, elastic)
+                }),
+                LineKernel::General => general::<S, ENERGY>(springs, u, p, elastic),
+            };
+        }
+        elastic
+    }
+}
+
+/// The displacement of end `i` (zero on the ground, where `GROUNDED` says an end may be).
+#[inline(always)]
+fn end<V: Lin, const GROUNDED: bool>(u: &[V], i: u32) -> V {
+    if GROUNDED && i == GROUND {
+        V::zero()
+    } else {
+        u[i as usize]
+    }
+}
+
+/// Springs along axis `k`: the general pass's arithmetic on component `k`.
+#[inline(always)]
+fn along_axis<S: Space, const ENERGY: bool, const GROUNDED: bool>(
+    springs: &[LineSpring<S>],
+    k: usize,
+    u: &[S::V],
+    p: &mut [S::V],
+    mut elastic: f64,
+) -> f64 {
+    for s in springs {
+        let e = end::<_, GROUNDED>(u, s.b).component(k) - end::<_, GROUNDED>(u, s.a).component(k);
+        if ENERGY {
+            elastic += 0.5 * s.c * e * e;
+        }
+        let f = s.c * e;
+        if !GROUNDED || s.a != GROUND {
+            *p[s.a as usize].component_mut(k) += f;
+        }
+        if !GROUNDED || s.b != GROUND {
+            *p[s.b as usize].component_mut(k) += -f;
+        }
+    }
+    elastic
+}
+
+/// Springs of any direction.
+#[inline(always)]
+fn general<S: Space, const ENERGY: bool>(
+    springs: &[LineSpring<S>],
+    u: &[S::V],
+    p: &mut [S::V],
+    mut elastic: f64,
+) -> f64 {
+    for s in springs {
+        let e = s
+            .direction
+            .dot(&(end::<_, true>(u, s.b) - end::<_, true>(u, s.a)));
+        if ENERGY {
+            elastic += 0.5 * s.c * e * e;
+        }
+        let f = s.direction * (s.c * e);
+        if s.a != GROUND {
+            p[s.a as usize] += f;
+        }
+        if s.b != GROUND {
+            p[s.b as usize] += -f;
+        }
+    }
+    elastic
+}
+
+/// How a run of particles is stepped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ParticleKernel {
+    /// Free along coordinate axis `k` alone.
+    Along(usize),
+    /// Any other freedom (the projection of its motion).
+    General,
+}
+
+/// One particle's part of an increment along axis `k`, where every other axis is held: the
+/// acceleration f·(1/m) on `k` (the general projection leaves that component as it is and the
+/// others exactly 0), then v(n+½) and x(n+1) on `k`, the force cleared. Returns the
+/// acceleration.
+#[inline(always)]
+pub fn step_along<V: Lin>(
+    k: usize,
+    (x, carry, v): (&mut V, &mut V, &mut V),
+    f: &mut V,
+    inverse_mass: f64,
+    h: f64,
+) -> V {
+    let a = f.component(k) * inverse_mass;
+    *f = V::zero();
+    let vk = v.component_mut(k);
+    *vk += a * h;
+    let dx = *vk * h;
+    compensated_add(x.component_mut(k), carry.component_mut(k), dx);
+    let mut acceleration = V::zero();
+    *acceleration.component_mut(k) = a;
+    acceleration
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Vector2, Vector3};
+
+    #[test]
+    fn runs_follow_the_kernel_in_order() {
+        let r = runs(&[1, 1, 2, 2, 2, 1], |x| *x);
+        let ranges: Vec<_> = r.iter().map(|r| (r.range.clone(), r.kernel)).collect();
+        assert_eq!(ranges, vec![(0..2, 1), (2..5, 2), (5..6, 1)]);
+        assert!(runs(&[] as &[u8], |x| *x).is_empty());
+    }
+
+    #[test]
+    fn axes_are_exact_unit_vectors() {
+        assert_eq!(axis_of(&Vector2::new(1.0, 0.0), 2), Some(0));
+        assert_eq!(axis_of(&Vector3::new(0.0, -0.0, 1.0), 3), Some(2));
+        assert_eq!(axis_of(&Vector2::new(-1.0, 0.0), 2), None);
+        assert_eq!(axis_of(&Vector2::new(1.0, 1e-300), 2), None);
+        let (x, y, z) = (Vector3::x(), Vector3::y(), Vector3::z());
+        assert_eq!(free_axis(&[z, x], 3), Some(1));
+        assert_eq!(free_axis(&[x, x], 3), None);
+        assert_eq!(free_axis(&[z], 3), None);
+        assert_eq!(free_axis(&[Vector2::new(0.6, 0.8)], 2), None);
+        assert_eq!(free_axis(&[Vector2::y()], 2), Some(0));
+    }
+}

@@ -173,7 +173,7 @@ impl<S: Space> ParticleDashpots<S> {
         v_n.set_plus(v_half, 0.5 * h, acc);
         let k = self.list.len();
         // The centred velocity before the dashpots act, as `Rates::set_plus` forms it.
-        let centred = |p: usize| v_half.p[p] + acc.p[p] * (0.5 * h);
+        let centred = |p: usize| v_half.p.get(p) + acc.p.get(p) * (0.5 * h);
         // σ_j: the rates over |l_j| (the rates themselves on fixed unit lines).
         let mut sigma = [0.0; MAX_DASHPOTS];
         if let Some(inverse) = &self.steady {
@@ -203,8 +203,8 @@ impl<S: Space> ParticleDashpots<S> {
             power += dashpot.c * self.span_squares[j] * sigma[j] * sigma[j];
         }
         for &(j, p, _, g) in &self.ends {
-            acc.p[p] -= g * (self.list[j].c * sigma[j]);
-            v_n.p[p] = v_half.p[p] + acc.p[p] * (0.5 * h);
+            acc.p.sub(p, g * (self.list[j].c * sigma[j]));
+            v_n.p.set(p, v_half.p.get(p) + acc.p.get(p) * (0.5 * h));
         }
         power
     }

@@ -115,7 +115,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// Move a configuration along a generalised DOF by `delta`.
     pub fn perturb(&self, cfg: &mut Config<S>, target: &Target<S>, delta: f64) {
         match target {
-            Target::Particle(i, d) => cfg.u[*i] += *d * delta,
+            Target::Particle(i, d) => cfg.u.add(*i, *d * delta),
             Target::Translation(b, d) => cfg.bu[*b] += *d * delta,
             Target::Rotation(b, g) => {
                 if FINITE {
@@ -133,7 +133,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// The generalised force along a DOF.
     pub fn project(&self, forces: &Forces<S>, target: &Target<S>) -> f64 {
         match target {
-            Target::Particle(i, d) => d.dot(&forces.p[*i]),
+            Target::Particle(i, d) => d.dot(&forces.p.get(*i)),
             Target::Translation(b, d) => d.dot(&forces.b[*b]),
             Target::Rotation(b, g) => g.dot(&forces.m[*b]),
         }
@@ -142,7 +142,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// The rate of a generalised DOF.
     pub fn rate_along(&self, rates: &Rates<S>, target: &Target<S>) -> f64 {
         match target {
-            Target::Particle(i, d) => d.dot(&rates.p[*i]),
+            Target::Particle(i, d) => d.dot(&rates.p.get(*i)),
             Target::Translation(b, d) => d.dot(&rates.b[*b]),
             Target::Rotation(b, g) => g.dot(&rates.w[*b]),
         }
@@ -152,7 +152,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     pub fn unit_rate(&self, target: &Target<S>) -> Rates<S> {
         let mut r = self.zero_rates();
         match target {
-            Target::Particle(i, d) => r.p[*i] = *d,
+            Target::Particle(i, d) => r.p.set(*i, *d),
             Target::Translation(b, d) => r.b[*b] = *d,
             Target::Rotation(b, g) => r.w[*b] = *g,
         }
@@ -163,7 +163,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     pub fn mass_entry(&self, cfg: &Config<S>, k: &Target<S>, l: &Target<S>) -> f64 {
         let ul = self.unit_rate(l);
         match k {
-            Target::Particle(i, d) => self.particles[*i].mass * d.dot(&ul.p[*i]),
+            Target::Particle(i, d) => self.particles[*i].mass * d.dot(&ul.p.get(*i)),
             Target::Translation(b, d) => {
                 let (f, _) = self.body_momentum(cfg, *b, &ul.b[*b], &ul.w[*b]);
                 d.dot(&f)

@@ -32,7 +32,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         counters.force_evaluations += 1;
         let elastic = self.grounded_spring_forces::<ENERGY>(cfg, out);
         let line = &self.line_springs;
-        let mut elastic = line.add_forces::<ENERGY>(&cfg.u, &mut out.p, elastic);
+        let mut elastic = line.add_forces::<ENERGY>(&cfg.u, out, elastic);
         for s in &self.springs {
             let stretch = self.displacement(cfg, &s.b) - self.displacement(cfg, &s.a);
             let (e, dir) = if s.axial && FINITE {
@@ -114,7 +114,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     #[inline(always)]
     fn push_along(&self, cfg: &Config<S>, k: usize, n: S::V, f: f64, out: &mut Forces<S>) {
         let c = &self.contacts[k];
-        out.p[c.particle] += n * f;
+        out.add_particle(c.particle, n * f);
         out.b[c.body] -= n * f;
         out.m[c.body] -= S::moment(&self.contact_arm(cfg, k), &n) * f;
     }

@@ -329,7 +329,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         let (model, scene) = (self.model, self.scene);
         for iv in &scene.initial_velocities {
             match model.points[iv.node] {
-                Point::Particle(i) => self.velocities.v_n.p[i] = S::v(&iv.velocity),
+                Point::Particle(i) => self.velocities.v_n.p.set(i, S::v(&iv.velocity)),
                 Point::Body { body, .. } => {
                     self.velocities.v_n.b[body] = S::v(&iv.velocity);
                     self.velocities.v_n.w[body] = S::w(&iv.angular);

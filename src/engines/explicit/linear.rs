@@ -246,7 +246,7 @@ pub fn static_step<S: Space, const FINITE: bool>(
 ) -> Result<(), EngineError> {
     for (target, value) in &held.prescribed {
         let current = match target {
-            Target::Particle(i, d) => d.dot(&cfg.u[*i]),
+            Target::Particle(i, d) => d.dot(&cfg.u.get(*i)),
             Target::Translation(b, d) => d.dot(&cfg.bu[*b]),
             Target::Rotation(b, g) => model.rotation_about(cfg, *b, g),
         };

@@ -8,7 +8,7 @@
 use super::body_solve::{BodyOperator, BodySolve};
 use super::runs::{LineSprings, ParticleKernel, Run};
 use super::space::{BodyInertia, Lin, Space};
-pub use super::state::{Config, ContactMode, Counters, Forces, Rates, fill_zero};
+pub use super::state::{Config, ContactMode, Counters, Forces, Rates, Vectors, fill_zero};
 use crate::scene::{
     Attachment, Connection, ContactPair, ContactState, Dof, Element, Scene, StepKind, Surface,
     surface_distance,
@@ -613,7 +613,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// The configuration at t = 0.
     pub fn initial_config(&self) -> Config<S> {
         Config {
-            u: vec![S::V::zero(); self.particles.len()],
+            u: Vectors::zeros(self.particles.len()),
             bu: vec![S::V::zero(); self.bodies.len()],
             br: vec![S::identity(); self.bodies.len()],
             br_carry: vec![S::Carry::default(); self.bodies.len()],
@@ -647,7 +647,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     pub fn displacement(&self, cfg: &Config<S>, p: &Point<S>) -> S::V {
         match p {
             Point::Ground(_) => S::V::zero(),
-            Point::Particle(i) => cfg.u[*i],
+            Point::Particle(i) => cfg.u.get(*i),
             Point::Body { body, rho } => {
                 if FINITE {
                     cfg.bu[*body] + S::turned(&cfg.br[*body], rho)
@@ -663,7 +663,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     pub fn velocity(&self, cfg: &Config<S>, vel: &Rates<S>, p: &Point<S>) -> S::V {
         match p {
             Point::Ground(_) => S::V::zero(),
-            Point::Particle(i) => vel.p[*i],
+            Point::Particle(i) => vel.p.get(*i),
             Point::Body { body, rho } => {
                 vel.b[*body] + S::cross(&vel.w[*body], &self.arm(cfg, *body, rho))
             }
@@ -674,7 +674,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     pub(super) fn apply(&self, cfg: &Config<S>, p: &Point<S>, f: S::V, out: &mut Forces<S>) {
         match p {
             Point::Ground(_) => {}
-            Point::Particle(i) => out.p[*i] += f,
+            Point::Particle(i) => out.add_particle(*i, f),
             Point::Body { body, rho } => {
                 out.b[*body] += f;
                 out.m[*body] += S::moment(&self.arm(cfg, *body, rho), &f);
@@ -703,7 +703,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             let n = S::rotate(&cfg.br[c.body], &c.normal);
             (n.dot(&self.face_to_node(cfg, k)), n)
         } else {
-            let (th, relative) = (&cfg.bth[c.body], cfg.u[c.particle] - cfg.bu[c.body]);
+            let (th, relative) = (&cfg.bth[c.body], cfg.u.get(c.particle) - cfg.bu[c.body]);
             let d = c.gap0 + c.normal.dot(&relative) - c.normal.dot(&S::cross(th, &c.arm0));
             (d, c.normal)
         }
@@ -714,7 +714,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     #[inline]
     pub(super) fn local(&self, cfg: &Config<S>, k: usize, centre: &S::V) -> S::V {
         let c = &self.contacts[k];
-        let arm = c.arm0 + (cfg.u[c.particle] - cfg.bu[c.body]);
+        let arm = c.arm0 + (cfg.u.get(c.particle) - cfg.bu[c.body]);
         if FINITE {
             S::unrotate(&cfg.br[c.body], &arm) - *centre
         } else {
@@ -737,7 +737,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     pub(super) fn contact_arm(&self, cfg: &Config<S>, k: usize) -> S::V {
         let c = &self.contacts[k];
         if FINITE {
-            c.arm0 + (cfg.u[c.particle] - cfg.bu[c.body])
+            c.arm0 + (cfg.u.get(c.particle) - cfg.bu[c.body])
         } else {
             c.arm0
         }
@@ -750,7 +750,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     pub(super) fn normal_rate(&self, cfg: &Config<S>, vel: &Rates<S>, k: usize, n: &S::V) -> f64 {
         let c = &self.contacts[k];
         let (i, b) = (c.particle, c.body);
-        n.dot(&(vel.p[i] - vel.b[b] - S::cross(&vel.w[b], &self.contact_arm(cfg, k))))
+        n.dot(&(vel.p.get(i) - vel.b[b] - S::cross(&vel.w[b], &self.contact_arm(cfg, k))))
     }
 
     /// Whether the scene has contacts with solids (parry shapes).
@@ -814,7 +814,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     #[inline(always)]
     pub(super) fn face_to_node(&self, cfg: &Config<S>, k: usize) -> S::V {
         let c = &self.contacts[k];
-        let relative = cfg.u[c.particle] - cfg.bu[c.body];
+        let relative = cfg.u.get(c.particle) - cfg.bu[c.body];
         (c.arm0 - c.face) + relative - S::turned(&cfg.br[c.body], &c.face)
     }
 }

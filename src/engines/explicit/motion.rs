@@ -37,13 +37,10 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         out: &mut Rates<S>,
         counters: &mut Counters,
     ) {
-        for ((a, f), (inverse_mass, motion)) in out
-            .p
-            .iter_mut()
-            .zip(&forces.p)
-            .zip(self.inverse_masses.iter().zip(&held.particle_motion))
-        {
-            *a = held.motions[*motion as usize].project(*f * *inverse_mass);
+        let particles = self.inverse_masses.iter().zip(&held.particle_motion);
+        for (i, (inverse_mass, motion)) in particles.enumerate() {
+            let a = held.motions[*motion as usize].project(forces.p.get(i) * *inverse_mass);
+            out.p.set(i, a);
         }
         self.body_accelerations(cfg, forces, vel, held, out, counters);
     }
@@ -84,7 +81,8 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     pub fn kinetic_energy(&self, cfg: &Config<S>, vel: &Rates<S>) -> f64 {
         let mut e = 0.0;
         for (i, p) in self.particles.iter().enumerate() {
-            e += 0.5 * p.mass * vel.p[i].dot(&vel.p[i]);
+            let v = vel.p.get(i);
+            e += 0.5 * p.mass * v.dot(&v);
         }
         for b in 0..self.bodies.len() {
             let (f, m) = self.body_momentum(cfg, b, &vel.b[b], &vel.w[b]);
@@ -116,8 +114,11 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         held: &Constraints<S>,
         counters: &mut Counters,
     ) {
-        for ((x, c), v) in cfg.u.iter_mut().zip(carry.p.iter_mut()).zip(&vel.p) {
-            compensated_add(x, c, *v * h);
+        let components = cfg.u.components_mut().zip(carry.p.components_mut());
+        for ((x, c), v) in components.zip(vel.p.components()) {
+            for ((x, c), v) in x.iter_mut().zip(c.iter_mut()).zip(v) {
+                compensated_add(x, c, *v * h);
+            }
         }
         self.advance_bodies(cfg, carry, h, vel, held, counters);
     }
@@ -140,40 +141,62 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         v_half: &mut Rates<S>,
         acc: &mut Rates<S>,
     ) {
+        // The components every run cleared as it read them.
+        let mut cleared = [true; 3];
         for run in &held.particle_runs {
             let r = run.range.clone();
-            let state = (&mut cfg.u[r.clone()], &mut carry.p[r.clone()]);
-            let (v, f) = (&mut v_half.p[r.clone()], &mut forces.p[r.clone()]);
-            let inverse_masses = &self.inverse_masses[r.clone()];
-            let acc = &mut acc.p[r.clone()];
             match run.kernel {
-                ParticleKernel::Along(k) => on_axis(k, |k| {
-                    let state = (state.0.iter_mut().zip(state.1.iter_mut())).zip(v.iter_mut());
-                    let data = f.iter_mut().zip(inverse_masses);
-                    for (i, (((x, c), v), (f, m))) in state.zip(data).enumerate() {
-                        let a = step_along(k, (x, c, v), f, *m, h);
-                        if STORE_ACC {
-                            acc[i] = a;
+                ParticleKernel::Along(k) => {
+                    for (j, cleared) in cleared.iter_mut().enumerate() {
+                        *cleared &= j == k;
+                    }
+                    on_axis(k, |k| {
+                        let x = &mut cfg.u.component_mut(k)[r.clone()];
+                        let c = &mut carry.p.component_mut(k)[r.clone()];
+                        let v = &mut v_half.p.component_mut(k)[r.clone()];
+                        let f = &mut forces.p.component_mut(k)[r.clone()];
+                        let a = &mut acc.p.component_mut(k)[r.clone()];
+                        let state = (x.iter_mut().zip(c.iter_mut())).zip(v.iter_mut());
+                        let data = (f.iter_mut().zip(&self.inverse_masses[r.clone()])).zip(a);
+                        for (((x, c), v), ((f, m), a)) in state.zip(data) {
+                            let acceleration = step_along(x, c, v, f, *m, h);
+                            if STORE_ACC {
+                                *a = acceleration;
+                            }
+                        }
+                    });
+                    if STORE_ACC {
+                        // The held components' accelerations, exactly 0 as the projection
+                        // gives them.
+                        for (j, a) in acc.p.components_mut().enumerate() {
+                            if j != k {
+                                a[r.clone()].fill(0.0);
+                            }
                         }
                     }
-                }),
+                }
                 ParticleKernel::General => {
-                    let motions = (&held.motions, &held.particle_motion[r]);
-                    let state = (state.0.iter_mut().zip(state.1.iter_mut())).zip(v.iter_mut());
-                    let data = (f.iter_mut().zip(inverse_masses)).zip(motions.1);
-                    for (i, (((x, c), v), ((f, m), motion))) in state.zip(data).enumerate() {
-                        let a = motions.0[*motion as usize].project(*f * *m);
-                        *f = S::V::zero();
+                    let motions = &held.particle_motion[r.clone()];
+                    for (i, motion) in r.zip(motions) {
+                        let m = self.inverse_masses[i];
+                        let a = held.motions[*motion as usize].project(forces.p.get(i) * m);
+                        forces.p.set(i, S::V::zero());
                         if STORE_ACC {
-                            acc[i] = a;
+                            acc.p.set(i, a);
                         }
-                        *v += a * h;
-                        compensated_add(x, c, *v * h);
+                        let v = v_half.p.get(i) + a * h;
+                        v_half.p.set(i, v);
+                        let (mut x, mut c) = (cfg.u.get(i), carry.p.get(i));
+                        compensated_add(&mut x, &mut c, v * h);
+                        cfg.u.set(i, x);
+                        carry.p.set(i, c);
                     }
                 }
             }
         }
-        forces.particles_cleared = true;
+        for (written, cleared) in forces.written.iter_mut().zip(cleared) {
+            *written &= !cleared;
+        }
     }
 
     /// The bodies' part of [`Model::advance`].
@@ -209,8 +232,9 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
 
     /// Remove velocity components along held directions.
     pub fn enforce(&self, vel: &mut Rates<S>, held: &Constraints<S>) {
-        for (v, m) in vel.p.iter_mut().zip(&held.particle_motion) {
-            *v = project(&held.held_sets[*m as usize], *v);
+        for (i, m) in held.particle_motion.iter().enumerate() {
+            let v = project(&held.held_sets[*m as usize], vel.p.get(i));
+            vel.p.set(i, v);
         }
         for b in 0..self.bodies.len() {
             vel.b[b] = project(&held.body_held_t[b], vel.b[b]);
@@ -222,7 +246,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     pub fn set_penetration(&self, cfg: &mut Config<S>, k: usize, depth: f64) {
         let (d, n) = self.gap(cfg, k);
         let i = self.contacts[k].particle;
-        cfg.u[i] -= n * (d + depth);
+        cfg.u.sub(i, n * (d + depth));
     }
 
     /// State reached from `(cfg, vel)` after `s` seconds with acceleration `acc` and jerk
@@ -242,8 +266,9 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     ) -> (Config<S>, Rates<S>) {
         let (s2, s3) = (0.5 * s * s, s * s * s / 6.0);
         let mut out = cfg.clone();
-        for (i, u) in out.u.iter_mut().enumerate() {
-            *u = cfg.u[i] + vel.p[i] * s + acc.p[i] * s2 + jerk.p[i] * s3;
+        for i in 0..cfg.u.len() {
+            let u = cfg.u.get(i) + vel.p.get(i) * s + acc.p.get(i) * s2 + jerk.p.get(i) * s3;
+            out.u.set(i, u);
         }
         for (b, u) in out.bu.iter_mut().enumerate() {
             *u = cfg.bu[b] + vel.b[b] * s + acc.b[b] * s2 + jerk.b[b] * s3;
@@ -273,9 +298,9 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             let n = S::rotate(r, &c.normal);
             let f = S::rotate(r, &c.face);
             let p_dot = vel.b[b] + S::cross(&vel.w[b], &f);
-            S::cross(&vel.w[b], &n).dot(&self.face_to_node(cfg, k)) + n.dot(&(vel.p[i] - p_dot))
+            S::cross(&vel.w[b], &n).dot(&self.face_to_node(cfg, k)) + n.dot(&(vel.p.get(i) - p_dot))
         } else {
-            c.normal.dot(&(vel.p[i] - vel.b[b])) - c.normal.dot(&S::cross(&vel.w[b], &c.arm0))
+            c.normal.dot(&(vel.p.get(i) - vel.b[b])) - c.normal.dot(&S::cross(&vel.w[b], &c.arm0))
         }
     }
 
@@ -283,7 +308,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     pub fn set_gap_rate(&self, cfg: &Config<S>, vel: &mut Rates<S>, k: usize, rate: f64) {
         let current = self.gap_rate(cfg, vel, k);
         let (_, n) = self.gap(cfg, k);
-        vel.p[self.contacts[k].particle] += n * (rate - current);
+        vel.p.add(self.contacts[k].particle, n * (rate - current));
     }
 
     /// Second time derivative of a contact pair's gap, exact for the given velocities and
@@ -309,9 +334,9 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             // pair fast through space does not shrink τ.
             let arm = self.contact_arm(cfg, k);
             let (w, alpha) = (vel.w[b], acc.w[b]);
-            let v = vel.p[i] - vel.b[b] - S::cross(&w, &arm);
+            let v = vel.p.get(i) - vel.b[b] - S::cross(&w, &arm);
             let a =
-                acc.p[i] - acc.b[b] - S::cross(&alpha, &arm) - S::cross(&w, &S::cross(&w, &arm));
+                acc.p.get(i) - acc.b[b] - S::cross(&alpha, &arm) - S::cross(&w, &S::cross(&w, &arm));
             let (speed, pace, spin) = (v.dot(&v).sqrt(), a.dot(&a).sqrt(), w.dot(&w).sqrt());
             let tau =
                 (1e-6 * (depth / speed).min((depth / pace).sqrt()).min(1.0 / spin)).min(longest);
@@ -332,10 +357,10 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             let p_dot = vel.b[b] + S::cross(&w, &f);
             let p_ddot = acc.b[b] + S::cross(&alpha, &f) + S::cross(&w, &S::cross(&w, &f));
             n_ddot.dot(&self.face_to_node(cfg, k))
-                + n_dot.dot(&(vel.p[i] - p_dot)) * 2.0
-                + n.dot(&(acc.p[i] - p_ddot))
+                + n_dot.dot(&(vel.p.get(i) - p_dot)) * 2.0
+                + n.dot(&(acc.p.get(i) - p_ddot))
         } else {
-            c.normal.dot(&(acc.p[i] - acc.b[b])) - c.normal.dot(&S::cross(&acc.w[b], &c.arm0))
+            c.normal.dot(&(acc.p.get(i) - acc.b[b])) - c.normal.dot(&S::cross(&acc.w[b], &c.arm0))
         }
     }
 }

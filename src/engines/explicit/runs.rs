@@ -8,7 +8,7 @@
 //! 1 or 0 changes nothing), with half the instructions in 2D and a third in 3D. The runs keep
 //! the scene's order, so every force is summed in the order the general pass sums it.
 
-use super::model::{GROUND, LineSpring};
+use super::model::{Forces, GROUND, LineSpring, Vectors};
 use super::space::{Lin, Space, compensated_add};
 use std::ops::Range;
 
@@ -101,61 +101,62 @@ impl<S: Space> LineSprings<S> {
         Self { all, runs }
     }
 
-    /// Add the springs' forces at particle displacements `u` to the particle forces `p`;
+    /// Add the springs' forces at particle displacements `u` to the particle forces of `out`;
     /// `elastic` with their elastic energy added term by term (unchanged unless `ENERGY`).
     #[inline(always)]
     pub(super) fn add_forces<const ENERGY: bool>(
         &self,
-        u: &[S::V],
-        p: &mut [S::V],
+        u: &Vectors<S::V>,
+        out: &mut Forces<S>,
         mut elastic: f64,
     ) -> f64 {
         for run in &self.runs {
             let springs = &self.all[run.range.clone()];
             elastic = match run.kernel {
                 LineKernel::Axis(k) => on_axis(k, |k| {
-                    along_axis::<S, ENERGY, false>(springs, k, u, p, elastic)
+                    out.written[k] = true;
+                    let (u, p) = (u.component(k), out.p.component_mut(k));
+                    along_axis::<S, ENERGY, false>(springs, u, p, elastic)
                 }),
                 LineKernel::AxisGrounded(k) => on_axis(k, |k| {
-                    along_axis::<S, ENERGY, true>(springs, k, u, p, elastic)
+                    out.written[k] = true;
+                    let (u, p) = (u.component(k), out.p.component_mut(k));
+                    along_axis::<S, ENERGY, true>(springs, u, p, elastic)
                 }),
-                LineKernel::General => general::<S, ENERGY>(springs, u, p, elastic),
+                LineKernel::General => general::<S, ENERGY>(springs, u, out, elastic),
             };
         }
         elastic
     }
 }
 
-/// The displacement of end `i` (zero on the ground, where `GROUNDED` says an end may be).
-#[inline(always)]
-fn end<V: Lin, const GROUNDED: bool>(u: &[V], i: u32) -> V {
-    if GROUNDED && i == GROUND {
-        V::zero()
-    } else {
-        u[i as usize]
-    }
-}
-
-/// Springs along axis `k`: the general pass's arithmetic on component `k`.
+/// Springs along one axis, with `u` and `p` that axis's components of the displacements and
+/// forces: the general pass's arithmetic on that component.
 #[inline(always)]
 fn along_axis<S: Space, const ENERGY: bool, const GROUNDED: bool>(
     springs: &[LineSpring<S>],
-    k: usize,
-    u: &[S::V],
-    p: &mut [S::V],
+    u: &[f64],
+    p: &mut [f64],
     mut elastic: f64,
 ) -> f64 {
+    let end = |i: u32| {
+        if GROUNDED && i == GROUND {
+            0.0
+        } else {
+            u[i as usize]
+        }
+    };
     for s in springs {
-        let e = end::<_, GROUNDED>(u, s.b).component(k) - end::<_, GROUNDED>(u, s.a).component(k);
+        let e = end(s.b) - end(s.a);
         if ENERGY {
             elastic += 0.5 * s.c * e * e;
         }
         let f = s.c * e;
         if !GROUNDED || s.a != GROUND {
-            *p[s.a as usize].component_mut(k) += f;
+            p[s.a as usize] += f;
         }
         if !GROUNDED || s.b != GROUND {
-            *p[s.b as usize].component_mut(k) += -f;
+            p[s.b as usize] += -f;
         }
     }
     elastic
@@ -165,23 +166,28 @@ fn along_axis<S: Space, const ENERGY: bool, const GROUNDED: bool>(
 #[inline(always)]
 fn general<S: Space, const ENERGY: bool>(
     springs: &[LineSpring<S>],
-    u: &[S::V],
-    p: &mut [S::V],
+    u: &Vectors<S::V>,
+    out: &mut Forces<S>,
     mut elastic: f64,
 ) -> f64 {
+    let end = |i: u32| {
+        if i == GROUND {
+            S::V::zero()
+        } else {
+            u.get(i as usize)
+        }
+    };
     for s in springs {
-        let e = s
-            .direction
-            .dot(&(end::<_, true>(u, s.b) - end::<_, true>(u, s.a)));
+        let e = s.direction.dot(&(end(s.b) - end(s.a)));
         if ENERGY {
             elastic += 0.5 * s.c * e * e;
         }
         let f = s.direction * (s.c * e);
         if s.a != GROUND {
-            p[s.a as usize] += f;
+            out.add_particle(s.a as usize, f);
         }
         if s.b != GROUND {
-            p[s.b as usize] += -f;
+            out.add_particle(s.b as usize, -f);
         }
     }
     elastic
@@ -196,27 +202,23 @@ pub enum ParticleKernel {
     General,
 }
 
-/// One particle's part of an increment along axis `k`, where every other axis is held: the
-/// acceleration f·(1/m) on `k` (the general projection leaves that component as it is and the
-/// others exactly 0), then v(n+½) and x(n+1) on `k`, the force cleared. Returns the
-/// acceleration.
+/// One particle's part of an increment along the one axis it is free on, on that component:
+/// the acceleration f·(1/m) (the general projection leaves that component as it is and the
+/// others exactly 0), then v(n+½) and x(n+1), the force cleared. Returns the acceleration.
 #[inline(always)]
-pub fn step_along<V: Lin>(
-    k: usize,
-    (x, carry, v): (&mut V, &mut V, &mut V),
-    f: &mut V,
+pub fn step_along(
+    x: &mut f64,
+    carry: &mut f64,
+    v: &mut f64,
+    f: &mut f64,
     inverse_mass: f64,
     h: f64,
-) -> V {
-    let a = f.component(k) * inverse_mass;
-    *f = V::zero();
-    let vk = v.component_mut(k);
-    *vk += a * h;
-    let dx = *vk * h;
-    compensated_add(x.component_mut(k), carry.component_mut(k), dx);
-    let mut acceleration = V::zero();
-    *acceleration.component_mut(k) = a;
-    acceleration
+) -> f64 {
+    let a = *f * inverse_mass;
+    *f = 0.0;
+    *v += a * h;
+    compensated_add(x, carry, *v * h);
+    a
 }
 
 #[cfg(test)]

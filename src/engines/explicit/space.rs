@@ -21,8 +21,12 @@ pub trait Lin:
     + SubAssign
     + PartialEq
 {
+    /// Number of components.
+    const DIM: usize;
     /// The zero value.
     fn zero() -> Self;
+    /// The value whose component `k` is `f(k)`.
+    fn from_components(f: impl Fn(usize) -> f64) -> Self;
     /// Inner product.
     fn dot(&self, other: &Self) -> f64;
     /// Component `k` (`k` below the dimension).
@@ -32,8 +36,12 @@ pub trait Lin:
 }
 
 impl Lin for f64 {
+    const DIM: usize = 1;
     fn zero() -> Self {
         0.0
+    }
+    fn from_components(f: impl Fn(usize) -> f64) -> Self {
+        f(0)
     }
     fn dot(&self, other: &Self) -> f64 {
         self * other
@@ -47,10 +55,15 @@ impl Lin for f64 {
 }
 
 macro_rules! lin_vector {
-    ($t:ty) => {
+    ($t:ty, $dim:literal) => {
         impl Lin for $t {
+            const DIM: usize = $dim;
             fn zero() -> Self {
                 <$t>::zeros()
+            }
+            #[inline(always)]
+            fn from_components(f: impl Fn(usize) -> f64) -> Self {
+                <$t>::from_fn(|k, _| f(k))
             }
             fn dot(&self, other: &Self) -> f64 {
                 nalgebra::Matrix::dot(self, other)
@@ -66,8 +79,8 @@ macro_rules! lin_vector {
         }
     };
 }
-lin_vector!(Vector2<f64>);
-lin_vector!(Vector3<f64>);
+lin_vector!(Vector2<f64>, 2);
+lin_vector!(Vector3<f64>, 3);
 
 /// Kahan summation step: `x += dx`, carrying the rounding error in `carry` (the sum is
 /// `x − carry`).

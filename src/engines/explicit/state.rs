@@ -3,13 +3,104 @@
 //! contact is evaluated, and the counters of what a run evaluated.
 
 use super::space::{BodyInertia, Lin, Space};
+use std::marker::PhantomData;
+
+/// One vector per particle, stored by component: every first component, then every second,
+/// and so on. A pass that moves particles along one axis streams that component alone, 8 bytes
+/// per particle and quantity whatever the dimension. The arithmetic on each component is the
+/// vector's own, so the layout changes no result.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Vectors<V: Lin> {
+    data: Vec<f64>,
+    len: usize,
+    marker: PhantomData<V>,
+}
+
+impl<V: Lin> Vectors<V> {
+    /// `len` zero vectors.
+    pub fn zeros(len: usize) -> Self {
+        Self {
+            data: vec![0.0; V::DIM * len],
+            len,
+            marker: PhantomData,
+        }
+    }
+    /// Number of vectors.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+    /// Vector `i`.
+    #[inline(always)]
+    pub fn get(&self, i: usize) -> V {
+        V::from_components(|k| self.data[k * self.len + i])
+    }
+    /// Set vector `i`.
+    #[inline(always)]
+    pub fn set(&mut self, i: usize, v: V) {
+        for k in 0..V::DIM {
+            self.data[k * self.len + i] = v.component(k);
+        }
+    }
+    /// Vector `i` += `v`.
+    #[inline(always)]
+    pub fn add(&mut self, i: usize, v: V) {
+        for k in 0..V::DIM {
+            self.data[k * self.len + i] += v.component(k);
+        }
+    }
+    /// Vector `i` −= `v`.
+    #[inline(always)]
+    pub fn sub(&mut self, i: usize, v: V) {
+        for k in 0..V::DIM {
+            self.data[k * self.len + i] -= v.component(k);
+        }
+    }
+    /// Component `k` of every vector.
+    #[inline(always)]
+    pub fn component(&self, k: usize) -> &[f64] {
+        &self.data[k * self.len..(k + 1) * self.len]
+    }
+    /// Component `k` of every vector, to write.
+    #[inline(always)]
+    pub fn component_mut(&mut self, k: usize) -> &mut [f64] {
+        &mut self.data[k * self.len..(k + 1) * self.len]
+    }
+    /// Every component, in order, each as one slice.
+    pub fn components(&self) -> impl Iterator<Item = &[f64]> {
+        self.data.chunks_exact(self.len.max(1))
+    }
+    /// Every component, in order, each as one slice to write.
+    pub fn components_mut(&mut self) -> impl Iterator<Item = &mut [f64]> {
+        self.data.chunks_exact_mut(self.len.max(1))
+    }
+    /// The vectors in order.
+    pub fn iter(&self) -> impl Iterator<Item = V> + '_ {
+        (0..self.len).map(|i| self.get(i))
+    }
+    /// Copy another set of as many vectors.
+    pub fn copy_from(&mut self, other: &Self) {
+        self.data.copy_from_slice(&other.data);
+    }
+    /// Set every vector to zero.
+    pub fn fill_zero(&mut self) {
+        fill_zero(&mut self.data, 0.0);
+    }
+    /// Set component `k` of every vector to zero.
+    pub fn fill_zero_component(&mut self, k: usize) {
+        fill_zero(self.component_mut(k), 0.0);
+    }
+}
 
 /// Configuration, as displacements from t = 0 (so round-off is relative to the motion, not to
 /// the coordinates: the penalty multiplies position errors by k_p).
 #[derive(Debug, Clone)]
 pub struct Config<S: Space> {
     /// Particle displacements.
-    pub u: Vec<S::V>,
+    pub u: Vectors<S::V>,
     /// Reference node displacements.
     pub bu: Vec<S::V>,
     /// Body orientations (finite rotation).
@@ -29,7 +120,7 @@ pub struct Config<S: Space> {
 #[derive(Debug, Clone)]
 pub struct Rates<S: Space> {
     /// Particles.
-    pub p: Vec<S::V>,
+    pub p: Vectors<S::V>,
     /// Body reference nodes.
     pub b: Vec<S::V>,
     /// Body angular.
@@ -40,7 +131,7 @@ impl<S: Space> Rates<S> {
     /// All zero.
     pub fn zeros(particles: usize, bodies: usize) -> Self {
         Self {
-            p: vec![S::V::zero(); particles],
+            p: Vectors::zeros(particles),
             b: vec![S::V::zero(); bodies],
             w: vec![S::W::zero(); bodies],
         }
@@ -53,8 +144,11 @@ impl<S: Space> Rates<S> {
     }
     /// In place: `self = a + s · b`.
     pub fn set_plus(&mut self, a: &Self, s: f64, b: &Self) {
-        for (o, (x, y)) in self.p.iter_mut().zip(a.p.iter().zip(&b.p)) {
-            *o = *x + *y * s;
+        let (ap, bp) = (a.p.components(), b.p.components());
+        for (o, (x, y)) in self.p.components_mut().zip(ap.zip(bp)) {
+            for (o, (x, y)) in o.iter_mut().zip(x.iter().zip(y)) {
+                *o = *x + *y * s;
+            }
         }
         self.set_plus_bodies(a, s, b);
     }
@@ -70,7 +164,7 @@ impl<S: Space> Rates<S> {
     }
     /// Whether every component is finite.
     pub fn is_finite(&self) -> bool {
-        self.p.iter().chain(&self.b).all(|a| a.dot(a).is_finite())
+        self.p.iter().chain(self.b.iter().copied()).all(|a| a.dot(&a).is_finite())
             && self.w.iter().all(|a| a.dot(a).is_finite())
     }
     /// Largest Euclidean norm of any particle's, body's or angular difference, and the largest
@@ -78,15 +172,11 @@ impl<S: Space> Rates<S> {
     pub fn max_difference(&self, other: &Self) -> (f64, f64) {
         let mut d: f64 = 0.0;
         let mut m: f64 = 0.0;
-        for (a, b) in self
-            .p
-            .iter()
-            .zip(&other.p)
-            .chain(self.b.iter().zip(&other.b))
-        {
-            let e = *a - *b;
+        let bodies = self.b.iter().copied().zip(other.b.iter().copied());
+        for (a, b) in self.p.iter().zip(other.p.iter()).chain(bodies) {
+            let e = a - b;
             d = d.max(e.dot(&e));
-            m = m.max(a.dot(a));
+            m = m.max(a.dot(&a));
         }
         for (a, b) in self.w.iter().zip(&other.w) {
             let e = *a - *b;
@@ -102,7 +192,7 @@ impl<S: Space> Rates<S> {
 #[derive(Debug, Clone)]
 pub struct Forces<S: Space> {
     /// Particle forces.
-    pub p: Vec<S::V>,
+    pub p: Vectors<S::V>,
     /// Body forces.
     pub b: Vec<S::V>,
     /// Body moments about the reference node.
@@ -115,47 +205,58 @@ pub struct Forces<S: Space> {
     pub contact: Vec<f64>,
     /// Signed gap per contact pair where the pass evaluated contact (negative: penetration).
     pub gap: Vec<f64>,
-    /// Whether `p` is all zero already: the pass that consumed the particle forces
-    /// ([`Model::step_particles`]) cleared them as it read them, so [`Forces::clear`] need not
-    /// stream through them again.
-    pub(super) particles_cleared: bool,
+    /// Which components of `p` may be other than zero: those a pass added to since the last
+    /// clear and that the pass which consumed the particle forces ([`Model::step_particles`])
+    /// did not clear as it read them. [`Forces::clear`] streams through those alone.
+    pub(super) written: [bool; 3],
 }
 
 impl<S: Space> Forces<S> {
     pub(super) fn zeros(particles: usize, bodies: usize, contacts: usize) -> Self {
         Self {
-            p: vec![S::V::zero(); particles],
+            p: Vectors::zeros(particles),
             b: vec![S::V::zero(); bodies],
             m: vec![S::W::zero(); bodies],
             elastic: 0.0,
             dissipation: 0.0,
             contact: vec![0.0; contacts],
             gap: vec![0.0; contacts],
-            particles_cleared: false,
+            written: [false; 3],
         }
     }
     /// Copy another force set into this one (same shape).
     pub fn copy_from(&mut self, other: &Self) {
-        self.p.copy_from_slice(&other.p);
+        self.p.copy_from(&other.p);
         self.b.copy_from_slice(&other.b);
         self.m.copy_from_slice(&other.m);
         self.contact.copy_from_slice(&other.contact);
         self.gap.copy_from_slice(&other.gap);
         self.elastic = other.elastic;
         self.dissipation = other.dissipation;
-        self.particles_cleared = other.particles_cleared;
+        self.written = other.written;
     }
     /// Reset to zero, keeping the allocation.
     pub fn clear(&mut self) {
-        if !self.particles_cleared {
-            fill_zero(&mut self.p, S::V::zero());
+        for k in 0..S::V::DIM {
+            if self.written[k] {
+                self.p.fill_zero_component(k);
+            }
         }
-        self.particles_cleared = false;
+        self.written = [false; 3];
         fill_zero(&mut self.b, S::V::zero());
         fill_zero(&mut self.m, S::W::zero());
         fill_zero(&mut self.contact, 0.0);
         self.elastic = 0.0;
         self.dissipation = 0.0;
+    }
+}
+
+impl<S: Space> Forces<S> {
+    /// Add `f` to particle `i`'s force.
+    #[inline(always)]
+    pub fn add_particle(&mut self, i: usize, f: S::V) {
+        self.p.add(i, f);
+        self.written = [true; 3];
     }
 }
 

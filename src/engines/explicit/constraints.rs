@@ -231,7 +231,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 (s.direction, s.length0)
             }
         };
-        for s in &self.line_springs.all {
+        for s in self.line_springs.iter() {
             let [a, b] = s.ends();
             add(&mut stiffness, [&a, &b], &s.direction, s.c, 0.0);
         }

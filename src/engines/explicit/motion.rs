@@ -335,8 +335,10 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             let arm = self.contact_arm(cfg, k);
             let (w, alpha) = (vel.w[b], acc.w[b]);
             let v = vel.p.get(i) - vel.b[b] - S::cross(&w, &arm);
-            let a =
-                acc.p.get(i) - acc.b[b] - S::cross(&alpha, &arm) - S::cross(&w, &S::cross(&w, &arm));
+            let a = acc.p.get(i)
+                - acc.b[b]
+                - S::cross(&alpha, &arm)
+                - S::cross(&w, &S::cross(&w, &arm));
             let (speed, pace, spin) = (v.dot(&v).sqrt(), a.dot(&a).sqrt(), w.dot(&w).sqrt());
             let tau =
                 (1e-6 * (depth / speed).min((depth / pace).sqrt()).min(1.0 / spin)).min(longest);

@@ -81,24 +81,77 @@ pub enum LineKernel {
     General,
 }
 
-/// The line springs, in the scene's order, and their runs.
+/// A line spring along a coordinate axis (which its run says): 16 bytes.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct AxisSpring {
+    /// Stiffness.
+    c: f64,
+    /// Particle at end a, or [`GROUND`].
+    a: u32,
+    /// Particle at end b, or [`GROUND`].
+    b: u32,
+}
+
+/// The line springs in runs by kernel: those along a coordinate axis as [`AxisSpring`]s, the
+/// others as they are, each list in the scene's order.
 #[derive(Debug, Clone)]
 pub(super) struct LineSprings<S: Space> {
-    /// Every line spring.
-    pub(super) all: Vec<LineSpring<S>>,
-    /// Their runs by kernel.
-    pub(super) runs: Vec<Run<LineKernel>>,
+    along: Vec<AxisSpring>,
+    other: Vec<LineSpring<S>>,
+    /// The runs; an axis kernel's range is in `along`, the general kernel's in `other`.
+    runs: Vec<Run<LineKernel>>,
 }
 
 impl<S: Space> LineSprings<S> {
     /// The springs and their runs.
     pub(super) fn new(all: Vec<LineSpring<S>>) -> Self {
-        let runs = runs(&all, |s| match axis_of(&s.direction, S::DIM) {
+        let kernel = |s: &LineSpring<S>| match axis_of(&s.direction, S::DIM) {
             Some(k) if s.a != GROUND && s.b != GROUND => LineKernel::Axis(k),
             Some(k) => LineKernel::AxisGrounded(k),
             None => LineKernel::General,
-        });
-        Self { all, runs }
+        };
+        let mut runs = runs(&all, kernel);
+        let (mut along, mut other) = (Vec::new(), Vec::new());
+        for run in &mut runs {
+            let springs = &all[run.range.clone()];
+            let list_len = if run.kernel == LineKernel::General {
+                other.extend_from_slice(springs);
+                other.len()
+            } else {
+                along.extend(springs.iter().map(|s| AxisSpring {
+                    c: s.c,
+                    a: s.a,
+                    b: s.b,
+                }));
+                along.len()
+            };
+            run.range = list_len - springs.len()..list_len;
+        }
+        Self { along, other, runs }
+    }
+
+    /// Every line spring, in the scene's order.
+    pub(super) fn iter(&self) -> impl Iterator<Item = LineSpring<S>> + '_ {
+        self.runs.iter().flat_map(|run| {
+            let axis = match run.kernel {
+                LineKernel::Axis(k) | LineKernel::AxisGrounded(k) => Some(k),
+                LineKernel::General => None,
+            };
+            let (other, along) = match axis {
+                None => (&self.other[run.range.clone()], &[][..]),
+                Some(_) => (&[][..], &self.along[run.range.clone()]),
+            };
+            let direction = S::V::from_components(|j| if Some(j) == axis { 1.0 } else { 0.0 });
+            other
+                .iter()
+                .copied()
+                .chain(along.iter().map(move |s| LineSpring {
+                    a: s.a,
+                    b: s.b,
+                    direction,
+                    c: s.c,
+                }))
+        })
     }
 
     /// Add the springs' forces at particle displacements `u` to the particle forces of `out`;
@@ -111,19 +164,19 @@ impl<S: Space> LineSprings<S> {
         mut elastic: f64,
     ) -> f64 {
         for run in &self.runs {
-            let springs = &self.all[run.range.clone()];
+            let r = run.range.clone();
             elastic = match run.kernel {
                 LineKernel::Axis(k) => on_axis(k, |k| {
                     out.written[k] = true;
                     let (u, p) = (u.component(k), out.p.component_mut(k));
-                    along_axis::<S, ENERGY, false>(springs, u, p, elastic)
+                    along_axis::<ENERGY, false>(&self.along[r.clone()], u, p, elastic)
                 }),
                 LineKernel::AxisGrounded(k) => on_axis(k, |k| {
                     out.written[k] = true;
                     let (u, p) = (u.component(k), out.p.component_mut(k));
-                    along_axis::<S, ENERGY, true>(springs, u, p, elastic)
+                    along_axis::<ENERGY, true>(&self.along[r.clone()], u, p, elastic)
                 }),
-                LineKernel::General => general::<S, ENERGY>(springs, u, out, elastic),
+                LineKernel::General => general::<S, ENERGY>(&self.other[r], u, out, elastic),
             };
         }
         elastic
@@ -133,8 +186,8 @@ impl<S: Space> LineSprings<S> {
 /// Springs along one axis, with `u` and `p` that axis's components of the displacements and
 /// forces: the general pass's arithmetic on that component.
 #[inline(always)]
-fn along_axis<S: Space, const ENERGY: bool, const GROUNDED: bool>(
-    springs: &[LineSpring<S>],
+fn along_axis<const ENERGY: bool, const GROUNDED: bool>(
+    springs: &[AxisSpring],
     u: &[f64],
     p: &mut [f64],
     mut elastic: f64,
@@ -266,17 +319,29 @@ mod tests {
         out
     }
 
-    /// The axis kernels' forces and energy equal the general kernel's bit for bit.
+    /// The axis kernels' forces and energy equal the general kernel's bit for bit, and the
+    /// springs come back in the scene's order.
     fn same_forces<S: Space>(u: Vec<S::V>, d: S::V, other: S::V) {
-        let n = u.len() as u32;
-        let springs = LineSprings::new(springs::<S>(n, d, other));
+        let n = u.len();
+        let all = springs::<S>(n as u32, d, other);
+        let springs = LineSprings::new(all.clone());
         assert!(springs.runs.len() >= 4, "axis, general and grounded runs");
-        let mut by_runs = vec![S::V::zero(); u.len()];
-        let mut by_general = by_runs.clone();
-        let e_runs = springs.add_forces::<true>(&u, &mut by_runs, 0.25);
-        let e_general = general::<S, true>(&springs.all, &u, &mut by_general, 0.25);
+        let back: Vec<_> = springs
+            .iter()
+            .map(|s| (s.a, s.b, s.c, s.direction))
+            .collect();
+        let given: Vec<_> = all.iter().map(|s| (s.a, s.b, s.c, s.direction)).collect();
+        assert_eq!(back, given);
+        let mut positions = Vectors::zeros(n);
+        for (i, u) in u.iter().enumerate() {
+            positions.set(i, *u);
+        }
+        let mut by_runs = Forces::<S>::zeros(n, 0, 0);
+        let mut by_general = Forces::<S>::zeros(n, 0, 0);
+        let e_runs = springs.add_forces::<true>(&positions, &mut by_runs, 0.25);
+        let e_general = general::<S, true>(&all, &positions, &mut by_general, 0.25);
         assert_eq!(e_runs.to_bits(), e_general.to_bits());
-        for (a, b) in by_runs.iter().zip(&by_general) {
+        for (a, b) in by_runs.p.iter().zip(by_general.p.iter()) {
             for k in 0..S::DIM {
                 assert_eq!(
                     a.component(k).to_bits(),
@@ -301,8 +366,8 @@ mod tests {
         same_forces::<Spatial>(u3, Vector3::y(), Vector3::x());
     }
 
-    /// One particle along axis `k` steps as the general projection steps it, bit for bit, with
-    /// the held components at rest.
+    /// One particle free along one axis steps as the general projection steps it, bit for bit,
+    /// its held components left at rest.
     #[test]
     fn a_particle_along_one_axis_steps_as_the_projection_does() {
         let v = values(40, 11);
@@ -316,15 +381,18 @@ mod tests {
             let mut f = Vector3::new(c[3], c[4], c[0] * c[4]);
             let m = 1.0 / (0.1 + c[3].abs());
             let (mut x2, mut carry2, mut vel2, f2) = (x, carry, vel, f);
-            let a = step_along(1, (&mut x, &mut carry, &mut vel), &mut f, m, h);
+            let a = step_along(&mut x[1], &mut carry[1], &mut vel[1], &mut f[1], m, h);
             let a2 = motion.project(f2 * m);
             vel2 += a2 * h;
             compensated_add(&mut x2, &mut carry2, vel2 * h);
+            let a = Vector3::new(0.0, a, 0.0);
             for (p, q) in [(a, a2), (x, x2), (carry, carry2), (vel, vel2)] {
                 for k in 0..3 {
                     assert_eq!(p[k].to_bits(), q[k].to_bits(), "{p:?} {q:?}");
                 }
             }
+            f[0] = 0.0;
+            f[2] = 0.0;
             assert_eq!(f, Vector3::zeros());
         }
     }

@@ -164,7 +164,10 @@ impl<S: Space> Rates<S> {
     }
     /// Whether every component is finite.
     pub fn is_finite(&self) -> bool {
-        self.p.iter().chain(self.b.iter().copied()).all(|a| a.dot(&a).is_finite())
+        self.p
+            .iter()
+            .chain(self.b.iter().copied())
+            .all(|a| a.dot(&a).is_finite())
             && self.w.iter().all(|a| a.dot(a).is_finite())
     }
     /// Largest Euclidean norm of any particle's, body's or angular difference, and the largest

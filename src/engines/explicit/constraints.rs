@@ -1,9 +1,9 @@
 //! A step's boundary conditions compiled, and the generalised DOFs they leave free: moving
 //! along them, projecting on them, their mass, and a bound on their highest frequency.
 
+use super::axis::{ParticleKernel, free_axis};
 use super::body_solve::BodyOperator;
 use super::model::*;
-use super::runs::{ParticleKernel, free_axis, runs};
 use super::space::{Lin, Space};
 use crate::scene::{BoundaryCondition, Dof, Step};
 
@@ -19,7 +19,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             held_sets: Vec::new(),
             motions: Vec::new(),
             particle_motion: Vec::new(),
-            particle_runs: Vec::new(),
+            particle_kernel: ParticleKernel::General,
             body_held_t: vec![Vec::new(); nb],
             body_held_r: vec![Vec::new(); nb],
             body_free_r: vec![Vec::new(); nb],
@@ -75,11 +75,11 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             })
             .collect();
         c.motions = distinct.iter().map(|h| Motion::of(h, S::DIM)).collect();
-        let kernels: Vec<ParticleKernel> = distinct
-            .iter()
-            .map(|h| free_axis(h, S::DIM).map_or(ParticleKernel::General, ParticleKernel::Along))
-            .collect();
-        c.particle_runs = runs(&c.particle_motion, |m| kernels[*m as usize]);
+        let mut axes = distinct.iter().map(|h| free_axis(h, S::DIM));
+        c.particle_kernel = match axes.next() {
+            Some(Some(k)) if axes.all(|a| a == Some(k)) => ParticleKernel::Along(k),
+            _ => ParticleKernel::General,
+        };
         c.held_sets = distinct.into_iter().map(<[S::V]>::to_vec).collect();
         for b in 0..nb {
             c.body_free_r[b] = S::free_rotations(&c.body_held_r[b]);

@@ -1,5 +1,6 @@
 //! `explicit`: our central-difference explicit integrator with penalty contact.
 
+pub mod axis;
 pub mod body_solve;
 pub mod centred;
 pub mod constraints;
@@ -12,7 +13,6 @@ pub mod model;
 pub mod motion;
 pub mod on_request;
 pub mod rows;
-pub mod runs;
 pub mod space;
 pub mod start;
 pub mod state;

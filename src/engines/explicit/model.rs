@@ -5,8 +5,8 @@
 //! `FINITE` const parameter selects finite rotation (`explicit`) or the benchmark's
 //! small-rotation idealisation (`explicit_small`); it is resolved at compile time.
 
+use super::axis::{LineSprings, ParticleKernel};
 use super::body_solve::{BodyOperator, BodySolve};
-use super::runs::{LineSprings, ParticleKernel, Run};
 use super::space::{BodyInertia, Lin, Space};
 pub use super::state::{Config, ContactMode, Counters, Forces, Rates, Vectors, fill_zero};
 use crate::scene::{
@@ -176,8 +176,8 @@ pub struct Constraints<S: Space> {
     /// Each particle's projection, as an index into `motions` (4 bytes per particle streamed
     /// by the time loop instead of a projection's 40 or 56).
     pub particle_motion: Vec<u32>,
-    /// The particles in runs by the kernel that steps them ([`super::runs`]).
-    pub particle_runs: Vec<Run<ParticleKernel>>,
+    /// The kernel that steps the particles ([`super::axis`]).
+    pub particle_kernel: ParticleKernel,
     /// Held translation axes per body.
     pub body_held_t: Vec<Vec<S::V>>,
     /// Held rotation axes per body.

@@ -2,9 +2,9 @@
 //! constraints, the update of velocities and positions, the kinetic energy; and the kinematics
 //! the consistent contact start sets (a pair's penetration and gap rate).
 
+use super::axis::{ParticleKernel, step_along};
 use super::body_solve::project;
 use super::model::*;
-use super::runs::{ParticleKernel, on_axis, step_along};
 use super::space::{BodyInertia, Lin, Space, compensated_add};
 
 impl<S: Space, const FINITE: bool> Model<S, FINITE> {
@@ -37,10 +37,24 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         out: &mut Rates<S>,
         counters: &mut Counters,
     ) {
-        let particles = self.inverse_masses.iter().zip(&held.particle_motion);
-        for (i, (inverse_mass, motion)) in particles.enumerate() {
-            let a = held.motions[*motion as usize].project(forces.p.get(i) * *inverse_mass);
-            out.p.set(i, a);
+        match held.particle_kernel {
+            ParticleKernel::Along(k) => {
+                let (a, f) = (out.p.component_mut(k), forces.p.component(k));
+                for ((a, f), m) in a.iter_mut().zip(f).zip(&self.inverse_masses) {
+                    *a = *f * *m;
+                }
+                // The held components exactly 0, as the projection gives them.
+                for j in (0..S::V::DIM).filter(|j| *j != k) {
+                    out.p.component_mut(j).fill(0.0);
+                }
+            }
+            ParticleKernel::General => {
+                let particles = self.inverse_masses.iter().zip(&held.particle_motion);
+                for (i, (m, motion)) in particles.enumerate() {
+                    let a = held.motions[*motion as usize].project(forces.p.get(i) * *m);
+                    out.p.set(i, a);
+                }
+            }
         }
         self.body_accelerations(cfg, forces, vel, held, out, counters);
     }
@@ -114,22 +128,21 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         held: &Constraints<S>,
         counters: &mut Counters,
     ) {
-        let components = cfg.u.components_mut().zip(carry.p.components_mut());
-        for ((x, c), v) in components.zip(vel.p.components()) {
-            for ((x, c), v) in x.iter_mut().zip(c.iter_mut()).zip(v) {
-                compensated_add(x, c, *v * h);
-            }
+        let (x, c) = (cfg.u.flat_mut(), carry.p.flat_mut());
+        for ((x, c), v) in x.iter_mut().zip(c.iter_mut()).zip(vel.p.flat()) {
+            compensated_add(x, c, *v * h);
         }
         self.advance_bodies(cfg, carry, h, vel, held, counters);
     }
 
-    /// The particles' part of an increment whose forces do not read the velocity, in one pass
-    /// over them: a(n) = P M⁻¹ f(n) (into `acc` where `STORE_ACC`), v(n+½) = v(n−½) + h·a(n)
-    /// in place of v(n−½) in `v_half`, and x(n+1) = x(n) + h·v(n+½) into `cfg` (compensated).
-    /// The arithmetic of [`Model::accelerations`], [`Rates::set_plus`] and [`Model::advance`]
-    /// one after the other, bit for bit, with each particle's data read once instead of three
-    /// times and the acceleration written only where a later increment reads it. The particle
-    /// forces are cleared as they are read, for the next force pass.
+    /// The particles' part of an increment whose forces do not read the velocity:
+    /// a(n) = P M⁻¹ f(n) (into `acc`), v(n+½) = v(n−½) + h·a(n) in place of v(n−½) in
+    /// `v_half`, and x(n+1) = x(n) + h·v(n+½) into `cfg` (compensated); the particle forces
+    /// cleared for the next force pass. The arithmetic of [`Model::accelerations`],
+    /// [`Rates::set_plus`] and [`Model::advance`], bit for bit. Where every particle moves along
+    /// one axis, in one pass over that component (each particle's data read once, the
+    /// acceleration written only where `STORE_ACC`: where a later increment reads it); otherwise
+    /// the projections first, then each pass over every component alike.
     #[allow(clippy::too_many_arguments)]
     pub fn step_particles<const STORE_ACC: bool>(
         &self,
@@ -141,61 +154,47 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         v_half: &mut Rates<S>,
         acc: &mut Rates<S>,
     ) {
-        // The components every run cleared as it read them.
-        let mut cleared = [true; 3];
-        for run in &held.particle_runs {
-            let r = run.range.clone();
-            match run.kernel {
-                ParticleKernel::Along(k) => {
-                    for (j, cleared) in cleared.iter_mut().enumerate() {
-                        *cleared &= j == k;
-                    }
-                    on_axis(k, |k| {
-                        let x = &mut cfg.u.component_mut(k)[r.clone()];
-                        let c = &mut carry.p.component_mut(k)[r.clone()];
-                        let v = &mut v_half.p.component_mut(k)[r.clone()];
-                        let f = &mut forces.p.component_mut(k)[r.clone()];
-                        let a = &mut acc.p.component_mut(k)[r.clone()];
-                        let state = (x.iter_mut().zip(c.iter_mut())).zip(v.iter_mut());
-                        let data = (f.iter_mut().zip(&self.inverse_masses[r.clone()])).zip(a);
-                        for (((x, c), v), ((f, m), a)) in state.zip(data) {
-                            let acceleration = step_along(x, c, v, f, *m, h);
-                            if STORE_ACC {
-                                *a = acceleration;
-                            }
-                        }
-                    });
+        match held.particle_kernel {
+            ParticleKernel::Along(k) => {
+                let x = cfg.u.component_mut(k);
+                let c = carry.p.component_mut(k);
+                let v = v_half.p.component_mut(k);
+                let f = forces.p.component_mut(k);
+                let a = acc.p.component_mut(k);
+                let state = (x.iter_mut().zip(c.iter_mut())).zip(v.iter_mut());
+                let data = (f.iter_mut().zip(&self.inverse_masses)).zip(a);
+                for (((x, c), v), ((f, m), a)) in state.zip(data) {
+                    let acceleration = step_along(x, c, v, f, *m, h);
                     if STORE_ACC {
-                        // The held components' accelerations, exactly 0 as the projection
-                        // gives them.
-                        for (j, a) in acc.p.components_mut().enumerate() {
-                            if j != k {
-                                a[r.clone()].fill(0.0);
-                            }
-                        }
+                        *a = acceleration;
                     }
                 }
-                ParticleKernel::General => {
-                    let motions = &held.particle_motion[r.clone()];
-                    for (i, motion) in r.zip(motions) {
-                        let m = self.inverse_masses[i];
-                        let a = held.motions[*motion as usize].project(forces.p.get(i) * m);
-                        forces.p.set(i, S::V::zero());
-                        if STORE_ACC {
-                            acc.p.set(i, a);
-                        }
-                        let v = v_half.p.get(i) + a * h;
-                        v_half.p.set(i, v);
-                        let (mut x, mut c) = (cfg.u.get(i), carry.p.get(i));
-                        compensated_add(&mut x, &mut c, v * h);
-                        cfg.u.set(i, x);
-                        carry.p.set(i, c);
+                if STORE_ACC {
+                    // The held components' accelerations, exactly 0 as the projection gives
+                    // them.
+                    for j in (0..S::V::DIM).filter(|j| *j != k) {
+                        acc.p.component_mut(j).fill(0.0);
                     }
                 }
+                forces.written[k] = false;
             }
-        }
-        for (written, cleared) in forces.written.iter_mut().zip(cleared) {
-            *written &= !cleared;
+            ParticleKernel::General => {
+                // Each particle's acceleration (its projection), then every component alike.
+                let particles = self.inverse_masses.iter().zip(&held.particle_motion);
+                for (i, (m, motion)) in particles.enumerate() {
+                    let a = held.motions[*motion as usize].project(forces.p.get(i) * *m);
+                    acc.p.set(i, a);
+                }
+                for (v, a) in v_half.p.flat_mut().iter_mut().zip(acc.p.flat()) {
+                    *v += *a * h;
+                }
+                let (x, c) = (cfg.u.flat_mut(), carry.p.flat_mut());
+                for ((x, c), v) in x.iter_mut().zip(c.iter_mut()).zip(v_half.p.flat()) {
+                    compensated_add(x, c, *v * h);
+                }
+                forces.p.fill_zero();
+                forces.written = [false; 3];
+            }
         }
     }
 

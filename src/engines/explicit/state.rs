@@ -69,13 +69,16 @@ impl<V: Lin> Vectors<V> {
     pub fn component_mut(&mut self, k: usize) -> &mut [f64] {
         &mut self.data[k * self.len..(k + 1) * self.len]
     }
-    /// Every component, in order, each as one slice.
-    pub fn components(&self) -> impl Iterator<Item = &[f64]> {
-        self.data.chunks_exact(self.len.max(1))
+    /// Every component of every vector, by component: for the passes that treat each
+    /// component alike (sets of as many vectors share this layout).
+    #[inline(always)]
+    pub fn flat(&self) -> &[f64] {
+        &self.data
     }
-    /// Every component, in order, each as one slice to write.
-    pub fn components_mut(&mut self) -> impl Iterator<Item = &mut [f64]> {
-        self.data.chunks_exact_mut(self.len.max(1))
+    /// [`Vectors::flat`], to write.
+    #[inline(always)]
+    pub fn flat_mut(&mut self) -> &mut [f64] {
+        &mut self.data
     }
     /// The vectors in order.
     pub fn iter(&self) -> impl Iterator<Item = V> + '_ {
@@ -144,11 +147,9 @@ impl<S: Space> Rates<S> {
     }
     /// In place: `self = a + s · b`.
     pub fn set_plus(&mut self, a: &Self, s: f64, b: &Self) {
-        let (ap, bp) = (a.p.components(), b.p.components());
-        for (o, (x, y)) in self.p.components_mut().zip(ap.zip(bp)) {
-            for (o, (x, y)) in o.iter_mut().zip(x.iter().zip(y)) {
-                *o = *x + *y * s;
-            }
+        let (ap, bp) = (a.p.flat(), b.p.flat());
+        for (o, (x, y)) in self.p.flat_mut().iter_mut().zip(ap.iter().zip(bp)) {
+            *o = *x + *y * s;
         }
         self.set_plus_bodies(a, s, b);
     }
@@ -164,22 +165,27 @@ impl<S: Space> Rates<S> {
     }
     /// Whether every component is finite.
     pub fn is_finite(&self) -> bool {
-        self.p
-            .iter()
-            .chain(self.b.iter().copied())
-            .all(|a| a.dot(&a).is_finite())
+        let finite = |a: S::V| a.dot(&a).is_finite();
+        (0..self.p.len()).all(|i| finite(self.p.get(i)))
+            && self.b.iter().all(|a| finite(*a))
             && self.w.iter().all(|a| a.dot(a).is_finite())
     }
     /// Largest Euclidean norm of any particle's, body's or angular difference, and the largest
     /// such norm of `self` (square roots taken once, of the maxima).
+    #[inline]
     pub fn max_difference(&self, other: &Self) -> (f64, f64) {
         let mut d: f64 = 0.0;
         let mut m: f64 = 0.0;
-        let bodies = self.b.iter().copied().zip(other.b.iter().copied());
-        for (a, b) in self.p.iter().zip(other.p.iter()).chain(bodies) {
+        let mut note = |a: S::V, b: S::V| {
             let e = a - b;
             d = d.max(e.dot(&e));
             m = m.max(a.dot(&a));
+        };
+        for i in 0..self.p.len() {
+            note(self.p.get(i), other.p.get(i));
+        }
+        for (a, b) in self.b.iter().zip(&other.b) {
+            note(*a, *b);
         }
         for (a, b) in self.w.iter().zip(&other.w) {
             let e = *a - *b;
@@ -239,9 +245,13 @@ impl<S: Space> Forces<S> {
         self.written = other.written;
     }
     /// Reset to zero, keeping the allocation.
+    #[inline(always)]
     pub fn clear(&mut self) {
-        for k in 0..S::V::DIM {
-            if self.written[k] {
+        let written = &self.written[..S::V::DIM];
+        if written.iter().all(|w| *w) {
+            self.p.fill_zero();
+        } else {
+            for (k, _) in written.iter().enumerate().filter(|(_, w)| **w) {
                 self.p.fill_zero_component(k);
             }
         }

@@ -1,41 +1,18 @@
-//! Runs: consecutive line springs, and consecutive particles, that one kernel steps.
+//! Passes along one axis: when every line spring lies along one coordinate axis, and when every
+//! particle is free along one coordinate axis alone.
 //!
 //! A line spring whose direction is a coordinate axis stretches by that component of its ends'
 //! displacements alone and pushes along it alone; a particle held along every coordinate axis
-//! but one moves along that one alone. Their kernels read and write that one component of each
-//! vector, where the general ones form dot products and projections whose other terms are exact
-//! zeros: the same arithmetic on the component that moves, bit for bit (a product with an exact
-//! 1 or 0 changes nothing), with half the instructions in 2D and a third in 3D. The runs keep
-//! the scene's order, so every force is summed in the order the general pass sums it.
+//! but one moves along that one alone. The kernels for them read and write that one component
+//! (one slice of the component-wise store, [`Vectors`]), where the general ones form dot
+//! products and projections whose other terms are exact zeros: the same arithmetic on the
+//! component that moves, bit for bit (a product with an exact 1 or 0 changes nothing), with
+//! half the instructions and half the bytes in 2D, a third in 3D. The choice is made once per
+//! scene (springs) and per step (particles), so a scene pays one branch per pass for it; a
+//! scene with a spring or a particle off the axes takes the general passes throughout.
 
 use super::model::{Forces, GROUND, LineSpring, Vectors};
 use super::space::{Lin, Space, compensated_add};
-use std::ops::Range;
-
-/// Consecutive items that one kernel takes.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Run<K> {
-    /// The items' indices.
-    pub range: Range<usize>,
-    /// Their kernel.
-    pub kernel: K,
-}
-
-/// The runs of `items` under `kernel`, in order: each as long as the kernel stays the same.
-pub fn runs<T, K: PartialEq>(items: &[T], kernel: impl Fn(&T) -> K) -> Vec<Run<K>> {
-    let mut out: Vec<Run<K>> = Vec::new();
-    for (i, item) in items.iter().enumerate() {
-        let k = kernel(item);
-        match out.last_mut() {
-            Some(run) if run.kernel == k => run.range.end = i + 1,
-            _ => out.push(Run {
-                range: i..i + 1,
-                kernel: k,
-            }),
-        }
-    }
-    out
-}
 
 /// The coordinate axis `d` is, if it is exactly one (components 1 and 0).
 pub fn axis_of<V: Lin>(d: &V, dim: usize) -> Option<usize> {
@@ -59,29 +36,7 @@ pub fn free_axis<V: Lin>(held: &[V], dim: usize) -> Option<usize> {
     }
 }
 
-/// `body(k)` with `k` a constant in each arm, so that an inlined kernel indexes one component
-/// without a runtime index.
-#[inline(always)]
-pub fn on_axis<R>(k: usize, mut body: impl FnMut(usize) -> R) -> R {
-    match k {
-        0 => body(0),
-        1 => body(1),
-        _ => body(2),
-    }
-}
-
-/// How a run of line springs is taken.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum LineKernel {
-    /// Along coordinate axis `k`, both ends particles.
-    Axis(usize),
-    /// Along coordinate axis `k`, an end on the ground.
-    AxisGrounded(usize),
-    /// Any other direction.
-    General,
-}
-
-/// A line spring along a coordinate axis (which its run says): 16 bytes.
+/// A line spring along the axis its set names: 16 bytes.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct AxisSpring {
     /// Stiffness.
@@ -92,66 +47,54 @@ pub(super) struct AxisSpring {
     b: u32,
 }
 
-/// The line springs in runs by kernel: those along a coordinate axis as [`AxisSpring`]s, the
-/// others as they are, each list in the scene's order.
+/// The line springs, in the scene's order.
 #[derive(Debug, Clone)]
-pub(super) struct LineSprings<S: Space> {
-    along: Vec<AxisSpring>,
-    other: Vec<LineSpring<S>>,
-    /// The runs; an axis kernel's range is in `along`, the general kernel's in `other`.
-    runs: Vec<Run<LineKernel>>,
+pub(super) enum LineSprings<S: Space> {
+    /// Every one along coordinate axis `axis`.
+    Axis {
+        /// The axis.
+        axis: usize,
+        /// The springs.
+        springs: Vec<AxisSpring>,
+    },
+    /// Any directions.
+    General(Vec<LineSpring<S>>),
 }
 
 impl<S: Space> LineSprings<S> {
-    /// The springs and their runs.
+    /// The springs, along one axis where every one is.
     pub(super) fn new(all: Vec<LineSpring<S>>) -> Self {
-        let kernel = |s: &LineSpring<S>| match axis_of(&s.direction, S::DIM) {
-            Some(k) if s.a != GROUND && s.b != GROUND => LineKernel::Axis(k),
-            Some(k) => LineKernel::AxisGrounded(k),
-            None => LineKernel::General,
-        };
-        let mut runs = runs(&all, kernel);
-        let (mut along, mut other) = (Vec::new(), Vec::new());
-        for run in &mut runs {
-            let springs = &all[run.range.clone()];
-            let list_len = if run.kernel == LineKernel::General {
-                other.extend_from_slice(springs);
-                other.len()
-            } else {
-                along.extend(springs.iter().map(|s| AxisSpring {
+        let axis = all.first().and_then(|s| axis_of(&s.direction, S::DIM));
+        match axis {
+            Some(k) if all.iter().all(|s| axis_of(&s.direction, S::DIM) == Some(k)) => {
+                let springs = all.iter().map(|s| AxisSpring {
                     c: s.c,
                     a: s.a,
                     b: s.b,
-                }));
-                along.len()
-            };
-            run.range = list_len - springs.len()..list_len;
+                });
+                LineSprings::Axis {
+                    axis: k,
+                    springs: springs.collect(),
+                }
+            }
+            _ => LineSprings::General(all),
         }
-        Self { along, other, runs }
     }
 
     /// Every line spring, in the scene's order.
-    pub(super) fn iter(&self) -> impl Iterator<Item = LineSpring<S>> + '_ {
-        self.runs.iter().flat_map(|run| {
-            let axis = match run.kernel {
-                LineKernel::Axis(k) | LineKernel::AxisGrounded(k) => Some(k),
-                LineKernel::General => None,
-            };
-            let (other, along) = match axis {
-                None => (&self.other[run.range.clone()], &[][..]),
-                Some(_) => (&[][..], &self.along[run.range.clone()]),
-            };
-            let direction = S::V::from_components(|j| if Some(j) == axis { 1.0 } else { 0.0 });
-            other
-                .iter()
-                .copied()
-                .chain(along.iter().map(move |s| LineSpring {
+    pub(super) fn iter(&self) -> Box<dyn Iterator<Item = LineSpring<S>> + '_> {
+        match self {
+            LineSprings::Axis { axis, springs } => {
+                let direction = S::V::from_components(|j| if j == *axis { 1.0 } else { 0.0 });
+                Box::new(springs.iter().map(move |s| LineSpring {
                     a: s.a,
                     b: s.b,
                     direction,
                     c: s.c,
                 }))
-        })
+            }
+            LineSprings::General(springs) => Box::new(springs.iter().copied()),
+        }
     }
 
     /// Add the springs' forces at particle displacements `u` to the particle forces of `out`;
@@ -161,54 +104,39 @@ impl<S: Space> LineSprings<S> {
         &self,
         u: &Vectors<S::V>,
         out: &mut Forces<S>,
-        mut elastic: f64,
+        elastic: f64,
     ) -> f64 {
-        for run in &self.runs {
-            let r = run.range.clone();
-            elastic = match run.kernel {
-                LineKernel::Axis(k) => on_axis(k, |k| {
-                    out.written[k] = true;
-                    let (u, p) = (u.component(k), out.p.component_mut(k));
-                    along_axis::<ENERGY, false>(&self.along[r.clone()], u, p, elastic)
-                }),
-                LineKernel::AxisGrounded(k) => on_axis(k, |k| {
-                    out.written[k] = true;
-                    let (u, p) = (u.component(k), out.p.component_mut(k));
-                    along_axis::<ENERGY, true>(&self.along[r.clone()], u, p, elastic)
-                }),
-                LineKernel::General => general::<S, ENERGY>(&self.other[r], u, out, elastic),
-            };
+        match self {
+            LineSprings::Axis { axis, springs } => {
+                out.written[*axis] = true;
+                let (u, p) = (u.component(*axis), out.p.component_mut(*axis));
+                along_axis::<ENERGY>(springs, u, p, elastic)
+            }
+            LineSprings::General(springs) => general::<S, ENERGY>(springs, u, out, elastic),
         }
-        elastic
     }
 }
 
 /// Springs along one axis, with `u` and `p` that axis's components of the displacements and
 /// forces: the general pass's arithmetic on that component.
 #[inline(always)]
-fn along_axis<const ENERGY: bool, const GROUNDED: bool>(
+fn along_axis<const ENERGY: bool>(
     springs: &[AxisSpring],
     u: &[f64],
     p: &mut [f64],
     mut elastic: f64,
 ) -> f64 {
-    let end = |i: u32| {
-        if GROUNDED && i == GROUND {
-            0.0
-        } else {
-            u[i as usize]
-        }
-    };
+    let end = |i: u32| if i == GROUND { 0.0 } else { u[i as usize] };
     for s in springs {
         let e = end(s.b) - end(s.a);
         if ENERGY {
             elastic += 0.5 * s.c * e * e;
         }
         let f = s.c * e;
-        if !GROUNDED || s.a != GROUND {
+        if s.a != GROUND {
             p[s.a as usize] += f;
         }
-        if !GROUNDED || s.b != GROUND {
+        if s.b != GROUND {
             p[s.b as usize] += -f;
         }
     }
@@ -246,12 +174,12 @@ fn general<S: Space, const ENERGY: bool>(
     elastic
 }
 
-/// How a run of particles is stepped.
+/// How a step's particles are stepped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ParticleKernel {
-    /// Free along coordinate axis `k` alone.
+    /// Every one free along coordinate axis `k` alone.
     Along(usize),
-    /// Any other freedom (the projection of its motion).
+    /// Any other freedoms (each particle's projection).
     General,
 }
 
@@ -295,37 +223,29 @@ mod tests {
             .collect()
     }
 
-    /// A chain of `n` particles between two grounds along `d`, mixed with a spring of another
-    /// direction, so that the runs change kernel in the middle.
-    fn springs<S: Space>(n: u32, d: S::V, other: S::V) -> Vec<LineSpring<S>> {
+    /// A chain of `n` particles between two grounds along `d`.
+    fn springs<S: Space>(n: u32, d: S::V) -> Vec<LineSpring<S>> {
         let c = values(n as usize + 2, 7);
-        let mut out: Vec<LineSpring<S>> = (0..=n)
+        (0..=n)
             .map(|i| LineSpring {
                 a: if i == 0 { GROUND } else { i - 1 },
                 b: if i == n { GROUND } else { i },
                 direction: d,
                 c: 1.0 + c[i as usize].abs(),
             })
-            .collect();
-        out.insert(
-            3,
-            LineSpring {
-                a: 1,
-                b: 4,
-                direction: other,
-                c: 2.5,
-            },
-        );
-        out
+            .collect()
     }
 
-    /// The axis kernels' forces and energy equal the general kernel's bit for bit, and the
-    /// springs come back in the scene's order.
+    /// The axis kernel's forces and energy equal the general kernel's bit for bit, and the
+    /// springs come back in the scene's order; one spring off the axis makes the set general.
     fn same_forces<S: Space>(u: Vec<S::V>, d: S::V, other: S::V) {
         let n = u.len();
-        let all = springs::<S>(n as u32, d, other);
+        let all = springs::<S>(n as u32, d);
+        let mut mixed = all.clone();
+        mixed[3].direction = other;
+        assert!(matches!(LineSprings::new(mixed), LineSprings::General(_)));
         let springs = LineSprings::new(all.clone());
-        assert!(springs.runs.len() >= 4, "axis, general and grounded runs");
+        assert!(matches!(springs, LineSprings::Axis { .. }));
         let back: Vec<_> = springs
             .iter()
             .map(|s| (s.a, s.b, s.c, s.direction))
@@ -336,12 +256,12 @@ mod tests {
         for (i, u) in u.iter().enumerate() {
             positions.set(i, *u);
         }
-        let mut by_runs = Forces::<S>::zeros(n, 0, 0);
+        let mut by_axis = Forces::<S>::zeros(n, 0, 0);
         let mut by_general = Forces::<S>::zeros(n, 0, 0);
-        let e_runs = springs.add_forces::<true>(&positions, &mut by_runs, 0.25);
+        let e_axis = springs.add_forces::<true>(&positions, &mut by_axis, 0.25);
         let e_general = general::<S, true>(&all, &positions, &mut by_general, 0.25);
-        assert_eq!(e_runs.to_bits(), e_general.to_bits());
-        for (a, b) in by_runs.p.iter().zip(by_general.p.iter()) {
+        assert_eq!(e_axis.to_bits(), e_general.to_bits());
+        for (a, b) in by_axis.p.iter().zip(by_general.p.iter()) {
             for k in 0..S::DIM {
                 assert_eq!(
                     a.component(k).to_bits(),
@@ -376,8 +296,8 @@ mod tests {
         let motion = Motion::of(&held, 3);
         assert_eq!(free_axis(&held, 3), Some(1));
         for c in v.chunks(5) {
-            let on_axis = |x: f64| Vector3::new(0.0, x, 0.0);
-            let (mut x, mut carry, mut vel) = (on_axis(c[0]), on_axis(c[1] * 1e-17), on_axis(c[2]));
+            let along = |x: f64| Vector3::new(0.0, x, 0.0);
+            let (mut x, mut carry, mut vel) = (along(c[0]), along(c[1] * 1e-17), along(c[2]));
             let mut f = Vector3::new(c[3], c[4], c[0] * c[4]);
             let m = 1.0 / (0.1 + c[3].abs());
             let (mut x2, mut carry2, mut vel2, f2) = (x, carry, vel, f);
@@ -395,14 +315,6 @@ mod tests {
             f[2] = 0.0;
             assert_eq!(f, Vector3::zeros());
         }
-    }
-
-    #[test]
-    fn runs_follow_the_kernel_in_order() {
-        let r = runs(&[1, 1, 2, 2, 2, 1], |x| *x);
-        let ranges: Vec<_> = r.iter().map(|r| (r.range.clone(), r.kernel)).collect();
-        assert_eq!(ranges, vec![(0..2, 1), (2..5, 2), (5..6, 1)]);
-        assert!(runs(&[] as &[u8], |x| *x).is_empty());
     }
 
     #[test]

@@ -336,17 +336,17 @@ pub struct Model<S: Space, const FINITE: bool> {
 }
 
 /// The springs of fixed direction between particles or a particle and the ground, in their
-/// compact form, and the others as they are (each list in the scene's order).
-fn line_springs<S: Space>(springs: Vec<TwoPoint<S>>) -> (Vec<LineSpring<S>>, Vec<TwoPoint<S>>) {
+/// compact form, and the others as they are (each list in the scene's order), taken one by one
+/// so that a large scene never holds every spring in the general form.
+fn line_springs<S: Space>(
+    springs: impl Iterator<Item = TwoPoint<S>>,
+) -> (Vec<LineSpring<S>>, Vec<TwoPoint<S>>) {
     let end = |p: &Point<S>| match p {
         Point::Ground(_) => Some(GROUND),
         Point::Particle(i) => u32::try_from(*i).ok().filter(|i| *i != GROUND),
         Point::Body { .. } => None,
     };
-    let is_line = |s: &TwoPoint<S>| !s.axial && end(&s.a).is_some() && end(&s.b).is_some();
-    let lines = springs.iter().filter(|s| is_line(s)).count();
-    let mut line = Vec::with_capacity(lines);
-    let mut other = Vec::with_capacity(springs.len() - lines);
+    let (mut line, mut other) = (Vec::new(), Vec::new());
     for s in springs {
         match (s.axial, end(&s.a), end(&s.b)) {
             (false, Some(a), Some(b)) => line.push(LineSpring {
@@ -507,31 +507,25 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 })
                 .collect()
         };
-        let two_point = |list: &[Element]| -> Vec<TwoPoint<S>> {
-            list.iter()
-                .filter_map(|e| {
-                    let (nodes, direction, axial) = match &e.connection {
-                        Connection::FixedDirection { nodes, direction } => {
-                            (*nodes, S::v(direction), false)
-                        }
-                        Connection::Axial { nodes } => {
-                            let d = x0(nodes[1]) - x0(nodes[0]);
-                            (*nodes, d * (1.0 / d.dot(&d).sqrt()), true)
-                        }
-                        Connection::Grounded { .. } => return None,
-                    };
-                    let span0 = x0(nodes[1]) - x0(nodes[0]);
-                    Some(TwoPoint {
-                        a: points[nodes[0]],
-                        b: points[nodes[1]],
-                        direction,
-                        axial,
-                        span0,
-                        length0: span0.dot(&span0).sqrt(),
-                        c: e.coefficient,
-                    })
-                })
-                .collect()
+        let two_point = |e: &Element| -> Option<TwoPoint<S>> {
+            let (nodes, direction, axial) = match &e.connection {
+                Connection::FixedDirection { nodes, direction } => (*nodes, S::v(direction), false),
+                Connection::Axial { nodes } => {
+                    let d = x0(nodes[1]) - x0(nodes[0]);
+                    (*nodes, d * (1.0 / d.dot(&d).sqrt()), true)
+                }
+                Connection::Grounded { .. } => return None,
+            };
+            let span0 = x0(nodes[1]) - x0(nodes[0]);
+            Some(TwoPoint {
+                a: points[nodes[0]],
+                b: points[nodes[1]],
+                direction,
+                axial,
+                span0,
+                length0: span0.dot(&span0).sqrt(),
+                c: e.coefficient,
+            })
         };
         let contacts: Vec<Contact<S>> = scene
             .contacts
@@ -576,10 +570,10 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 force: S::v(&l.force),
             })
             .collect();
-        let (line_springs, springs) = line_springs(two_point(&scene.springs));
+        let (line_springs, springs) = line_springs(scene.springs.iter().filter_map(two_point));
         let grounded_springs = grounded(&scene.springs);
         let grounded_dashpots = grounded(&scene.dashpots);
-        let dashpots = two_point(&scene.dashpots);
+        let dashpots = scene.dashpots.iter().filter_map(two_point).collect();
         Model {
             inverse_masses: particles.iter().map(|p| 1.0 / p.mass).collect(),
             particles,

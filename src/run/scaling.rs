@@ -33,9 +33,21 @@ pub const STUDY_SECONDS: f64 = 150.0;
 /// as often as a fast one's.
 pub const POINT_SECONDS: f64 = 10.0;
 
-/// Increments of the shorter of the two timed runs at every N (the longer takes twice as
-/// many): about 2.5 periods of the mode at h = 0.1·√(m/k).
+/// Increments of the shorter of the two timed runs from N = 1000 up (the longer takes twice
+/// as many): about 2.5 periods of the mode at h = 0.1·√(m/k).
 pub const STEPS: u64 = 400;
+
+/// DOF-increments the shorter timed run takes at least ([`steps_for`]): a smaller chain runs
+/// longer, so that the difference of the two runs stands above the timer's and the
+/// allocator's noise (at N = 100 and 400 increments it is tens of microseconds, and the
+/// fastest repeats of the two runs differed by as much).
+const WORK_PER_RUN: f64 = 4.0e5;
+
+/// Increments of the shorter timed run at N: [`STEPS`], or more on a chain smaller than
+/// [`WORK_PER_RUN`] / [`STEPS`] masses.
+pub fn steps_for(n: usize) -> u64 {
+    STEPS.max((WORK_PER_RUN / n.max(1) as f64).ceil() as u64)
+}
 
 /// DOF-increments each timed run is repeated up to (R·S·N ≥ this): a small chain's run takes
 /// microseconds, so it is repeated often enough that its fastest repeat is not one lucky
@@ -105,7 +117,7 @@ pub fn sizes(max_n: usize) -> Vec<usize> {
 
 /// Times each run is repeated at N.
 pub fn repeats_for(n: usize) -> u64 {
-    ((WORK_PER_POINT / (n as f64 * STEPS as f64)).ceil() as u64).max(MIN_REPEATS)
+    ((WORK_PER_POINT / (n as f64 * steps_for(n) as f64)).ceil() as u64).max(MIN_REPEATS)
 }
 
 /// Run the study; `progress` is told each point as it starts (engine, N).
@@ -200,7 +212,7 @@ pub fn measure_with(engine: &dyn Engine, n: usize, repeats: u64) -> Result<Point
         let error = displacement_error(&chain, &output.history)?;
         Ok((seconds, rss, error, chain))
     };
-    let (short, _, _, chain) = timed(STEPS)?;
+    let (short, _, _, chain) = timed(steps_for(n))?;
     let (long, rss, error, long_chain) = timed(2 * chain.steps)?;
     let ns_per_step = (long - short).max(0.0) * 1e9 / chain.steps as f64;
     let limit = streaming_limit(n, chain.steps, repeats);
@@ -338,4 +350,20 @@ pub fn fitted_exponent(points: &[(f64, f64)]) -> Option<(f64, f64)> {
         let slope = sxy / sxx;
         (slope, my - slope * mx)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_small_chain_runs_long_enough_to_time() {
+        assert_eq!(steps_for(1_000_000), STEPS);
+        assert_eq!(steps_for(1000), STEPS);
+        assert_eq!(steps_for(100), 4000);
+        assert_eq!(steps_for(10), 40_000);
+        for n in sizes(1_000_000) {
+            assert!(n as f64 * steps_for(n) as f64 >= WORK_PER_RUN);
+        }
+    }
 }

@@ -135,8 +135,10 @@ pub fn study(max_n: usize, mut progress: impl FnMut(&str, usize)) -> Result<Stud
             crate::interrupt::checkpoint("scaling").map_err(|_| "interrupted".to_string())?;
             let name = engine.name().to_string();
             let left = STUDY_SECONDS - started.elapsed().as_secs_f64();
+            // In proportion to the DOF-increments a run takes (N × increments).
+            let work = |n: usize| n as f64 * steps_for(n) as f64;
             let predicted = last.map(|(n0, point, long)| {
-                let scale = n as f64 / n0 as f64;
+                let scale = work(n) / work(n0);
                 (point * scale, long * scale)
             });
             // The point at its fewest repeats: a short and a long run each, MIN_REPEATS times.
@@ -146,7 +148,7 @@ pub fn study(max_n: usize, mut progress: impl FnMut(&str, usize)) -> Result<Stud
                     engine: name,
                     n,
                     reason: format!(
-                        "predicted {fewest:.0} s at {MIN_REPEATS} repeats (linear in N from the last point), over the {left:.0} s left of the study's {STUDY_SECONDS:.0} s"
+                        "predicted {fewest:.0} s at {MIN_REPEATS} repeats (linear in N × increments from the last point), over the {left:.0} s left of the study's {STUDY_SECONDS:.0} s"
                     ),
                 });
                 break;

@@ -522,9 +522,10 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
     }
 
     /// The rest of increment n where no force reads the velocity and no row falls: the
-    /// particles in one fused pass ([`Model::step_particles`], their half-step velocities
-    /// updated in place, their accelerations kept only for the step's last increment, which
-    /// the next step restarts from), then the bodies as the general path takes them.
+    /// particles by [`Model::step_particles`] (their half-step velocities updated in place;
+    /// along one axis in one pass, their accelerations kept only for the step's last
+    /// increment, which the next step restarts from), then the bodies as the general path
+    /// takes them.
     fn advance_fused(&mut self, n: u64, plan: &StepPlan<S>) {
         let (model, h, held) = (self.model, self.h, &plan.held);
         let (cfg, carry, acc) = (&mut self.cfg, &mut self.carry, &mut self.acc);

@@ -347,6 +347,7 @@ fn line_springs<S: Space>(
         Point::Body { .. } => None,
     };
     let (mut line, mut other) = (Vec::new(), Vec::new());
+    line.reserve_exact(springs.size_hint().1.unwrap_or(0));
     for s in springs {
         match (s.axial, end(&s.a), end(&s.b)) {
             (false, Some(a), Some(b)) => line.push(LineSpring {

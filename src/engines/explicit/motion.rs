@@ -137,8 +137,9 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
 
     /// The particles' part of an increment whose forces do not read the velocity:
     /// a(n) = P M⁻¹ f(n) (into `acc`), v(n+½) = v(n−½) + h·a(n) in place of v(n−½) in
-    /// `v_half`, and x(n+1) = x(n) + h·v(n+½) into `cfg` (compensated); the particle forces
-    /// cleared for the next force pass. The arithmetic of [`Model::accelerations`],
+    /// `v_half`, and x(n+1) = x(n) + h·v(n+½) into `cfg` (compensated); the components of the
+    /// particle forces it read cleared for the next force pass (any other component a pass
+    /// wrote stays marked in [`Forces::written`] for [`Forces::clear`]). The arithmetic of [`Model::accelerations`],
     /// [`Rates::set_plus`] and [`Model::advance`], bit for bit. Where every particle moves along
     /// one axis, in one pass over that component (each particle's data read once, the
     /// acceleration written only where `STORE_ACC`: where a later increment reads it); otherwise

@@ -197,9 +197,16 @@ pub fn step_along(
 ) -> f64 {
     let a = *f * inverse_mass;
     *f = 0.0;
+    move_along(x, carry, v, a, h);
+    a
+}
+
+/// One particle's motion along the one axis it is free on, from its acceleration `a` on that
+/// component: v(n+½) = v(n−½) + h·a in place, then x(n+1) = x(n) + h·v(n+½) (compensated).
+#[inline(always)]
+pub fn move_along(x: &mut f64, carry: &mut f64, v: &mut f64, a: f64, h: f64) {
     *v += a * h;
     compensated_add(x, carry, *v * h);
-    a
 }
 
 #[cfg(test)]

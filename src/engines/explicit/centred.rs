@@ -166,11 +166,23 @@ impl<S: Space> ParticleDashpots<S> {
         v_n: &mut Rates<S>,
         counters: &mut Counters,
     ) -> f64 {
+        let power = self.accelerations(at, acc, counters);
+        v_n.set_plus(at.v_half, 0.5 * at.h, acc);
+        power
+    }
+
+    /// [`ParticleDashpots::solve`] without the centred velocity itself: the accelerations
+    /// `acc` at it and the dashpots' power, for an increment that writes no row.
+    pub(super) fn accelerations<const FINITE: bool>(
+        &mut self,
+        at: &AtIncrement<S, FINITE>,
+        acc: &mut Rates<S>,
+        counters: &mut Counters,
+    ) -> f64 {
         let (model, cfg, forces) = (at.model, at.cfg, at.forces);
         let (v_half, h, held) = (at.v_half, at.h, at.held);
         counters.damping_evaluations += 1;
         model.accelerations(cfg, forces, v_half, held, acc, counters);
-        v_n.set_plus(v_half, 0.5 * h, acc);
         let k = self.list.len();
         // The centred velocity before the dashpots act, as `Rates::set_plus` forms it.
         let centred = |p: usize| v_half.p.get(p) + acc.p.get(p) * (0.5 * h);
@@ -204,7 +216,6 @@ impl<S: Space> ParticleDashpots<S> {
         }
         for &(j, p, _, g) in &self.ends {
             acc.p.sub(p, g * (self.list[j].c * sigma[j]));
-            v_n.p.set(p, v_half.p.get(p) + acc.p.get(p) * (0.5 * h));
         }
         power
     }

@@ -472,9 +472,18 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         self.watch_solids(n)?;
         let restart = !self.started || n == plan.first;
         let advances = n != plan.first + plan.count;
-        if !restart && !row && advances && !plan.velocity.reads_velocity() {
-            self.advance_fused(n, plan);
-            return Ok(());
+        if !restart && !row && advances {
+            match plan.velocity {
+                VelocityRule::Absent => {
+                    self.advance_fused(n, plan);
+                    return Ok(());
+                }
+                VelocityRule::Direct(_) => {
+                    self.advance_centred(n, plan);
+                    return Ok(());
+                }
+                _ => {}
+            }
         }
         let power = if restart {
             self.restart(plan)
@@ -544,6 +553,40 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
             self.dissipated += 0.5 * h * self.last_power;
         }
         self.last_power = 0.0;
+        std::mem::swap(&mut self.v_half.b, &mut self.v_next.b);
+        std::mem::swap(&mut self.v_half.w, &mut self.v_next.w);
+        std::mem::swap(&mut self.acc_prev, &mut self.acc);
+    }
+
+    /// The rest of increment n where the dashpots' rates are solved directly
+    /// ([`VelocityRule::Direct`]) and no row falls: the accelerations at the centred velocity
+    /// (the velocity itself is not formed), then the particles by [`Model::move_particles`]
+    /// and the bodies as the general path takes them. The arithmetic of the general path,
+    /// bit for bit.
+    fn advance_centred(&mut self, n: u64, plan: &mut StepPlan<S>) {
+        let (model, h) = (self.model, self.h);
+        let VelocityRule::Direct(dashpots) = &mut plan.velocity else {
+            unreachable!("called for a step whose dashpots are solved directly")
+        };
+        let at = AtIncrement {
+            model,
+            cfg: &self.cfg,
+            forces: &self.forces,
+            v_half: &self.v_half,
+            acc_prev: &self.acc_prev,
+            h,
+            held: &plan.held,
+        };
+        let power = dashpots.accelerations(&at, &mut self.acc, &mut self.counters);
+        if n > 0 {
+            self.dissipated += 0.5 * h * (self.last_power + power);
+        }
+        self.last_power = power;
+        let (held, cfg, carry, acc) = (&plan.held, &mut self.cfg, &mut self.carry, &self.acc);
+        model.move_particles(cfg, carry, h, held, &mut self.v_half, acc);
+        let v_next = &mut self.v_next;
+        v_next.set_plus_bodies(&self.v_half, h, acc);
+        model.advance_bodies(cfg, carry, h, v_next, held, &mut self.counters);
         std::mem::swap(&mut self.v_half.b, &mut self.v_next.b);
         std::mem::swap(&mut self.v_half.w, &mut self.v_next.w);
         std::mem::swap(&mut self.acc_prev, &mut self.acc);

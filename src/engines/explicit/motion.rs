@@ -2,7 +2,7 @@
 //! constraints, the update of velocities and positions, the kinetic energy; and the kinematics
 //! the consistent contact start sets (a pair's penetration and gap rate).
 
-use super::axis::{ParticleKernel, step_along};
+use super::axis::{ParticleKernel, move_along, step_along};
 use super::body_solve::project;
 use super::model::*;
 use super::space::{BodyInertia, Lin, Space, compensated_add};
@@ -44,9 +44,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                     *a = *f * *m;
                 }
                 // The held components exactly 0, as the projection gives them.
-                for j in (0..S::V::DIM).filter(|j| *j != k) {
-                    out.p.component_mut(j).fill(0.0);
-                }
+                out.p.fill_zero_except(k);
             }
             ParticleKernel::General => {
                 let particles = self.inverse_masses.iter().zip(&held.particle_motion);
@@ -173,9 +171,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 if STORE_ACC {
                     // The held components' accelerations, exactly 0 as the projection gives
                     // them.
-                    for j in (0..S::V::DIM).filter(|j| *j != k) {
-                        acc.p.component_mut(j).fill(0.0);
-                    }
+                    acc.p.fill_zero_except(k);
                 }
                 forces.written[k] = false;
             }
@@ -186,6 +182,39 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                     let a = held.motions[*motion as usize].project(forces.p.get(i) * *m);
                     acc.p.set(i, a);
                 }
+                self.move_particles(cfg, carry, h, held, v_half, acc);
+                forces.p.fill_zero();
+                forces.written = [false; 3];
+            }
+        }
+    }
+
+    /// The particles' motion from accelerations `acc` already formed under `held`:
+    /// v(n+½) = v(n−½) + h·a(n) in place of v(n−½) in `v_half`, and x(n+1) = x(n) + h·v(n+½)
+    /// into `cfg` (compensated). The arithmetic of [`Rates::set_plus`] and [`Model::advance`]
+    /// on the particles, bit for bit; where every particle moves along one axis, on that
+    /// component alone (the others, held, keep their values as in
+    /// [`Model::step_particles`]), otherwise each pass over every component alike.
+    pub fn move_particles(
+        &self,
+        cfg: &mut Config<S>,
+        carry: &mut Rates<S>,
+        h: f64,
+        held: &Constraints<S>,
+        v_half: &mut Rates<S>,
+        acc: &Rates<S>,
+    ) {
+        match held.particle_kernel {
+            ParticleKernel::Along(k) => {
+                let x = cfg.u.component_mut(k);
+                let c = carry.p.component_mut(k);
+                let v = v_half.p.component_mut(k);
+                let state = (x.iter_mut().zip(c.iter_mut())).zip(v.iter_mut());
+                for (((x, c), v), a) in state.zip(acc.p.component(k)) {
+                    move_along(x, c, v, *a, h);
+                }
+            }
+            ParticleKernel::General => {
                 for (v, a) in v_half.p.flat_mut().iter_mut().zip(acc.p.flat()) {
                     *v += *a * h;
                 }
@@ -193,8 +222,6 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 for ((x, c), v) in x.iter_mut().zip(c.iter_mut()).zip(v_half.p.flat()) {
                     compensated_add(x, c, *v * h);
                 }
-                forces.p.fill_zero();
-                forces.written = [false; 3];
             }
         }
     }

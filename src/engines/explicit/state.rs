@@ -89,12 +89,22 @@ impl<V: Lin> Vectors<V> {
         self.data.copy_from_slice(&other.data);
     }
     /// Set every vector to zero.
+    #[inline(always)]
     pub fn fill_zero(&mut self) {
         fill_zero(&mut self.data, 0.0);
     }
     /// Set component `k` of every vector to zero.
+    #[inline(always)]
     pub fn fill_zero_component(&mut self, k: usize) {
         fill_zero(self.component_mut(k), 0.0);
+    }
+    /// Set every component but `k` of every vector to zero (what a projection onto axis `k`
+    /// leaves of them).
+    #[inline(always)]
+    pub fn fill_zero_except(&mut self, k: usize) {
+        for j in (0..V::DIM).filter(|j| *j != k) {
+            self.fill_zero_component(j);
+        }
     }
 }
 

@@ -24,14 +24,17 @@
 //! with the state in registers (the dependent chain alone) and in heap slices, one pass per
 //! stage (what a scene-driven engine must at least do). `floor/<case>/slices` of the pinned 2D
 //! rigid cases: the least arithmetic of the same scheme on a body turning about a pin
-//! (`run::floor::PinnedBody`), in heap slices.
+//! (`run::floor::PinnedBody`), in heap slices; of springs_grounded_c: the same recurrence as
+//! the engine's on a mass pulled along a line by an axial spring and the dashpot solved along
+//! the turning line (`run::floor::AxialOscillator`, `tests/floor.rs`: equal to round-off), in
+//! heap slices.
 //!
 //! Run with `cargo bench --bench increment`; `BENCHMARKS.md` gives the table.
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use crosscheck::case;
 use crosscheck::engines::RunSettings;
 use crosscheck::engines::explicit::ExplicitEngine;
-use crosscheck::run::floor::{DampedOscillator, PinnedBody};
+use crosscheck::run::floor::{AxialOscillator, DampedOscillator, PinnedBody};
 use crosscheck::run::matching;
 use crosscheck::scene::IncrementRule;
 use std::hint::black_box;
@@ -135,6 +138,20 @@ fn floor(c: &mut Criterion) {
         group.bench_function(format!("{}/registers", scene.id), |b| {
             b.iter(|| black_box(oscillator).in_registers(black_box(h), steps))
         });
+        group.bench_function(format!("{}/slices", scene.id), |b| {
+            b.iter(|| black_box(oscillator).in_slices(black_box(h), steps))
+        });
+    }
+    for scene in seed_cases() {
+        let Some(oscillator) = AxialOscillator::of(&scene) else {
+            continue;
+        };
+        let IncrementRule::Given(h) = scene.settings.increment else {
+            continue;
+        };
+        let h = h / REFINEMENT;
+        let steps = (oscillator.duration / h).round() as u64;
+        group.throughput(Throughput::Elements(steps));
         group.bench_function(format!("{}/slices", scene.id), |b| {
             b.iter(|| black_box(oscillator).in_slices(black_box(h), steps))
         });

@@ -1,6 +1,8 @@
-//! The arithmetic floor of one increment: the explicit scheme's recurrence for the simplest
-//! seed scene, a mass on a grounded spring and dashpot, written out by hand, so a benchmark can
-//! say how far the general engine is from the arithmetic it must do.
+//! The arithmetic floor of one increment: the explicit scheme's recurrence for a seed scene,
+//! written out by hand, so a benchmark can say how far the general engine is from the
+//! arithmetic it must do. Here the simplest, a mass on a grounded spring and dashpot; in
+//! [`AxialOscillator`] a mass on a spring and dashpot whose line turns, in [`PinnedBody`] a
+//! body turning about a pin.
 //!
 //! The recurrence is the one the explicit engine runs on such a scene: central differences
 //! with the centred dashpot treatment (the dashpot's rate solves
@@ -168,5 +170,7 @@ fn compensated_add(x: &mut f64, carry: &mut f64, dx: f64) {
     *x = t;
 }
 
+mod axial;
 mod pinned_body;
+pub use axial::{AxialOscillator, AxialState};
 pub use pinned_body::PinnedBody;

@@ -24,10 +24,10 @@
 //! with the state in registers (the dependent chain alone) and in heap slices, one pass per
 //! stage (what a scene-driven engine must at least do). `floor/<case>/slices` of the pinned 2D
 //! rigid cases: the least arithmetic of the same scheme on a body turning about a pin
-//! (`run::floor::PinnedBody`), in heap slices; of springs_grounded_c: the same recurrence as
-//! the engine's on a mass pulled along a line by an axial spring and the dashpot solved along
-//! the turning line (`run::floor::AxialOscillator`, `tests/floor.rs`: equal to round-off), in
-//! heap slices.
+//! (`run::floor::PinnedBody`), in heap slices; of springs_grounded_c and springs_n2n_c: the
+//! same recurrence as the engine's on masses pulled along a line by axial springs and the
+//! dashpot solved along its turning line (`run::floor::AxialOscillator`, `tests/floor.rs`:
+//! equal to round-off), in heap slices.
 //!
 //! Run with `cargo bench --bench increment`; `BENCHMARKS.md` gives the table.
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
@@ -143,17 +143,17 @@ fn floor(c: &mut Criterion) {
         });
     }
     for scene in seed_cases() {
-        let Some(oscillator) = AxialOscillator::of(&scene) else {
+        let Some(system) = AxialOscillator::of(&scene) else {
             continue;
         };
         let IncrementRule::Given(h) = scene.settings.increment else {
             continue;
         };
         let h = h / REFINEMENT;
-        let steps = (oscillator.duration / h).round() as u64;
+        let steps = (system.duration / h).round() as u64;
         group.throughput(Throughput::Elements(steps));
         group.bench_function(format!("{}/slices", scene.id), |b| {
-            b.iter(|| black_box(oscillator).in_slices(black_box(h), steps))
+            b.iter(|| black_box(&system).in_slices(black_box(h), steps))
         });
     }
     for scene in seed_cases() {

@@ -87,27 +87,33 @@ fn released_oscillator(m: f64, k: f64, c: f64, h: f64, t: f64) -> (f64, f64) {
 }
 
 #[test]
-fn the_axial_floor_recognises_only_a_mass_on_a_turning_spring_and_dashpot() {
-    let oscillator = AxialOscillator::of(&scene("springs_grounded_c")).expect("system C");
-    // The values of cases/springs_grounded_c.toml: unit spacing along the 45° line, released
-    // one unit along it, held across it.
+fn the_axial_floor_recognises_only_masses_on_turning_springs_and_a_dashpot() {
+    // The values of cases/springs_grounded_c.toml and springs_n2n_c.toml: unit spacing along
+    // the 45° line, the end mass released one unit along it, every mass held across it.
     let along = nalgebra::Vector2::new(1.0, 1.0).normalize();
-    assert_eq!(
-        (oscillator.mass, oscillator.stiffness, oscillator.damping),
-        (0.02588, 30.0, 0.12)
-    );
-    assert!(
-        (oscillator.span - along).norm() <= 1e-15,
-        "{}",
-        oscillator.span
-    );
-    assert!((oscillator.released_from - along).norm() <= 1e-15);
-    assert!(oscillator.held.dot(&along).abs() <= 1e-15);
-    assert_eq!(oscillator.duration, 1.0);
+    let near = |a: nalgebra::Vector2<f64>, b: nalgebra::Vector2<f64>| (a - b).norm() <= 1e-15;
+    for (id, moving) in [("springs_grounded_c", 1), ("springs_n2n_c", 2)] {
+        let system = AxialOscillator::of(&scene(id)).expect(id);
+        assert_eq!(system.masses.len(), moving, "{id}");
+        for m in &system.masses {
+            assert_eq!(m.mass, 0.02588);
+            assert!(m.held.dot(&along).abs() <= 1e-15, "{id}");
+        }
+        let end = system.masses.last().unwrap();
+        assert!(near(end.released_from, along), "{id}");
+        // Spring 101-102 joins two held nodes in the grounded test and is left out there.
+        assert_eq!(system.springs.len(), moving, "{id}");
+        for s in system.springs.iter().chain([&system.dashpot]) {
+            assert!(near(s.span, along), "{id}");
+        }
+        assert_eq!(system.dashpot.coefficient, 0.12);
+        assert_eq!(system.dashpot.ends[1], Some(moving - 1), "{id}");
+        assert_eq!(system.duration, 1.0);
+    }
     for id in [
         "springs_grounded_a",
         "springs_grounded_b",
-        "springs_n2n_c",
+        "springs_n2n_b",
         "rigid2d_pin_lumped",
     ] {
         assert_eq!(AxialOscillator::of(&scene(id)), None, "{id}");
@@ -116,30 +122,42 @@ fn the_axial_floor_recognises_only_a_mass_on_a_turning_spring_and_dashpot() {
 
 #[test]
 fn the_axial_floor_gives_the_engines_answer_and_the_closed_form() {
-    let scene = scene("springs_grounded_c");
-    let oscillator = AxialOscillator::of(&scene).unwrap();
-    let result = ExplicitEngine::finite()
-        .run(&scene, &RunSettings::default())
-        .unwrap();
-    let (h, steps) = (result.info.increment, result.info.steps);
-    assert_eq!(steps, 20_000);
-    let engine_u = *col(&result.history, "u_end").last().unwrap();
-    let state = oscillator.in_slices(h, steps);
     let along = nalgebra::Vector2::new(1.0, 1.0).normalize();
-    let floor_u = state.displacement.dot(&along);
-    // Off the line the projection leaves round-off alone.
-    let across = state.displacement.dot(&oscillator.held).abs();
-    println!("u(1 s): engine {engine_u:.17e}, floor {floor_u:.17e}, across {across:.1e}");
-    // The engine's recurrence on this scene (measured: equal to the last bit). Any order of
-    // operations would do: 2·10^4 increments of a quantity of order 1, each off by a few
-    // ulps, stay under 1e-12, while another treatment of the turning dashpot (lagged, or its
-    // line frozen at t = 0) is off by far more.
-    assert!(
-        (floor_u - engine_u).abs() <= 1e-12,
-        "{floor_u} against {engine_u}"
-    );
-    assert!(across <= 1e-12);
-    let (m, k, c) = (oscillator.mass, oscillator.stiffness, oscillator.damping);
+    for (id, columns) in [
+        ("springs_grounded_c", vec!["u_end"]),
+        ("springs_n2n_c", vec!["u_mid", "u_end"]),
+    ] {
+        let scene = scene(id);
+        let system = AxialOscillator::of(&scene).unwrap();
+        let result = ExplicitEngine::finite()
+            .run(&scene, &RunSettings::default())
+            .unwrap();
+        let (h, steps) = (result.info.increment, result.info.steps);
+        assert_eq!(steps, 20_000);
+        let state = system.in_slices(h, steps);
+        for ((column, u), mass) in columns.iter().zip(&state.displacements).zip(&system.masses) {
+            let engine_u = *col(&result.history, column).last().unwrap();
+            let floor_u = u.dot(&along);
+            // Off the line the projection leaves round-off alone.
+            let across = u.dot(&mass.held).abs();
+            println!("{id} {column}(1 s): engine {engine_u:.17e}, floor {floor_u:.17e}");
+            // The engine's recurrence on this scene (measured: equal to the last bit). Any
+            // order of operations would do: 2·10^4 increments of a quantity of order 1, each
+            // off by a few ulps, stay under 1e-12, while another treatment of the turning
+            // dashpot (lagged, or its line frozen at t = 0) is off by far more.
+            assert!(
+                (floor_u - engine_u).abs() <= 1e-12,
+                "{id} {column}: {floor_u}"
+            );
+            assert!(across <= 1e-12, "{id} {column}: {across:e} across the line");
+        }
+    }
+    // The grounded test is the single damped oscillator along the line.
+    let scene = scene("springs_grounded_c");
+    let system = AxialOscillator::of(&scene).unwrap();
+    let (h, steps) = (5.0e-5, 20_000);
+    let floor_u = system.in_slices(h, steps).displacements[0].dot(&along);
+    let (m, k, c) = (0.02588, 30.0, 0.12);
     let (exact, bound) = released_oscillator(m, k, c, h, h * steps as f64);
     println!(
         "closed form {exact:.12e}, floor error {:.3e}, bound {bound:.3e}",

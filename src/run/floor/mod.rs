@@ -1,7 +1,7 @@
 //! The arithmetic floor of one increment: the explicit scheme's recurrence for a seed scene,
 //! written out by hand, so a benchmark can say how far the general engine is from the
 //! arithmetic it must do. Here the simplest, a mass on a grounded spring and dashpot; in
-//! [`AxialOscillator`] a mass on a spring and dashpot whose line turns, in [`PinnedBody`] a
+//! [`AxialOscillator`] masses on springs and a dashpot whose lines turn, in [`PinnedBody`] a
 //! body turning about a pin.
 //!
 //! The recurrence is the one the explicit engine runs on such a scene: central differences
@@ -172,5 +172,5 @@ fn compensated_add(x: &mut f64, carry: &mut f64, dx: f64) {
 
 mod axial;
 mod pinned_body;
-pub use axial::{AxialOscillator, AxialState};
+pub use axial::{AxialElement, AxialOscillator, AxialState, LineMass};
 pub use pinned_body::PinnedBody;

@@ -169,4 +169,6 @@ fn compensated_add(x: &mut f64, carry: &mut f64, dx: f64) {
 }
 
 mod pinned_body;
+mod sliding_body;
 pub use pinned_body::PinnedBody;
+pub use sliding_body::{SlidingBody, SlidingState};

@@ -145,7 +145,7 @@ impl PinnedBody {
 
     /// The springs, all of fixed direction x from a held node: those on body points (with the
     /// point relative to the pin) and the particle's summed stiffness.
-    fn springs(
+    pub(super) fn springs(
         scene: &Scene,
         particle: usize,
         relative: &dyn Fn(usize) -> Vector2<f64>,
@@ -247,9 +247,9 @@ impl PinnedBody {
 /// An orientation in 2D as cos θ − 1 and sin θ (the versine keeps its relative precision near
 /// θ = 0), each with the carry of its compensated sum.
 #[derive(Debug, Clone, Copy, Default)]
-struct Heading {
-    versine: f64,
-    sine: f64,
+pub(super) struct Heading {
+    pub(super) versine: f64,
+    pub(super) sine: f64,
     carry: [f64; 2],
 }
 
@@ -257,7 +257,7 @@ impl Heading {
     /// Turn by the angle `x` (|x| small: the first two terms of the series of sin and cos − 1),
     /// restoring unit norm by the first-order correction of the excess c² + s² − 1.
     #[inline(always)]
-    fn turn(&mut self, x: f64) {
+    pub(super) fn turn(&mut self, x: f64) {
         let (v, s) = (self.versine, self.sine);
         let c = 1.0 + v;
         let excess = (2.0 * v + s * s) + v * v;

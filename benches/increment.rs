@@ -24,7 +24,10 @@
 //! with the state in registers (the dependent chain alone) and in heap slices, one pass per
 //! stage (what a scene-driven engine must at least do). `floor/<case>/slices` of the pinned 2D
 //! rigid cases: the least arithmetic of the same scheme on a body turning about a pin
-//! (`run::floor::PinnedBody`), in heap slices; of springs_grounded_c and springs_n2n_c: the
+//! (`run::floor::PinnedBody`), in heap slices; of rigid2d_slide_surface: the same on a body
+//! sliding along x and turning with its mass centre off its reference node, whose centripetal
+//! force reads the centred velocity, iterated with the engine's stop rule
+//! (`run::floor::SlidingBody`), in heap slices; of springs_grounded_c and springs_n2n_c: the
 //! same recurrence as the engine's on masses pulled along a line by axial springs and the
 //! dashpot solved along its turning line (`run::floor::AxialOscillator`, `tests/floor.rs`:
 //! equal to round-off), in heap slices.
@@ -34,7 +37,7 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use crosscheck::case;
 use crosscheck::engines::RunSettings;
 use crosscheck::engines::explicit::ExplicitEngine;
-use crosscheck::run::floor::{AxialOscillator, DampedOscillator, PinnedBody};
+use crosscheck::run::floor::{AxialOscillator, DampedOscillator, PinnedBody, SlidingBody};
 use crosscheck::run::matching;
 use crosscheck::scene::IncrementRule;
 use std::hint::black_box;
@@ -158,6 +161,20 @@ fn floor(c: &mut Criterion) {
     }
     for scene in seed_cases() {
         let Some(body) = PinnedBody::of(&scene) else {
+            continue;
+        };
+        let IncrementRule::Given(h) = scene.settings.increment else {
+            continue;
+        };
+        let h = h / REFINEMENT;
+        let steps = (body.duration / h).round() as u64;
+        group.throughput(Throughput::Elements(steps));
+        group.bench_function(format!("{}/slices", scene.id), |b| {
+            b.iter(|| black_box(&body).in_slices(black_box(h), steps))
+        });
+    }
+    for scene in seed_cases() {
+        let Some(body) = SlidingBody::of(&scene) else {
             continue;
         };
         let IncrementRule::Given(h) = scene.settings.increment else {

@@ -2,7 +2,8 @@
 //! written out by hand, so a benchmark can say how far the general engine is from the
 //! arithmetic it must do. Here the simplest, a mass on a grounded spring and dashpot; in
 //! [`AxialOscillator`] masses on springs and a dashpot whose lines turn, in [`PinnedBody`] a
-//! body turning about a pin.
+//! body turning about a pin, in [`SlidingBody`] a body that slides and turns with its mass
+//! centre off its reference node.
 //!
 //! The recurrence is the one the explicit engine runs on such a scene: central differences
 //! with the centred dashpot treatment (the dashpot's rate solves
@@ -172,5 +173,7 @@ fn compensated_add(x: &mut f64, carry: &mut f64, dx: f64) {
 
 mod axial;
 mod pinned_body;
+mod sliding_body;
 pub use axial::{AxialElement, AxialOscillator, AxialState, LineMass};
 pub use pinned_body::PinnedBody;
+pub use sliding_body::{SlidingBody, SlidingState};

@@ -15,6 +15,7 @@
 //! engine against, not its answer to round-off: `tests/floor.rs` holds it to the case's exact
 //! solution at the case's tolerance.
 
+use super::compensated_add;
 use crate::scene::{Attachment, Connection, Dimension, Dof, Scene, StepKind, Surface};
 use nalgebra::Vector2;
 use std::hint::black_box;
@@ -145,7 +146,7 @@ impl PinnedBody {
 
     /// The springs, all of fixed direction x from a held node: those on body points (with the
     /// point relative to the pin) and the particle's summed stiffness.
-    fn springs(
+    pub(super) fn springs(
         scene: &Scene,
         particle: usize,
         relative: &dyn Fn(usize) -> Vector2<f64>,
@@ -247,9 +248,9 @@ impl PinnedBody {
 /// An orientation in 2D as cos θ − 1 and sin θ (the versine keeps its relative precision near
 /// θ = 0), each with the carry of its compensated sum.
 #[derive(Debug, Clone, Copy, Default)]
-struct Heading {
-    versine: f64,
-    sine: f64,
+pub(super) struct Heading {
+    pub(super) versine: f64,
+    pub(super) sine: f64,
     carry: [f64; 2],
 }
 
@@ -257,7 +258,7 @@ impl Heading {
     /// Turn by the angle `x` (|x| small: the first two terms of the series of sin and cos − 1),
     /// restoring unit norm by the first-order correction of the excess c² + s² − 1.
     #[inline(always)]
-    fn turn(&mut self, x: f64) {
+    pub(super) fn turn(&mut self, x: f64) {
         let (v, s) = (self.versine, self.sine);
         let c = 1.0 + v;
         let excess = (2.0 * v + s * s) + v * v;
@@ -266,13 +267,4 @@ impl Heading {
         compensated_add(&mut self.versine, &mut self.carry[0], c * radial - s * ds);
         compensated_add(&mut self.sine, &mut self.carry[1], s * radial + c * ds);
     }
-}
-
-/// `x += dx` with the rounding error carried to the next addition (Kahan).
-#[inline(always)]
-fn compensated_add(x: &mut f64, carry: &mut f64, dx: f64) {
-    let y = dx - *carry;
-    let t = *x + y;
-    *carry = (t - *x) - y;
-    *x = t;
 }

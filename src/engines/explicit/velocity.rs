@@ -171,10 +171,13 @@ impl<S: Space> VelocityRule<S> {
                 let work = work.shaped(model);
                 model.dashpot_directions(cfg, &mut work.directions);
                 if !*solved {
-                    // Without dashpots `work.total` holds the position forces, whose
-                    // dissipation is 0.
                     if iterate(at, *affine, work, acc, counters) {
-                        return Ok(work.total.dissipation);
+                        // Without dashpots nothing dissipates (`work.total` is not used).
+                        return Ok(if model.has_dashpots() {
+                            work.total.dissipation
+                        } else {
+                            0.0
+                        });
                     }
                     // Stiff dashpots (h·|M⁻¹C|/2 ≥ 1): the iteration cannot contract, but
                     // where the map is affine it is solved directly from now on.
@@ -194,7 +197,7 @@ impl<S: Space> VelocityRule<S> {
 
 /// The fixed-point iteration v ← v(n−½) + (h/2)·a(v) from the predictor
 /// v(n−½) + (h/2)·a(n−1). True when it met its tolerance (v(n) in `work.v_n`, the
-/// accelerations in `acc`, the dissipation in `work.total`); it gives up early where it
+/// accelerations in `acc`, with dashpots the dissipation in `work.total`); it gives up early where it
 /// diverges and `stop_diverging`.
 fn iterate<S: Space, const FINITE: bool>(
     at: &AtIncrement<S, FINITE>,
@@ -206,12 +209,11 @@ fn iterate<S: Space, const FINITE: bool>(
     let (model, cfg, forces) = (at.model, at.cfg, at.forces);
     let (v_half, acc_prev, h, held) = (at.v_half, at.acc_prev, at.h, at.held);
     work.guess.set_plus(v_half, 0.5 * h, acc_prev);
-    work.total.copy_from(forces);
     let mut previous_change = 0.0;
     for pass in 0..MAX_DAMPING_ITERATIONS {
         // Without dashpots the velocity enters through the centripetal and gyroscopic terms
         // only: the position forces serve every pass as they are.
-        if model.has_dashpots() {
+        let total = if model.has_dashpots() {
             work.total.copy_from(forces);
             model.damping_along(
                 cfg,
@@ -220,8 +222,11 @@ fn iterate<S: Space, const FINITE: bool>(
                 &mut work.total,
                 counters,
             );
-        }
-        model.accelerations(cfg, &work.total, &work.guess, held, acc, counters);
+            &work.total
+        } else {
+            forces
+        };
+        model.accelerations(cfg, total, &work.guess, held, acc, counters);
         work.v_n.set_plus(v_half, 0.5 * h, acc);
         let (change, size) = work.v_n.max_difference(&work.guess);
         std::mem::swap(&mut work.v_n, &mut work.guess);

@@ -122,6 +122,46 @@ fn setup(c: &mut Criterion) {
     group.finish();
 }
 
+/// One form of a floor: its name, the duration it runs, and a run of so many increments of h.
+type FloorForm = (&'static str, f64, Box<dyn Fn(f64, u64)>);
+
+/// The floors that apply to `scene`, in every form they have.
+fn floor_forms(scene: &crosscheck::scene::Scene) -> Vec<FloorForm> {
+    let mut forms: Vec<FloorForm> = Vec::new();
+    if let Some(o) = DampedOscillator::of(scene) {
+        let run = move |h, n| {
+            black_box(black_box(o).in_registers(h, n));
+        };
+        forms.push(("registers", o.duration, Box::new(run)));
+        let run = move |h, n| {
+            black_box(black_box(o).in_slices(h, n));
+        };
+        forms.push(("slices", o.duration, Box::new(run)));
+    }
+    if let Some(system) = AxialOscillator::of(scene) {
+        let duration = system.duration;
+        let run = move |h, n| {
+            black_box(black_box(&system).in_slices(h, n));
+        };
+        forms.push(("slices", duration, Box::new(run)));
+    }
+    if let Some(body) = PinnedBody::of(scene) {
+        let duration = body.duration;
+        let run = move |h, n| {
+            black_box(black_box(&body).in_slices(h, n));
+        };
+        forms.push(("slices", duration, Box::new(run)));
+    }
+    if let Some(body) = SlidingBody::of(scene) {
+        let duration = body.duration;
+        let run = move |h, n| {
+            black_box(black_box(&body).in_slices(h, n));
+        };
+        forms.push(("slices", duration, Box::new(run)));
+    }
+    forms
+}
+
 fn floor(c: &mut Criterion) {
     let mut group = c.benchmark_group("floor");
     group
@@ -129,63 +169,17 @@ fn floor(c: &mut Criterion) {
         .warm_up_time(Duration::from_millis(300))
         .measurement_time(Duration::from_secs(2));
     for scene in seed_cases() {
-        let Some(oscillator) = DampedOscillator::of(&scene) else {
-            continue;
-        };
         let IncrementRule::Given(h) = scene.settings.increment else {
             continue;
         };
         let h = h / REFINEMENT;
-        let steps = (oscillator.duration / h).round() as u64;
-        group.throughput(Throughput::Elements(steps));
-        group.bench_function(format!("{}/registers", scene.id), |b| {
-            b.iter(|| black_box(oscillator).in_registers(black_box(h), steps))
-        });
-        group.bench_function(format!("{}/slices", scene.id), |b| {
-            b.iter(|| black_box(oscillator).in_slices(black_box(h), steps))
-        });
-    }
-    for scene in seed_cases() {
-        let Some(system) = AxialOscillator::of(&scene) else {
-            continue;
-        };
-        let IncrementRule::Given(h) = scene.settings.increment else {
-            continue;
-        };
-        let h = h / REFINEMENT;
-        let steps = (system.duration / h).round() as u64;
-        group.throughput(Throughput::Elements(steps));
-        group.bench_function(format!("{}/slices", scene.id), |b| {
-            b.iter(|| black_box(&system).in_slices(black_box(h), steps))
-        });
-    }
-    for scene in seed_cases() {
-        let Some(body) = PinnedBody::of(&scene) else {
-            continue;
-        };
-        let IncrementRule::Given(h) = scene.settings.increment else {
-            continue;
-        };
-        let h = h / REFINEMENT;
-        let steps = (body.duration / h).round() as u64;
-        group.throughput(Throughput::Elements(steps));
-        group.bench_function(format!("{}/slices", scene.id), |b| {
-            b.iter(|| black_box(&body).in_slices(black_box(h), steps))
-        });
-    }
-    for scene in seed_cases() {
-        let Some(body) = SlidingBody::of(&scene) else {
-            continue;
-        };
-        let IncrementRule::Given(h) = scene.settings.increment else {
-            continue;
-        };
-        let h = h / REFINEMENT;
-        let steps = (body.duration / h).round() as u64;
-        group.throughput(Throughput::Elements(steps));
-        group.bench_function(format!("{}/slices", scene.id), |b| {
-            b.iter(|| black_box(&body).in_slices(black_box(h), steps))
-        });
+        for (form, duration, run) in floor_forms(&scene) {
+            let steps = (duration / h).round() as u64;
+            group.throughput(Throughput::Elements(steps));
+            group.bench_function(format!("{}/{form}", scene.id), |b| {
+                b.iter(|| run(black_box(h), steps))
+            });
+        }
     }
     group.finish();
 }

@@ -126,10 +126,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         held: &Constraints<S>,
         counters: &mut Counters,
     ) {
-        let (x, c) = (cfg.u.flat_mut(), carry.p.flat_mut());
-        for ((x, c), v) in x.iter_mut().zip(c.iter_mut()).zip(vel.p.flat()) {
-            compensated_add(x, c, *v * h);
-        }
+        advance_flat(cfg.u.flat_mut(), carry.p.flat_mut(), vel.p.flat(), h);
         self.advance_bodies(cfg, carry, h, vel, held, counters);
     }
 
@@ -218,10 +215,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 for (v, a) in v_half.p.flat_mut().iter_mut().zip(acc.p.flat()) {
                     *v += *a * h;
                 }
-                let (x, c) = (cfg.u.flat_mut(), carry.p.flat_mut());
-                for ((x, c), v) in x.iter_mut().zip(c.iter_mut()).zip(v_half.p.flat()) {
-                    compensated_add(x, c, *v * h);
-                }
+                advance_flat(cfg.u.flat_mut(), carry.p.flat_mut(), v_half.p.flat(), h);
             }
         }
     }
@@ -391,5 +385,14 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         } else {
             c.normal.dot(&(acc.p.get(i) - acc.b[b])) - c.normal.dot(&S::cross(&acc.w[b], &c.arm0))
         }
+    }
+}
+
+/// `x += h · v` component by component, compensated (`carry`): the particles' positions from
+/// their velocities, every component alike.
+#[inline(always)]
+fn advance_flat(x: &mut [f64], carry: &mut [f64], v: &[f64], h: f64) {
+    for ((x, c), v) in x.iter_mut().zip(carry.iter_mut()).zip(v) {
+        compensated_add(x, c, *v * h);
     }
 }

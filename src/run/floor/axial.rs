@@ -14,8 +14,8 @@
 //! a run (rows, energy). It is written here from the scheme, not taken from the engine, and
 //! `tests/floor.rs` checks that the two agree to round-off.
 
-use super::compensated_add;
-use crate::scene::{Connection, DampingTreatment, Dimension, Dof, Element, Scene, StepKind};
+use super::{compensated_add, released};
+use crate::scene::{Connection, Dimension, Dof, Element, Scene, Step};
 use nalgebra::Vector2;
 use std::hint::black_box;
 
@@ -71,22 +71,10 @@ impl AxialOscillator {
     /// or has its ux prescribed in the static step; every spring and the one dashpot are axial
     /// and have a moving end, or join two held nodes.
     pub fn of(scene: &Scene) -> Option<Self> {
-        if scene.dimension != Dimension::Two
-            || scene.settings.damping != DampingTreatment::Centred
-            || !scene.bodies.is_empty()
-            || !scene.contacts.is_empty()
-            || !scene.loads.is_empty()
-            || !scene.initial_velocities.is_empty()
-        {
+        if scene.dimension != Dimension::Two {
             return None;
         }
-        let [static_step, dynamic] = scene.steps.as_slice() else {
-            return None;
-        };
-        let (StepKind::Static, StepKind::Dynamic { duration }) = (static_step.kind, dynamic.kind)
-        else {
-            return None;
-        };
+        let (static_step, dynamic, duration) = released(scene)?;
         let holds = |node: usize, dof: Dof| {
             dynamic
                 .conditions
@@ -98,7 +86,12 @@ impl AxialOscillator {
         let moving: Vec<usize> = (0..scene.nodes.len()).filter(|n| moves(*n)).collect();
         let mut masses = Vec::with_capacity(moving.len());
         for &node in &moving {
-            masses.push(Self::mass(scene, node, holds(node, Dof::Translation(1)))?);
+            masses.push(Self::mass(
+                scene,
+                static_step,
+                node,
+                holds(node, Dof::Translation(1)),
+            )?);
         }
         let index = |node: usize| moving.iter().position(|n| *n == node);
         let springs = Self::elements(scene, &scene.springs, &index)?;
@@ -114,11 +107,8 @@ impl AxialOscillator {
     }
 
     /// The moving node `node` as a [`LineMass`], when it has mass, is held in its frame's uy
-    /// (`held_across`) alone and starts where the static step holds or prescribes it.
-    fn mass(scene: &Scene, node: usize, held_across: bool) -> Option<LineMass> {
-        let [static_step, _] = scene.steps.as_slice() else {
-            return None;
-        };
+    /// alone (`held`) and starts where `static_step` holds or prescribes it.
+    fn mass(scene: &Scene, static_step: &Step, node: usize, held: bool) -> Option<LineMass> {
         let at = |dof: Dof| {
             static_step
                 .conditions
@@ -126,7 +116,7 @@ impl AxialOscillator {
                 .find(|c| c.node == node && c.dof == dof)
         };
         let release = at(Dof::Translation(0))?.value.unwrap_or(0.0);
-        if !held_across || scene.nodes[node].mass <= 0.0 || at(Dof::Translation(1)).is_none() {
+        if !held || scene.nodes[node].mass <= 0.0 || at(Dof::Translation(1)).is_none() {
             return None;
         }
         let frame = &scene.nodes[node].frame;

@@ -20,7 +20,7 @@
 //!   with node indices, then the dashpots' centred forces, then one pass over the particles).
 //!   What one pass computes reaches the next through memory.
 
-use crate::scene::{Connection, DampingTreatment, Dof, Scene, StepKind};
+use crate::scene::{Connection, DampingTreatment, Dof, Scene, Step, StepKind};
 use std::hint::black_box;
 
 /// One mass on a grounded spring and a grounded dashpot acting on the same translation,
@@ -45,14 +45,7 @@ impl DampedOscillator {
     /// or initial velocities, a static step that prescribes that translation and a dynamic step
     /// that releases it, and the centred dashpot treatment (the recurrence written here).
     pub fn of(scene: &Scene) -> Option<Self> {
-        if scene.settings.damping != DampingTreatment::Centred
-            || !scene.bodies.is_empty()
-            || !scene.contacts.is_empty()
-            || !scene.loads.is_empty()
-            || !scene.initial_velocities.is_empty()
-        {
-            return None;
-        }
+        let (static_step, dynamic, duration) = released(scene)?;
         let [spring] = scene.springs.as_slice() else {
             return None;
         };
@@ -73,13 +66,6 @@ impl DampedOscillator {
         if massive.len() != 1 || !std::ptr::eq(massive[0], &scene.nodes[node]) {
             return None;
         }
-        let [static_step, dynamic] = scene.steps.as_slice() else {
-            return None;
-        };
-        let (StepKind::Static, StepKind::Dynamic { duration }) = (static_step.kind, dynamic.kind)
-        else {
-            return None;
-        };
         let released_from = static_step
             .conditions
             .iter()
@@ -160,6 +146,28 @@ impl DampedOscillator {
         }
         (u[0], v_half[0])
     }
+}
+
+/// A scene of masses, springs and dashpots alone (no bodies, contacts, loads or initial
+/// velocities; the centred dashpot treatment) with a static step that sets where they start
+/// and a dynamic step that releases them: the two steps and the dynamic step's duration.
+fn released(scene: &Scene) -> Option<(&Step, &Step, f64)> {
+    if scene.settings.damping != DampingTreatment::Centred
+        || !scene.bodies.is_empty()
+        || !scene.contacts.is_empty()
+        || !scene.loads.is_empty()
+        || !scene.initial_velocities.is_empty()
+    {
+        return None;
+    }
+    let [static_step, dynamic] = scene.steps.as_slice() else {
+        return None;
+    };
+    let (StepKind::Static, StepKind::Dynamic { duration }) = (static_step.kind, dynamic.kind)
+    else {
+        return None;
+    };
+    Some((static_step, dynamic, duration))
 }
 
 /// `x += dx` with the rounding error carried to the next addition (Kahan).

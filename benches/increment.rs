@@ -27,17 +27,22 @@
 //! (`run::floor::PinnedBody`), in heap slices; of rigid2d_slide_surface: the same on a body
 //! sliding along x and turning with its mass centre off its reference node, whose centripetal
 //! force reads the centred velocity, iterated with the engine's stop rule
-//! (`run::floor::SlidingBody`), in heap slices; of springs_grounded_c and springs_n2n_c: the
-//! same recurrence as the engine's on masses pulled along a line by axial springs and the
-//! dashpot solved along its turning line (`run::floor::AxialOscillator`, `tests/floor.rs`:
-//! equal to round-off), in heap slices.
+//! (`run::floor::SlidingBody`), in heap slices; of rigid3d_slide_surface: the same body in 3D
+//! with the arithmetic a 3D engine needs (a quaternion turned with compensated sums, body
+//! points, forces, moments and the centripetal force as 3-vectors, the solve reduced to the
+//! two free DOFs as the engine's body solve reduces it: `run::floor::SlidingBody3d`), in heap
+//! slices; of springs_grounded_c and springs_n2n_c: the same recurrence as the engine's on
+//! masses pulled along a line by axial springs and the dashpot solved along its turning line
+//! (`run::floor::AxialOscillator`, `tests/floor.rs`: equal to round-off), in heap slices.
 //!
 //! Run with `cargo bench --bench increment`; `BENCHMARKS.md` gives the table.
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use crosscheck::case;
 use crosscheck::engines::RunSettings;
 use crosscheck::engines::explicit::ExplicitEngine;
-use crosscheck::run::floor::{AxialOscillator, DampedOscillator, PinnedBody, SlidingBody};
+use crosscheck::run::floor::{
+    AxialOscillator, DampedOscillator, PinnedBody, SlidingBody, SlidingBody3d,
+};
 use crosscheck::run::matching;
 use crosscheck::scene::IncrementRule;
 use std::hint::black_box;
@@ -153,6 +158,13 @@ fn floor_forms(scene: &crosscheck::scene::Scene) -> Vec<FloorForm> {
         forms.push(("slices", duration, Box::new(run)));
     }
     if let Some(body) = SlidingBody::of(scene) {
+        let duration = body.duration;
+        let run = move |h, n| {
+            black_box(black_box(&body).in_slices(h, n));
+        };
+        forms.push(("slices", duration, Box::new(run)));
+    }
+    if let Some(body) = SlidingBody3d::of(scene) {
         let duration = body.duration;
         let run = move |h, n| {
             black_box(black_box(&body).in_slices(h, n));

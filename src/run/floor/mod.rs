@@ -3,7 +3,8 @@
 //! arithmetic it must do. Here the simplest, a mass on a grounded spring and dashpot; in
 //! [`AxialOscillator`] masses on springs and a dashpot whose lines turn, in [`PinnedBody`] a
 //! body turning about a pin, in [`SlidingBody`] a body that slides and turns with its mass
-//! centre off its reference node.
+//! centre off its reference node, in [`SlidingBody3d`] the same body in 3D, with the
+//! arithmetic of a 3D engine.
 //!
 //! The recurrence is the one the explicit engine runs on such a scene: central differences
 //! with the centred dashpot treatment (the dashpot's rate solves
@@ -182,6 +183,8 @@ fn compensated_add(x: &mut f64, carry: &mut f64, dx: f64) {
 mod axial;
 mod pinned_body;
 mod sliding_body;
+mod sliding_body3d;
 pub use axial::{AxialElement, AxialOscillator, AxialState, LineMass};
 pub use pinned_body::PinnedBody;
 pub use sliding_body::{SlidingBody, SlidingState};
+pub use sliding_body3d::SlidingBody3d;

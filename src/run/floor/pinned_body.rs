@@ -145,14 +145,15 @@ impl PinnedBody {
     }
 
     /// The springs, all of fixed direction x from a held node: those on body points (with the
-    /// point relative to the pin) and the particle's summed stiffness.
-    pub(super) fn springs(
+    /// point relative to the pin, as `relative` gives it: a 2D or a 3D point) and the
+    /// particle's summed stiffness.
+    pub(super) fn springs<P>(
         scene: &Scene,
         particle: usize,
-        relative: &dyn Fn(usize) -> Vector2<f64>,
+        relative: &dyn Fn(usize) -> P,
         ground: &dyn Fn(usize) -> bool,
         on_body: &dyn Fn(usize) -> bool,
-    ) -> Option<(Vec<PointSpring>, f64)> {
+    ) -> Option<(Vec<(P, f64)>, f64)> {
         let (mut body_springs, mut particle_stiffness) = (Vec::new(), 0.0);
         for spring in &scene.springs {
             let Connection::FixedDirection { nodes, direction } = spring.connection else {

@@ -227,7 +227,7 @@ impl SlidingBody {
     /// Whether the nodes are as the floor takes them: the identity frame everywhere, no mass
     /// off the body but the particle's, initial velocities only on the reference node and the
     /// particle.
-    fn plain(scene: &Scene, particle: usize, reference: usize) -> bool {
+    pub(super) fn plain(scene: &Scene, particle: usize, reference: usize) -> bool {
         let nodes = scene.nodes.iter().enumerate();
         nodes
             .clone()
@@ -307,7 +307,8 @@ impl SlidingBody {
         for _ in 0..steps {
             load[0] = self.forces(&lists, &heading[0], x[0], u[0]);
             let matrix = MassMatrix::at(self, inverse_body_mass[0], &heading[0]);
-            acc[0] = centred(&matrix, &load[0], rates[0], acc[0], h);
+            let at = |guess: &Rates| matrix.accelerations(&load[0], guess[1]);
+            acc[0] = centred(at, rates[0], acc[0], h);
             rates[0] = plus(rates[0], h, acc[0]);
             v[0] += h * load[0].particle * inverse_mass[0];
             let turn = h * rates[0][1];
@@ -332,26 +333,38 @@ struct Lists {
 
 /// `a + s·b`.
 #[inline(always)]
-fn plus(a: Rates, s: f64, b: Rates) -> Rates {
-    [a[0] + s * b[0], a[1] + s * b[1]]
+pub(super) fn plus<const N: usize>(a: [f64; N], s: f64, b: [f64; N]) -> [f64; N] {
+    std::array::from_fn(|k| a[k] + s * b[k])
+}
+
+/// The largest of `f(k)` over the `N` components.
+#[inline(always)]
+fn largest<const N: usize>(f: impl Fn(usize) -> f64) -> f64 {
+    (1..N).fold(f(0), |m, k| m.max(f(k)))
 }
 
 /// The accelerations at the centred velocity `v(n) = v(n−½) + (h/2)·a(v(n))`, by fixed-point
-/// iteration from `v(n−½) + (h/2)·a(n−1)` (`half`, `previous`): each pass the accelerations at
-/// the guess, then the guess they give. The iteration contracts by ρ per pass, so the guess
-/// just made is within ρ/(1−ρ)·change of the fixed point; it stops where the change is within
-/// the tolerance of the largest rate, or, after a contracting pass (ρ < ½), where that bound
-/// is: change² ≤ tolerance·(previous change − change). Returns the last pass's accelerations.
+/// iteration from `v(n−½) + (h/2)·a(n−1)` (`half`, `previous`): each pass the accelerations
+/// `accelerations` gives at the guess, then the guess they give. The iteration contracts by ρ
+/// per pass, so the guess just made is within ρ/(1−ρ)·change of the fixed point; it stops
+/// where the change is within the tolerance of the largest rate, or, after a contracting pass
+/// (ρ < ½), where that bound is: change² ≤ tolerance·(previous change − change). Returns the
+/// last pass's accelerations.
 #[inline(always)]
-fn centred(matrix: &MassMatrix, load: &Load, half: Rates, previous: Rates, h: f64) -> Rates {
+pub(super) fn centred<const N: usize>(
+    accelerations: impl Fn(&[f64; N]) -> [f64; N],
+    half: [f64; N],
+    previous: [f64; N],
+    h: f64,
+) -> [f64; N] {
     let mut guess = plus(half, 0.5 * h, previous);
     let mut acc = previous;
     let mut previous_change = 0.0;
     for _ in 0..MAX_PASSES {
-        acc = matrix.accelerations(load, guess[1]);
+        acc = accelerations(&guess);
         let next = plus(half, 0.5 * h, acc);
-        let change = (next[0] - guess[0]).abs().max((next[1] - guess[1]).abs());
-        let tolerance = VELOCITY_TOLERANCE * next[0].abs().max(next[1].abs());
+        let change = largest::<N>(|k| (next[k] - guess[k]).abs());
+        let tolerance = VELOCITY_TOLERANCE * largest::<N>(|k| next[k].abs());
         let contracting = 2.0 * change < previous_change;
         let bound_met = change * change <= tolerance * (previous_change - change);
         previous_change = change;

@@ -12,6 +12,7 @@ use crosscheck::engines::{Engine, RunSettings};
 use crosscheck::run::floor::{
     AxialOscillator, DampedOscillator, PinnedBody, SlidingBody, SlidingBody3d,
 };
+use crosscheck::scene::Scene;
 
 #[test]
 fn floor_recognises_only_the_single_damped_oscillator() {
@@ -203,23 +204,31 @@ fn the_pinned_body_floor_gives_the_exact_solution_within_the_case_tolerance() {
     for id in ["rigid2d_pin_lumped", "rigid2d_pin_surface"] {
         let scene = scene(id);
         let floor = PinnedBody::of(&scene).unwrap();
-        let exact = ReferenceEngine
-            .run(&scene, &RunSettings::default())
-            .unwrap();
         let h = 1.0e-5;
         let steps = (floor.duration / h).round() as u64;
         let state = floor.in_slices(h, steps);
-        for (column, value) in [("rz", state.angle), ("ux_node", state.displacement)] {
-            let series = col(&exact.history, column);
-            let peak = series.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-            let error = (value - series.last().unwrap()).abs() / peak;
-            println!(
-                "{id} {column}: floor {value:.6e}, exact {:.6e}, error {error:.2e} of the peak",
-                series.last().unwrap()
-            );
-            assert!(error <= 1.0e-3, "{id} {column}: {error:e}");
-        }
+        let columns = [("rz", state.angle), ("ux_node", state.displacement)];
+        assert_near_exact(&scene, &columns, 1.0e-3);
     }
+}
+
+/// Each column's final value from a floor against `reference`'s on `scene`, as a fraction of
+/// the column's peak, at most `tolerance`; returns the peaks.
+fn assert_near_exact(scene: &Scene, columns: &[(&str, f64)], tolerance: f64) -> Vec<f64> {
+    let exact = ReferenceEngine.run(scene, &RunSettings::default()).unwrap();
+    let id = &scene.id;
+    let check = |&(column, value): &(&str, f64)| {
+        let series = col(&exact.history, column);
+        let last = *series.last().unwrap();
+        let peak = series.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let error = (value - last).abs() / peak;
+        println!(
+            "{id} {column}: floor {value:.6e}, exact {last:.6e}, error {error:.2e} of the peak"
+        );
+        assert!(error <= tolerance, "{id} {column}: {error:e}");
+        peak
+    };
+    columns.iter().map(check).collect()
 }
 
 #[test]
@@ -275,26 +284,15 @@ fn the_sliding_body_floor_gives_the_exact_solution_within_the_case_tolerance() {
     let tolerance = scene.tolerances["explicit"];
     assert_eq!(tolerance, 1.0e-3);
     let floor = SlidingBody::of(&scene).unwrap();
-    let exact = ReferenceEngine
-        .run(&scene, &RunSettings::default())
-        .unwrap();
     let h = 1.0e-5;
     let steps = (floor.duration / h).round() as u64;
     let state = floor.in_slices(h, steps);
-    for (column, value) in [
+    let columns = [
         ("rz", state.angle),
         ("ux", state.translation),
         ("ux_node", state.displacement),
-    ] {
-        let series = col(&exact.history, column);
-        let peak = series.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        let error = (value - series.last().unwrap()).abs() / peak;
-        println!(
-            "{id} {column}: floor {value:.6e}, exact {:.6e}, error {error:.2e} of the peak",
-            series.last().unwrap()
-        );
-        assert!(error <= tolerance, "{id} {column}: {error:e}");
-    }
+    ];
+    assert_near_exact(&scene, &columns, tolerance);
 }
 
 #[test]
@@ -348,9 +346,6 @@ fn the_3d_sliding_body_floor_gives_the_exact_solution_and_the_2d_floors_end_stat
     let tolerance = scene.tolerances["explicit"];
     assert_eq!(tolerance, 1.0e-3);
     let floor = SlidingBody3d::of(&scene).unwrap();
-    let exact = ReferenceEngine
-        .run(&scene, &RunSettings::default())
-        .unwrap();
     let h = 1.0e-5;
     let steps = (floor.duration / h).round() as u64;
     let state = floor.in_slices(h, steps);
@@ -359,18 +354,7 @@ fn the_3d_sliding_body_floor_gives_the_exact_solution_and_the_2d_floors_end_stat
         ("ux", state.translation),
         ("ux_node", state.displacement),
     ];
-    let mut peaks = Vec::new();
-    for (column, value) in columns {
-        let series = col(&exact.history, column);
-        let peak = series.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        let error = (value - series.last().unwrap()).abs() / peak;
-        println!(
-            "{id} {column}: floor {value:.6e}, exact {:.6e}, error {error:.2e} of the peak",
-            series.last().unwrap()
-        );
-        assert!(error <= tolerance, "{id} {column}: {error:e}");
-        peaks.push(peak);
-    }
+    let peaks = assert_near_exact(&scene, &columns, tolerance);
     // The 2D floor on the 2D twin solves the same equations at the same increment; only the
     // rounding of the different arithmetic (a quaternion and 3-vector products in place of a
     // versine and sine and scalar ones) separates the two. The recurrence amplifies round-off

@@ -235,6 +235,12 @@ pub struct ContactPairTable {
     /// Coefficient of restitution of an impact, in [0, 1] (default 1: elastic). Penalty
     /// contact gets a contact dashpot sized for it; rapier its `restitution`.
     pub restitution: Option<f64>,
+    /// Coulomb friction coefficient, static and kinetic alike (default 0: frictionless).
+    pub friction: Option<f64>,
+    /// Static friction coefficient μ_s, given with `kinetic_friction` where the two differ.
+    pub static_friction: Option<f64>,
+    /// Kinetic friction coefficient μ_k ≤ μ_s, given with `static_friction`.
+    pub kinetic_friction: Option<f64>,
 }
 
 /// `[[loads]]`: constant force at a material point, fixed in direction.

@@ -296,8 +296,20 @@ pub enum ContactState {
     Open,
 }
 
-/// A frictionless node-to-surface contact pair: a node against a surface of a body. Contact
-/// is unilateral: it opens when the contact force reaches zero and closes when the gap does.
+/// Coulomb friction of a contact pair: while the node sticks to the surface the tangential
+/// force stays within `static_coefficient` × the normal force; while it slides the tangential
+/// force is `kinetic_coefficient` × the normal force, against the slip.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Friction {
+    /// μ_s, > 0.
+    pub static_coefficient: f64,
+    /// μ_k, in (0, μ_s].
+    pub kinetic_coefficient: f64,
+}
+
+/// A node-to-surface contact pair: a node against a surface of a body. Contact is unilateral:
+/// it opens when the contact force reaches zero and closes when the gap does. Frictionless
+/// unless it has a [`Friction`].
 #[derive(Debug, Clone)]
 pub struct ContactPair {
     /// Name.
@@ -312,6 +324,8 @@ pub struct ContactPair {
     pub initially: ContactState,
     /// Coefficient of restitution of an impact, in [0, 1] (1: elastic, the default).
     pub restitution: f64,
+    /// Coulomb friction; `None`: frictionless (the default).
+    pub friction: Option<Friction>,
 }
 
 impl ContactPair {
@@ -326,6 +340,13 @@ impl ContactPair {
     /// A point of the surface at t = 0 (the plane's point, the solid's centre).
     pub fn anchor(&self) -> Vector3<f64> {
         self.surface.anchor()
+    }
+}
+
+impl Scene {
+    /// Whether any contact pair has friction (a frictionless scene computes none).
+    pub fn has_friction(&self) -> bool {
+        self.contacts.iter().any(|c| c.friction.is_some())
     }
 }
 

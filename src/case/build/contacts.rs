@@ -50,6 +50,7 @@ fn contact_pair(
         }
     };
     let restitution = restitution(&field, c)?;
+    let friction = friction(&field, c)?;
     starts_as_said(&field, c, &nodes[node].position, &surface, initially)?;
     identifier(&format!("{field}.id"), &c.id)?;
     if earlier.iter().any(|p: &ContactPair| p.name == c.id) {
@@ -65,7 +66,73 @@ fn contact_pair(
         surface,
         initially,
         restitution,
+        friction,
     })
+}
+
+/// A pair's Coulomb friction: `friction = μ` (static and kinetic alike), or `static_friction`
+/// with `kinetic_friction` (0 ≤ μ_k ≤ μ_s); none given, or μ = 0: frictionless.
+fn friction(field: &str, c: &ContactPairTable) -> Result<Option<Friction>, SceneError> {
+    let coefficient = |key: &str, mu: f64| -> Result<f64, SceneError> {
+        let at = format!("{field}.{key}");
+        if !(mu.is_finite() && mu >= 0.0) {
+            return err(
+                at,
+                format!("a friction coefficient is a finite number ≥ 0, got {mu}"),
+            );
+        }
+        in_range(&at, mu)
+    };
+    let (mu_s, mu_k) = match (c.friction, c.static_friction, c.kinetic_friction) {
+        (None, None, None) => return Ok(None),
+        (Some(mu), None, None) => {
+            let mu = coefficient("friction", mu)?;
+            (mu, mu)
+        }
+        (Some(_), _, _) => {
+            return err(
+                format!("{field}.friction"),
+                "give either `friction` (static and kinetic alike) or `static_friction` with `kinetic_friction`, not both",
+            );
+        }
+        (None, Some(s), Some(k)) => (
+            coefficient("static_friction", s)?,
+            coefficient("kinetic_friction", k)?,
+        ),
+        (None, Some(_), None) => {
+            return err(
+                format!("{field}.static_friction"),
+                "give `kinetic_friction` with it (or `friction` where the two are equal)",
+            );
+        }
+        (None, None, Some(_)) => {
+            return err(
+                format!("{field}.kinetic_friction"),
+                "give `static_friction` with it (or `friction` where the two are equal)",
+            );
+        }
+    };
+    if mu_k > mu_s {
+        return err(
+            format!("{field}.kinetic_friction"),
+            format!(
+                "the kinetic coefficient {mu_k} exceeds the static one {mu_s}; a sliding node cannot resist more than a stuck one"
+            ),
+        );
+    }
+    if mu_s == 0.0 {
+        return Ok(None);
+    }
+    if mu_k == 0.0 {
+        return err(
+            format!("{field}.kinetic_friction"),
+            "is 0 with a static coefficient above 0; a pair that resists sticking resists sliding too (give a kinetic coefficient > 0)",
+        );
+    }
+    Ok(Some(Friction {
+        static_coefficient: mu_s,
+        kinetic_coefficient: mu_k,
+    }))
 }
 
 /// A pair's coefficient of restitution: in [0, 1], 1 when not given.

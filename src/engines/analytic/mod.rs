@@ -34,6 +34,9 @@ impl Engine for AnalyticEngine {
 
     fn run(&self, scene: &Scene, _settings: &RunSettings) -> Result<RunOutput, EngineError> {
         let start = Instant::now();
+        if scene.has_friction() {
+            return unsupported("contact with friction");
+        }
         let hand = match scene.family {
             Family::Springs => springs::solve(scene),
             Family::RigidBody => rigid::solve(scene).map(|s| s.history),

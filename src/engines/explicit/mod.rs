@@ -119,6 +119,11 @@ impl Engine for ExplicitEngine {
     }
     fn run(&self, scene: &Scene, settings: &RunSettings) -> Result<RunOutput, EngineError> {
         let start = Instant::now();
+        if scene.has_friction() {
+            return Err(EngineError::Unsupported(
+                "explicit: contact with friction".into(),
+            ));
+        }
         if self.kinematics == Kinematics::Small {
             small_rotation_applies(scene)?;
         }

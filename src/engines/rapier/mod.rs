@@ -423,6 +423,11 @@ impl RapierEngine {
         settings: &RunSettings,
     ) -> Result<(RunOutput, record::Diagnostics), EngineError> {
         let start = Instant::now();
+        if scene.has_friction() {
+            return Err(EngineError::Unsupported(
+                "rapier: contact with friction".into(),
+            ));
+        }
         let plan = plan::plan_with(scene, self.holding)?;
         let (dt, solver) = match self.configuration {
             Configuration::Matched(m) => (own_increment(scene, settings), Some(m)),

@@ -65,6 +65,11 @@ impl Engine for ReferenceEngine {
 
     fn run(&self, scene: &Scene, _settings: &RunSettings) -> Result<RunOutput, EngineError> {
         let start = Instant::now();
+        if scene.has_friction() {
+            return Err(EngineError::Unsupported(
+                "reference: contact with friction".into(),
+            ));
+        }
         let mechanism = Mechanism::new(scene)?;
         let fine = solve(scene, &mechanism, TOLERANCE, 1.0)?;
         let finer = solve(scene, &mechanism, TOLERANCE / 2.0, 0.5)?;

@@ -31,6 +31,19 @@ pub const E_ELASTIC: &str = "e_elastic";
 pub const E_VISCOUS: &str = "e_viscous";
 /// Work of the loads since the dynamic start.
 pub const W_EXTERNAL: &str = "w_external";
+/// Energy dissipated by friction since the dynamic start: a column only of a scene with
+/// friction, after [`E_VISCOUS`] (frictionless histories keep [`ENERGY_COLUMNS`]).
+pub const E_FRICTIONAL: &str = "e_frictional";
+
+/// The energy columns of a scene: [`ENERGY_COLUMNS`], with [`E_FRICTIONAL`] after
+/// [`E_VISCOUS`] where the scene has friction (the balance then includes it).
+pub fn energy_columns(friction: bool) -> Vec<&'static str> {
+    let mut columns = ENERGY_COLUMNS.to_vec();
+    if friction {
+        columns.insert(3, E_FRICTIONAL);
+    }
+    columns
+}
 /// Kinetic + elastic + viscous − work − the initial energy (zero for an exact integration).
 pub const E_BALANCE: &str = "e_balance";
 

@@ -6,6 +6,7 @@
 //! it), the update of velocities and positions.
 
 use super::diagnosis::{PAST_LIMIT_GROWTH, PastLimit, growing_mode};
+use super::friction::Sticks;
 use super::impacts::ImpactWork;
 use super::linear::{StableIncrement, static_step};
 use super::model::{
@@ -15,7 +16,7 @@ use super::rows::{RowSampler, note_impacts};
 use super::space::{Lin, Space};
 use super::start::consistent_start;
 use super::velocity::{AtIncrement, Velocities, VelocityRule};
-use crate::contract::ENERGY_COLUMNS;
+use crate::contract::energy_columns;
 use crate::engines::{EngineError, History};
 use crate::scene::{
     ContactStart, DEFAULT_SAFETY, DampingTreatment, IncrementRule, Probe, Scene, SceneSettings,
@@ -234,6 +235,8 @@ struct TimeLoop<'a, S: Space, const FINITE: bool> {
     acc_prev: Rates<S>,
     /// Position-dependent forces at increment n.
     forces: Forces<S>,
+    /// The stick points of the pairs with friction (`None` without friction).
+    sticks: Option<Sticks<S>>,
     velocities: Velocities<S>,
     /// Increment, stable increment, and the increments taken.
     h: f64,
@@ -281,9 +284,14 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         let interval = scene.duration() / (scene.output_rows - 1) as f64;
         let columns: Vec<String> = std::iter::once("t".to_string())
             .chain(scene.columns.iter().map(|c| c.name.clone()))
-            .chain(ENERGY_COLUMNS.iter().map(|s| s.to_string()))
+            .chain(
+                energy_columns(model.has_friction())
+                    .iter()
+                    .map(|s| s.to_string()),
+            )
             .collect();
         let cfg = model.initial_config();
+        let sticks = Sticks::new(model, &cfg);
         TimeLoop {
             model,
             scene,
@@ -297,6 +305,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
             acc: model.zero_rates(),
             acc_prev: model.zero_rates(),
             forces: model.zero_forces(),
+            sticks,
             velocities: Velocities::new(model),
             h: 0.0,
             stable: None,
@@ -365,6 +374,12 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         {
             let v = &mut self.velocities.v_n;
             consistent_start(model, &mut self.cfg, v, held, self.h, &mut self.counters);
+        }
+        if let Some(sticks) = self.sticks.as_mut() {
+            let mut normal = model.zero_forces();
+            let (mode, counters) = (ContactMode::Unilateral, &mut self.counters);
+            model.forces(&self.cfg, mode, &mut normal, counters);
+            sticks.start(model, &self.cfg, &self.velocities.v_n, &normal.contact);
         }
         self.cfg_start = self.cfg.clone();
         // Only above the stable increment (a stability study), and only where the scene's
@@ -453,6 +468,13 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
             model.forces(cfg, mode, &mut self.forces, counters);
         } else {
             model.forces_with::<false>(cfg, mode, &mut self.forces, counters);
+        }
+        if let Some(sticks) = self.sticks.as_mut() {
+            if row {
+                model.friction_forces::<true>(cfg, sticks, &mut self.forces);
+            } else {
+                model.friction_forces::<false>(cfg, sticks, &mut self.forces);
+            }
         }
         note_impacts(
             &mut self.pressed,
@@ -662,8 +684,13 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
             row.push(value);
         }
         let elastic = self.forces.elastic;
-        let balance = kinetic + elastic + self.dissipated - work - self.energy0;
-        row.extend([kinetic, elastic, self.dissipated, work, balance]);
+        let mut balance = kinetic + elastic + self.dissipated - work - self.energy0;
+        row.extend([kinetic, elastic, self.dissipated]);
+        if let Some(sticks) = &self.sticks {
+            balance += sticks.dissipated;
+            row.push(sticks.dissipated);
+        }
+        row.extend([work, balance]);
         self.check_growth(&row, kinetic + elastic, work, plan)?;
         self.sampler.push(row, &mut self.rows);
         Ok(())

@@ -73,6 +73,9 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     ) -> DVector<f64> {
         let mut f = self.zero_forces();
         self.forces(cfg, mode, &mut f, counters);
+        if matches!(mode, ContactMode::Bilateral) && self.has_friction() {
+            self.stick_forces_about_start(cfg, &mut f);
+        }
         DVector::from_iterator(dofs.len(), dofs.iter().map(|d| self.project(&f, d)))
     }
 

@@ -6,6 +6,7 @@ pub mod centred;
 pub mod constraints;
 pub mod diagnosis;
 pub mod forces;
+pub mod friction;
 pub mod impacts;
 pub mod integrate;
 pub mod linear;
@@ -119,11 +120,6 @@ impl Engine for ExplicitEngine {
     }
     fn run(&self, scene: &Scene, settings: &RunSettings) -> Result<RunOutput, EngineError> {
         let start = Instant::now();
-        if scene.has_friction() {
-            return Err(EngineError::Unsupported(
-                "explicit: contact with friction".into(),
-            ));
-        }
         if self.kinematics == Kinematics::Small {
             small_rotation_applies(scene)?;
         }

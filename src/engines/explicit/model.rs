@@ -10,8 +10,8 @@ use super::body_solve::{BodyOperator, BodySolve};
 use super::space::{BodyInertia, Lin, Space};
 pub use super::state::{Config, ContactMode, Counters, Forces, Rates, Vectors, fill_zero};
 use crate::scene::{
-    Attachment, Connection, ContactPair, ContactState, Dof, Element, Scene, StepKind, Surface,
-    surface_distance,
+    Attachment, Connection, ContactPair, ContactState, Dof, Element, Friction, Scene, StepKind,
+    Surface, surface_distance,
 };
 
 /// Where an element end or a load acts.
@@ -130,6 +130,8 @@ pub(super) struct Contact<S: Space> {
     pub(super) arm0: S::V,
     /// Gap at t = 0 (small rotation: the constant part of the linearised gap).
     pub(super) gap0: f64,
+    /// Coulomb friction ([`super::friction`]); `None`: frictionless.
+    pub(super) friction: Option<Friction>,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -560,6 +562,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                     normal,
                     arm0,
                     gap0: normal.dot(&(arm0 - face)),
+                    friction: c.friction,
                 }
             })
             .collect();

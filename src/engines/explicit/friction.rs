@@ -1,0 +1,193 @@
+//! Coulomb friction as Abaqus/Explicit's penalty friction does it: an elastic stick and a
+//! return to the slip cone.
+//!
+//! Each pair with friction keeps a stick point on its body (in the body's frame). The
+//! node's tangential offset from it, d_t, loads a tangential penalty of the normal penalty's
+//! stiffness: f_t = −k·d_t. While |f_t| ≤ μ·f_n the node sticks (elastically, by
+//! |f_t|/k); beyond it, the stick point is drawn after the node until |f_t| = μ_k·f_n (the
+//! node slips), and the energy μ_k·f_n × the stick point's travel is dissipated. A sticking
+//! node resists up to μ_s·f_n; once it slips it resists μ_k·f_n until the stick spring
+//! unloads below that (the slip stopped or reversed). A pair without a normal force carries
+//! no tangential force, and its stick point follows the node.
+//!
+//! The force depends on the configuration and the stick points alone, so it enters the force
+//! pass of central differences like the normal penalty. Its effect on the stable increment:
+//! the stick is a penalty of stiffness k in the face's tangent directions, which the
+//! linearisation includes ([`Model::stick_forces_about_start`]); on a node against a held
+//! face it adds modes at the normal penalty's frequency, so the limit does not move.
+
+use super::model::{Forces, Model};
+use super::space::{Lin, Space};
+use super::state::{Config, Rates};
+
+/// The stick points of a run's pairs and the energy their slip dissipated.
+#[derive(Debug, Clone)]
+pub struct Sticks<S: Space> {
+    /// Per pair: where the node sticks, relative to the body's reference node in its frame
+    /// (`None` for a frictionless pair).
+    points: Vec<Option<S::V>>,
+    /// Per pair: whether the node slipped at the last increment (its resistance then μ_k).
+    slipping: Vec<bool>,
+    /// Energy dissipated by slip since the start.
+    pub dissipated: f64,
+    /// Increments at which some pair slipped.
+    pub slips: u64,
+}
+
+impl<S: Space> Sticks<S> {
+    /// The stick points at `cfg` (each node sticks where it is); `None` for a scene without
+    /// friction, which then computes none.
+    pub fn new<const FINITE: bool>(model: &Model<S, FINITE>, cfg: &Config<S>) -> Option<Self> {
+        if !model.has_friction() {
+            return None;
+        }
+        let points = (0..model.contacts.len())
+            .map(|k| {
+                model.contacts[k]
+                    .friction
+                    .map(|_| model.body_frame_arm(cfg, k))
+            })
+            .collect();
+        Some(Sticks {
+            points,
+            slipping: vec![false; model.contacts.len()],
+            dissipated: 0.0,
+            slips: 0,
+        })
+    }
+
+    /// The stick points at the start of the first dynamic step, at `cfg` with velocities
+    /// `vel` and normal forces `normal`: a node that slides relative to its surface starts on
+    /// the slip cone (its stick point μ_k·f_n/k behind it, against the slip), so the first
+    /// increment already resists with μ_k·f_n; any other node sticks where it is.
+    pub fn start<const FINITE: bool>(
+        &mut self,
+        model: &Model<S, FINITE>,
+        cfg: &Config<S>,
+        vel: &Rates<S>,
+        normal: &[f64],
+    ) {
+        for (k, point) in self.points.iter_mut().enumerate() {
+            let (Some(point), Some(friction)) = (point.as_mut(), model.contacts[k].friction) else {
+                continue;
+            };
+            let arm = model.body_frame_arm(cfg, k);
+            *point = arm;
+            self.slipping[k] = false;
+            let slip = model.tangential_slip_rate(cfg, vel, k, &arm);
+            let speed = slip.dot(&slip).sqrt();
+            if normal[k] > 0.0 && speed > 0.0 {
+                let behind = friction.kinetic_coefficient * normal[k] / model.penalty;
+                *point = arm - slip * (behind / speed);
+                self.slipping[k] = true;
+            }
+        }
+    }
+}
+
+impl<S: Space, const FINITE: bool> Model<S, FINITE> {
+    /// Whether any contact pair has friction.
+    pub fn has_friction(&self) -> bool {
+        self.contacts.iter().any(|c| c.friction.is_some())
+    }
+
+    /// Pair `k`'s node relative to its body's reference node, in the body's frame.
+    pub(super) fn body_frame_arm(&self, cfg: &Config<S>, k: usize) -> S::V {
+        self.local(cfg, k, &S::V::zero())
+    }
+
+    /// Pair `k`'s node's velocity relative to the body point it touches, in the body's frame
+    /// and in the surface's tangent plane at `arm`.
+    fn tangential_slip_rate(&self, cfg: &Config<S>, vel: &Rates<S>, k: usize, arm: &S::V) -> S::V {
+        let c = &self.contacts[k];
+        let (i, b) = (c.particle, c.body);
+        let world = vel.p.get(i) - vel.b[b] - S::cross(&vel.w[b], &self.contact_arm(cfg, k));
+        let relative = if FINITE {
+            S::unrotate(&cfg.br[b], &world)
+        } else {
+            world - S::cross(&cfg.bth[b], &world)
+        };
+        let n = self.body_frame_normal(k, arm);
+        relative - n * n.dot(&relative)
+    }
+
+    /// Pair `k`'s outward normal at `arm` (the node in the body's frame).
+    fn body_frame_normal(&self, k: usize, arm: &S::V) -> S::V {
+        let c = &self.contacts[k];
+        match &c.solid {
+            Some((centre, shape)) => S::solid_gap(shape, &(*arm - *centre)).1,
+            None => c.normal,
+        }
+    }
+
+    /// Add the friction forces at `cfg` to `out`, whose normal forces the force pass has
+    /// set; move the stick points of the pairs that slip, and add the stick springs' energy
+    /// to `out.elastic` when `ENERGY`.
+    pub fn friction_forces<const ENERGY: bool>(
+        &self,
+        cfg: &Config<S>,
+        sticks: &mut Sticks<S>,
+        out: &mut Forces<S>,
+    ) {
+        let k_t = self.penalty;
+        let mut slipped = false;
+        for (k, c) in self.contacts.iter().enumerate() {
+            let (Some(friction), Some(point)) = (c.friction, sticks.points[k].as_mut()) else {
+                continue;
+            };
+            let arm = self.body_frame_arm(cfg, k);
+            let normal_force = out.contact[k];
+            if normal_force <= 0.0 {
+                *point = arm;
+                sticks.slipping[k] = false;
+                continue;
+            }
+            let n = self.body_frame_normal(k, &arm);
+            let offset = arm - *point;
+            let tangential = offset - n * n.dot(&offset);
+            let stretch = tangential.dot(&tangential).sqrt();
+            let mu = if sticks.slipping[k] {
+                friction.kinetic_coefficient
+            } else {
+                friction.static_coefficient
+            };
+            let mut elastic = tangential;
+            sticks.slipping[k] = k_t * stretch > mu * normal_force;
+            if sticks.slipping[k] {
+                let limit = friction.kinetic_coefficient * normal_force;
+                let kept = limit / k_t;
+                elastic = tangential * (kept / stretch);
+                *point = arm - elastic;
+                sticks.dissipated += limit * (stretch - kept);
+                slipped = true;
+            }
+            if ENERGY {
+                out.elastic += 0.5 * k_t * elastic.dot(&elastic);
+            }
+            let f = self.to_world(cfg, c.body, &(elastic * -k_t));
+            out.add_particle(c.particle, f);
+            out.b[c.body] -= f;
+            out.m[c.body] -= S::moment(&self.contact_arm(cfg, k), &f);
+        }
+        sticks.slips += u64::from(slipped);
+    }
+
+    /// The stick springs of the pairs with friction about the nodes' places at t = 0, added
+    /// to `out`: the tangential stiffness a sticking pair adds, for the linearisation.
+    pub fn stick_forces_about_start(&self, cfg: &Config<S>, out: &mut Forces<S>) {
+        for (k, c) in self.contacts.iter().enumerate() {
+            if c.friction.is_none() {
+                continue;
+            }
+            let start = self.body_frame_arm(&self.initial_config(), k);
+            let arm = self.body_frame_arm(cfg, k);
+            let n = self.body_frame_normal(k, &arm);
+            let offset = arm - start;
+            let tangential = offset - n * n.dot(&offset);
+            let f = self.to_world(cfg, c.body, &(tangential * -self.penalty));
+            out.add_particle(c.particle, f);
+            out.b[c.body] -= f;
+            out.m[c.body] -= S::moment(&self.contact_arm(cfg, k), &f);
+        }
+    }
+}

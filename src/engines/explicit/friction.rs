@@ -57,30 +57,41 @@ impl<S: Space> Sticks<S> {
     }
 
     /// The stick points at the start of the first dynamic step, at `cfg` with velocities
-    /// `vel` and normal forces `normal`: a node that slides relative to its surface starts on
-    /// the slip cone (its stick point μ_k·f_n/k behind it, against the slip), so the first
-    /// increment already resists with μ_k·f_n; any other node sticks where it is.
+    /// `vel` and the force pass's `forces` (without friction), as the consistent contact
+    /// start places the normal penalty: so the stick spring starts carrying the force the
+    /// rigid law would, instead of ringing from unloaded.
+    /// - A node sliding relative to its surface starts on the slip cone: its stick point
+    ///   μ_k·f_n/k behind it, so the first increment already resists with μ_k·f_n.
+    /// - A node at rest relative to it starts stuck, its stick spring loaded with the
+    ///   tangential force that holds the node's other forces (exact against a held body);
+    ///   where that exceeds μ_s·f_n, on the cone in the direction that force drives it.
     pub fn start<const FINITE: bool>(
         &mut self,
         model: &Model<S, FINITE>,
         cfg: &Config<S>,
         vel: &Rates<S>,
-        normal: &[f64],
+        forces: &Forces<S>,
     ) {
         for (k, point) in self.points.iter_mut().enumerate() {
             let (Some(point), Some(friction)) = (point.as_mut(), model.contacts[k].friction) else {
                 continue;
             };
             let arm = model.body_frame_arm(cfg, k);
-            *point = arm;
-            self.slipping[k] = false;
+            let normal = forces.contact[k];
             let slip = model.tangential_slip_rate(cfg, vel, k, &arm);
             let speed = slip.dot(&slip).sqrt();
-            if normal[k] > 0.0 && speed > 0.0 {
-                let behind = friction.kinetic_coefficient * normal[k] / model.penalty;
-                *point = arm - slip * (behind / speed);
-                self.slipping[k] = true;
-            }
+            let held = model.tangential_load(cfg, forces, k, &arm) * (1.0 / model.penalty);
+            let hold = held.dot(&held).sqrt() * model.penalty;
+            let cone = friction.kinetic_coefficient * normal / model.penalty;
+            (*point, self.slipping[k]) = if normal <= 0.0 {
+                (arm, false)
+            } else if speed > 0.0 {
+                (arm - slip * (cone / speed), true)
+            } else if hold <= friction.static_coefficient * normal {
+                (arm - held, false)
+            } else {
+                (arm - held * (cone * model.penalty / hold), true)
+            };
         }
     }
 }
@@ -102,13 +113,27 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         let c = &self.contacts[k];
         let (i, b) = (c.particle, c.body);
         let world = vel.p.get(i) - vel.b[b] - S::cross(&vel.w[b], &self.contact_arm(cfg, k));
-        let relative = if FINITE {
-            S::unrotate(&cfg.br[b], &world)
-        } else {
-            world - S::cross(&cfg.bth[b], &world)
-        };
+        let relative = self.to_body(cfg, b, &world);
         let n = self.body_frame_normal(k, arm);
         relative - n * n.dot(&relative)
+    }
+
+    /// The tangential part of the force `forces` puts on pair `k`'s node, in the body's
+    /// frame at `arm`.
+    fn tangential_load(&self, cfg: &Config<S>, forces: &Forces<S>, k: usize, arm: &S::V) -> S::V {
+        let c = &self.contacts[k];
+        let load = self.to_body(cfg, c.body, &forces.p.get(c.particle));
+        let n = self.body_frame_normal(k, arm);
+        load - n * n.dot(&load)
+    }
+
+    /// A world direction in body `b`'s frame (small rotation: Rᵀ ≈ 1 − [θ]×).
+    fn to_body(&self, cfg: &Config<S>, b: usize, x: &S::V) -> S::V {
+        if FINITE {
+            S::unrotate(&cfg.br[b], x)
+        } else {
+            *x - S::cross(&cfg.bth[b], x)
+        }
     }
 
     /// Pair `k`'s outward normal at `arm` (the node in the body's frame).

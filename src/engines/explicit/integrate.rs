@@ -379,7 +379,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
             let mut normal = model.zero_forces();
             let (mode, counters) = (ContactMode::Unilateral, &mut self.counters);
             model.forces(&self.cfg, mode, &mut normal, counters);
-            sticks.start(model, &self.cfg, &self.velocities.v_n, &normal.contact);
+            sticks.start(model, &self.cfg, &self.velocities.v_n, &normal);
         }
         self.cfg_start = self.cfg.clone();
         // Only above the stable increment (a stability study), and only where the scene's

@@ -1,0 +1,255 @@
+//! Coulomb friction in `explicit` (penalty friction: an elastic stick of the normal penalty's
+//! stiffness k and a return to the slip cone) against the exact answers of the friction cases
+//! (`cases/friction/`), written out here from Newton's law and Coulomb's, independently of
+//! every engine.
+//!
+//! While a node slides under a constant friction force its acceleration is constant, which
+//! central differences integrate exactly: the histories meet the closed forms to round-off
+//! until the node stops. Penalty friction then holds it on an elastic stick: the node rings
+//! about its stop point with amplitude μ·m·g/k and speed μ·g·√(m/k), and never slips again.
+use crosscheck::case;
+use crosscheck::engines::{History, RunOutput, RunSettings};
+use crosscheck::scene::Scene;
+use std::path::Path;
+
+const G: f64 = 9.81;
+/// The cases' penalty stiffness (normal and tangential).
+const K: f64 = 1.0e7;
+
+fn friction_case(id: &str) -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("cases/friction/{id}.toml"));
+    case::load(&path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn run(scene: &Scene) -> RunOutput {
+    crosscheck::run::registry::named("explicit")
+        .unwrap()
+        .run(scene, &RunSettings::default())
+        .unwrap_or_else(|e| panic!("{}: {e}", scene.id))
+}
+
+fn column(h: &History, name: &str) -> Vec<f64> {
+    h.column(name).unwrap_or_else(|| panic!("no column {name}"))
+}
+
+/// Largest |a − b| over the rows whose time satisfies `when`.
+fn largest_error(
+    h: &History,
+    name: &str,
+    exact: impl Fn(f64) -> f64,
+    when: impl Fn(f64) -> bool,
+) -> f64 {
+    let (t, x) = (column(h, "t"), column(h, name));
+    t.iter()
+        .zip(&x)
+        .filter(|(t, _)| when(**t))
+        .map(|(t, x)| (x - exact(*t)).abs())
+        .fold(0.0, f64::max)
+}
+
+/// A node launched at v0 = 2 along the face with μ = 0.5 stops at t* = v0/(μg) after
+/// d = v0²/(2μg), whatever its direction in the face's plane.
+fn slides_to_a_stop(id: &str, along: &str, speed: &str, across: Option<&str>) {
+    let (v0, mu) = (2.0, 0.5);
+    let (stop, distance) = (v0 / (mu * G), v0 * v0 / (2.0 * mu * G));
+    let out = run(&friction_case(id));
+    let h = &out.history;
+    let sliding = |t: f64| t < stop - 1e-3;
+    let stopped = |t: f64| t > stop + 1e-3;
+    // Constant deceleration, integrated exactly by central differences (the start puts the
+    // node on the slip cone): round-off of a few hundred increments' sums, 1e-10.
+    let v_err = largest_error(h, speed, |t| v0 - mu * G * t, sliding);
+    let x_err = largest_error(h, along, |t| v0 * t - 0.5 * mu * G * t * t, sliding);
+    assert!(
+        v_err < 1e-10 && x_err < 1e-10,
+        "{id}: sliding errs {v_err:e} (speed), {x_err:e} (distance)"
+    );
+    // Stopped: on the stick, within 2μmg/k of the stop point (the stick loads from zero to
+    // μmg and overshoots by as much), ringing at speed up to μg·√(m/k); 1 % over each bound.
+    let held = 2.0 * mu * G / K;
+    let x_after = largest_error(h, along, |_| distance, stopped);
+    let v_after = largest_error(h, speed, |_| 0.0, stopped);
+    assert!(
+        x_after < 1.01 * held,
+        "{id}: stopped {x_after:e} from d, bound {held:e}"
+    );
+    let ringing = mu * G * (1.0 / K).sqrt();
+    assert!(
+        v_after < 1.01 * ringing,
+        "{id}: stopped at speed {v_after:e}, bound {ringing:e}"
+    );
+    if let Some(across) = across {
+        // An isotropic law keeps the node on its launch line: round-off of the direction.
+        let side = largest_error(h, across, |_| 0.0, |_| true);
+        assert!(side < 1e-12, "{id}: left its line by {side:e}");
+    }
+    // All the kinetic energy goes into friction (μ m g d = m v0²/2), less what the stick
+    // spring holds, at most (μmg)²/(2k) = 1.2e-6.
+    let dissipated = *column(h, "e_frictional").last().unwrap();
+    let stick_energy = (mu * G).powi(2) / (2.0 * K);
+    assert!(
+        (dissipated - 0.5 * v0 * v0).abs() < stick_energy,
+        "{id}: dissipated {dissipated}, exact {}",
+        0.5 * v0 * v0
+    );
+    let balance = column(h, "e_balance")
+        .iter()
+        .fold(0.0_f64, |m, e| m.max(e.abs()));
+    assert!(balance < 1e-9, "{id}: energy balance {balance:e}");
+}
+
+#[test]
+fn a_node_slides_to_a_stop_at_v0_over_mu_g() {
+    slides_to_a_stop("friction_slide_stop_2d", "ux_node", "vx_node", None);
+    slides_to_a_stop(
+        "friction_slide_stop_3d",
+        "us_node",
+        "vs_node",
+        Some("us_side"),
+    );
+}
+
+#[test]
+fn the_stop_distance_does_not_depend_on_the_sliding_direction() {
+    slides_to_a_stop(
+        "friction_isotropy_30",
+        "us_node",
+        "vs_node",
+        Some("us_side"),
+    );
+    slides_to_a_stop(
+        "friction_isotropy_45",
+        "us_node",
+        "vs_node",
+        Some("us_side"),
+    );
+}
+
+#[test]
+fn a_node_on_a_slope_steeper_than_its_friction_angle_slides_at_g_sin_minus_mu_cos() {
+    let (theta, mu) = (35f64.to_radians(), 0.3);
+    let a = G * (theta.sin() - mu * theta.cos());
+    let h = run(&friction_case("friction_incline_slip")).history;
+    // Constant acceleration from rest, exact under central differences: round-off.
+    let x_err = largest_error(&h, "us_node", |t| 0.5 * a * t * t, |_| true);
+    let v_err = largest_error(&h, "vs_node", |t| a * t, |_| true);
+    assert!(x_err < 1e-11 && v_err < 1e-10, "errs {x_err:e}, {v_err:e}");
+    // Pressed by m g cos θ; the consistent start leaves the penalty's ringing at round-off.
+    let f_err = largest_error(&h, "contact_force", |_| G * theta.cos(), |_| true);
+    assert!(f_err < 1e-8, "contact force errs {f_err:e}");
+    // Dissipation: μ N × the distance slid.
+    let (t, d) = (0.5, column(&h, "e_frictional"));
+    let exact = mu * G * theta.cos() * 0.5 * a * t * t;
+    assert!(
+        (d.last().unwrap() - exact).abs() < 1e-9 * exact,
+        "dissipated {d:?}"
+    );
+}
+
+#[test]
+fn a_node_on_a_slope_within_its_friction_angle_stays_without_creep() {
+    let h = run(&friction_case("friction_incline_stick")).history;
+    // The stick spring starts loaded with the weight's tangential part m g sin θ, which it
+    // then carries exactly: no slip, no creep over the run (round-off of positions near 0).
+    let creep = largest_error(&h, "us_node", |_| 0.0, |_| true);
+    assert!(creep < 1e-15, "crept {creep:e} down the slope");
+    let dissipated = column(&h, "e_frictional")
+        .iter()
+        .fold(0.0_f64, |m, e| m.max(*e));
+    assert_eq!(dissipated, 0.0, "a stuck node dissipates nothing");
+}
+
+/// The Coulomb-damped oscillator from x = 0 at v0 (m = 1, k = 100, μ = 0.3): each phase
+/// is harmonic about the centre −c·sign(v), c = μmg/k, until v = 0; it stops where |x| ≤ c.
+fn coulomb_oscillator(t: f64) -> (f64, f64) {
+    let (omega, c) = (10.0, 0.3 * G / 100.0);
+    let (mut x, mut v, mut start) = (0.0, 3.0_f64, 0.0);
+    let mut direction = 1.0;
+    loop {
+        let centre = -c * direction;
+        let (a, b) = (x - centre, v / omega);
+        // x − centre = a cos ωs + b sin ωs; v = 0 next at ωs = atan2(b, a) (mod π, > 0).
+        let phase = b.atan2(a).rem_euclid(std::f64::consts::PI);
+        let phase = if phase == 0.0 {
+            std::f64::consts::PI
+        } else {
+            phase
+        };
+        let end = start + phase / omega;
+        let s = t.min(end) - start;
+        let (cos, sin) = ((omega * s).cos(), (omega * s).sin());
+        if t <= end {
+            return (centre + a * cos + b * sin, omega * (b * cos - a * sin));
+        }
+        x = centre + a * cos + b * sin;
+        (v, start, direction) = (0.0, end, -direction);
+        if x.abs() <= c {
+            return (x, 0.0);
+        }
+    }
+}
+
+#[test]
+fn a_mass_on_a_spring_sliding_on_a_rough_face_stops_inside_the_dead_band() {
+    let (c, omega) = (0.3 * G / 100.0, 10.0);
+    // The closed form's own figures, from the case's comment: stop at x = 0.022290 at
+    // t = atan2(v0/ω, c)/ω + 5π/ω = 1.718097 s.
+    let stop = (0.3_f64).atan2(c) / omega + 5.0 * std::f64::consts::PI / omega;
+    assert!((stop - 1.718097).abs() < 1e-6);
+    assert!((coulomb_oscillator(2.5).0 - 0.022290).abs() < 1e-6);
+    let h = run(&friction_case("friction_spring_stickslip")).history;
+    // Each of the six stops loads the stick over about √(m/k_t) = 3.2e-4 s, in which the
+    // spring's force moves the node little; the phase shift it leaves, ω·3.2e-4 = 3.2e-3 of
+    // the amplitude per turn, is what the errors measure: 1e-3 of the peak displacement 0.272
+    // and of v0 = 3 bounds them (measured 8.4e-4 and 7.7e-4).
+    let x_err = largest_error(&h, "ux_node", |t| coulomb_oscillator(t).0, |_| true);
+    let v_err = largest_error(&h, "vx_node", |t| coulomb_oscillator(t).1, |_| true);
+    assert!(
+        x_err < 1e-3 * 0.272 && v_err < 1e-3 * 3.0,
+        "errs {x_err:e}, {v_err:e}"
+    );
+    // At rest inside the dead band, where the closed form stops: each of the six reversals
+    // carries the node through the stick's travel 2μmg/k = 5.9e-7 without slip, which shifts
+    // the later turning points by as much: within six times that (measured 3.0e-6).
+    let x_end = *column(&h, "ux_node").last().unwrap();
+    let shift = (x_end - coulomb_oscillator(2.5).0).abs();
+    assert!(
+        shift < 6.0 * 2.0 * 0.3 * G / K,
+        "stopped {shift:e} from the exact stop"
+    );
+    // Dissipation: μ N × the path length, 0 → x1 → x2 → … → the stop.
+    let mut path = 0.0;
+    let mut last = 0.0;
+    for j in 0..6 {
+        let at = (0.3_f64).atan2(c) / omega + j as f64 * std::f64::consts::PI / omega;
+        let x = coulomb_oscillator(at).0;
+        path += (x - last).abs();
+        last = x;
+    }
+    let dissipated = *column(&h, "e_frictional").last().unwrap();
+    let exact = 0.3 * G * path;
+    assert!(
+        (dissipated - exact).abs() < 1e-4 * exact,
+        "dissipated {dissipated}, exact {exact}"
+    );
+}
+
+#[test]
+fn friction_does_not_move_the_stable_increment_of_a_node_on_a_held_face() {
+    // The stick is a tangential penalty of the normal one's stiffness: against a held face
+    // it adds modes at the normal penalty's frequency, so the limit stays 2√(m/k).
+    let scene = friction_case("friction_slide_stop_3d");
+    let mut frictionless = scene.clone();
+    frictionless.contacts[0].friction = None;
+    let with = run(&scene).info.stable_increment.unwrap();
+    let without = run(&frictionless).info.stable_increment.unwrap();
+    let exact = 2.0 * (1.0 / K).sqrt();
+    assert!(
+        (with - exact).abs() < 1e-6 * exact,
+        "with friction {with:e}, exact {exact:e}"
+    );
+    assert!(
+        (with - without).abs() < 1e-6 * exact,
+        "{with:e} against {without:e}"
+    );
+}

@@ -253,3 +253,18 @@ fn friction_does_not_move_the_stable_increment_of_a_node_on_a_held_face() {
         "{with:e} against {without:e}"
     );
 }
+
+#[test]
+fn at_mu_one_a_pull_just_under_mu_n_holds_and_just_over_slides() {
+    // Under: 0.99 μN from rest. The stick starts loaded with the pull and carries it: no
+    // creep at all (measured exactly 0 over 10^5 increments).
+    let h = run(&friction_case("friction_limit_under")).history;
+    let creep = largest_error(&h, "ux_node", |_| 0.0, |_| true);
+    assert!(creep < 1e-15, "crept {creep:e} under 0.99 mu N");
+    // Over: 1.01 μN slides at a = 0.01 g, exactly under central differences: round-off.
+    let a = 0.01 * G;
+    let h = run(&friction_case("friction_limit_over")).history;
+    let x_err = largest_error(&h, "ux_node", |t| 0.5 * a * t * t, |_| true);
+    let v_err = largest_error(&h, "vx_node", |t| a * t, |_| true);
+    assert!(x_err < 1e-12 && v_err < 1e-11, "errs {x_err:e}, {v_err:e}");
+}

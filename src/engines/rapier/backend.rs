@@ -44,6 +44,16 @@ pub struct Run {
     pub gyroscopic: Option<bool>,
 }
 
+/// A collider's material: rapier combines each coefficient of a contact's two colliders by
+/// their average, so both colliders of a pair carry the pair's own.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Material {
+    /// Coefficient of restitution.
+    pub restitution: f64,
+    /// Coefficient of friction (rapier has one: the pair's μ_k; 0: frictionless).
+    pub friction: f64,
+}
+
 /// The state after a step (or at the start of a dynamic step).
 #[derive(Debug, Clone)]
 pub struct Record {
@@ -82,12 +92,12 @@ pub trait World: Sized {
     fn new(run: &Run) -> Self;
     /// Add a body (the next index).
     fn insert_body(&mut self, body: &BodySpec, run: &Run);
-    /// Add a collider on its body (the next index), with its restitution and its collision
-    /// group (a bit mask: it touches only colliders of the same group).
+    /// Add a collider on its body (the next index), with its material and its collision group
+    /// (a bit mask: it touches only colliders of the same group).
     fn insert_collider(
         &mut self,
         collider: &ColliderSpec,
-        restitution: f64,
+        material: Material,
         group: u32,
     ) -> Result<(), EngineError>;
     /// Every body's linear and angular velocity, in order.
@@ -177,20 +187,25 @@ fn build<W: World>(plan: &Plan, run: &Run) -> Result<W, EngineError> {
     for b in &plan.bodies {
         world.insert_body(b, run);
     }
-    // Each collider takes its pair's restitution (rapier averages the two), and its pair's
-    // collision group: a pair's ball touches only its own slab or solid (two pairs on one node
-    // would otherwise each push the node off both surfaces; pairs 32 apart share a group).
-    let mut restitution = vec![0.0; plan.colliders.len()];
+    // Each collider takes its pair's restitution and friction (rapier averages each over the
+    // two colliders: the pair's own), and its pair's collision group: a pair's ball touches
+    // only its own slab or solid (two pairs on one node would otherwise each push the node off
+    // both surfaces; pairs 32 apart share a group).
+    let mut materials = vec![Material::default(); plan.colliders.len()];
     let mut groups = vec![0u32; plan.colliders.len()];
     for (k, c) in plan.contacts.iter().enumerate() {
-        restitution[c.ball] = c.restitution;
-        restitution[c.slab] = c.restitution;
+        let material = Material {
+            restitution: c.restitution,
+            friction: c.friction,
+        };
+        materials[c.ball] = material;
+        materials[c.slab] = material;
         let group = 1 << (k % 32);
         groups[c.ball] = group;
         groups[c.slab] = group;
     }
     for (i, c) in plan.colliders.iter().enumerate() {
-        world.insert_collider(c, restitution[i], groups[i])?;
+        world.insert_collider(c, materials[i], groups[i])?;
     }
     let velocities = if W::ZERO_STEP_ALWAYS || run.zero_step_first {
         let velocities = world.velocities();

@@ -55,8 +55,12 @@
 //! r = 1e-3 `size` on the node's body, centred on the node, the slab moved back by r so the
 //! two touch exactly at t = 0. A solid (ball, cuboid, capsule) is the parry shape the scene
 //! names, shrunk by r so the node itself touches where the solid's surface is (corners rounded
-//! by r). Friction 0. Restitution: the pair's, whether it starts open or closed (rapier
+//! by r). Restitution: the pair's, whether it starts open or closed (rapier
 //! cannot rest a closed pair of restitution 1: the report shows it with its control).
+//! Friction: the pair's kinetic coefficient μ_k on both colliders (rapier's `Average` rule
+//! gives the pair (μ_k + μ_k)/2 = μ_k exactly; rapier has one coefficient, so a pair whose
+//! static coefficient is larger sticks and breaks away at μ_k), 0 on a frictionless pair. The
+//! node's ball never rolls: a particle's rotations are locked.
 //!
 //! # Steps
 //!
@@ -300,6 +304,9 @@ pub struct ContactSpec {
     pub surface: Surface,
     /// Coefficient of restitution (rapier's `restitution` on both colliders, averaged).
     pub restitution: f64,
+    /// Coefficient of friction: the pair's μ_k, 0 where frictionless (rapier's `friction` on
+    /// both colliders, averaged: exactly μ_k).
+    pub friction: f64,
 }
 
 /// A point load.

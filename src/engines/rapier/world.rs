@@ -216,15 +216,16 @@ macro_rules! world {
         /// A world of one rapier crate.
         mod $module {
             use crate::engines::EngineError;
-            use crate::engines::rapier::backend::Run;
+            use crate::engines::rapier::backend::{Material, Run};
             use crate::engines::rapier::plan::{
                 BodyKind, BodySpec, BodyState, ColliderSpec, Frame, JointKind, JointSpec, Shape,
             };
             use nalgebra::{UnitQuaternion, Vector3};
             use rp::dynamics::{
-                GenericJoint, GenericJointBuilder, ImpulseJointHandle, IntegrationParameters,
-                JointAxesMask, JointAxis, LockedAxes, MassProperties, MotorModel, RigidBodyBuilder,
-                RigidBodyHandle, RigidBodyType, SpringCoefficients, SpringJointBuilder,
+                CoefficientCombineRule, GenericJoint, GenericJointBuilder, ImpulseJointHandle,
+                IntegrationParameters, JointAxesMask, JointAxis, LockedAxes, MassProperties,
+                MotorModel, RigidBodyBuilder, RigidBodyHandle, RigidBodyType, SpringCoefficients,
+                SpringJointBuilder,
             };
             use rp::geometry::{
                 ColliderBuilder, ColliderHandle, Group, InteractionGroups, InteractionTestMode,
@@ -351,7 +352,7 @@ macro_rules! world {
                 fn insert_collider(
                     &mut self,
                     c: &ColliderSpec,
-                    restitution: f64,
+                    material: Material,
                     group: u32,
                 ) -> Result<(), EngineError> {
                     let group = Group::from_bits_truncate(group);
@@ -372,8 +373,9 @@ macro_rules! world {
                     }
                     .position(pose(&c.frame))
                     .density(0.0)
-                    .friction(0.0)
-                    .restitution(restitution as Real)
+                    .friction(material.friction as Real)
+                    .friction_combine_rule(CoefficientCombineRule::Average)
+                    .restitution(material.restitution as Real)
                     .collision_groups(InteractionGroups::new(
                         group,
                         group,

@@ -50,6 +50,7 @@ pub(super) fn colliders(
             body: face_body,
             surface,
             restitution: pair.restitution,
+            friction: pair.friction.map_or(0.0, |f| f.kinetic_coefficient),
         });
     }
     Ok((colliders, contacts))

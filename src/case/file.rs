@@ -249,8 +249,12 @@ pub struct ContactPairTable {
 pub struct LoadTable {
     /// Node (a free node or a body's material point).
     pub node: String,
-    /// Force vector (global).
+    /// Force vector (global; at amplitude 1).
     pub force: Vec<f64>,
+    /// A tabular amplitude `[[t, a], ...]` scaling the force (times from the start of the
+    /// first dynamic step, strictly increasing; linear between points, the end values held
+    /// outside them). Default: constant.
+    pub amplitude: Option<Vec<Vec<f64>>>,
 }
 
 /// `[[initial_velocities]]`.

@@ -348,6 +348,11 @@ impl Scene {
     pub fn has_friction(&self) -> bool {
         self.contacts.iter().any(|c| c.friction.is_some())
     }
+
+    /// Whether any load varies in time.
+    pub fn has_amplitudes(&self) -> bool {
+        self.loads.iter().any(|l| l.amplitude.is_some())
+    }
 }
 
 /// Signed distance from `p` to a surface at its t = 0 placement (negative inside) and the
@@ -408,13 +413,50 @@ pub fn solid_distance(solid: &Solid, s: &Vector3<f64>) -> (f64, Vector3<f64>) {
     }
 }
 
-/// A constant force at a material point, fixed in direction.
+/// A force at a material point, fixed in direction: constant, or scaled by an amplitude.
 #[derive(Debug, Clone)]
 pub struct PointLoad {
     /// The node (a particle or a body's material point).
     pub node: NodeId,
-    /// The force (global, constant).
+    /// The force (global; at amplitude 1).
     pub force: Vector3<f64>,
+    /// How the force varies in time (`None`: constant).
+    pub amplitude: Option<Amplitude>,
+}
+
+impl PointLoad {
+    /// The force at time `t` (from the start of the first dynamic step).
+    pub fn force_at(&self, t: f64) -> Vector3<f64> {
+        match &self.amplitude {
+            Some(a) => self.force * a.at(t),
+            None => self.force,
+        }
+    }
+}
+
+/// A tabular amplitude, as Abaqus's `*AMPLITUDE`: values at increasing times, linear between
+/// them, the first value before the first time and the last after the last.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Amplitude {
+    /// (time, value) pairs, times strictly increasing, at least two.
+    pub points: Vec<(f64, f64)>,
+}
+
+impl Amplitude {
+    /// The value at time `t`.
+    pub fn at(&self, t: f64) -> f64 {
+        let p = &self.points;
+        let (first, last) = (p[0], p[p.len() - 1]);
+        if t <= first.0 {
+            return first.1;
+        }
+        if t >= last.0 {
+            return last.1;
+        }
+        let i = p.partition_point(|(ti, _)| *ti <= t);
+        let ((t0, a0), (t1, a1)) = (p[i - 1], p[i]);
+        a0 + (a1 - a0) * ((t - t0) / (t1 - t0))
+    }
 }
 
 /// Initial velocity of a node (for a body, of its reference node, with its angular velocity).

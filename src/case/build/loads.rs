@@ -1,6 +1,6 @@
 //! Loads, and initial velocities; each must do something in the steps the case runs.
 
-use super::{Builder, err};
+use super::{Builder, err, in_range};
 use crate::case::file::CaseFile;
 use crate::scene::*;
 use nalgebra::Vector3;
@@ -9,12 +9,68 @@ use nalgebra::Vector3;
 pub(super) fn loads(b: &Builder, case: &CaseFile) -> Result<Vec<PointLoad>, SceneError> {
     let mut loads = Vec::new();
     for (i, l) in case.loads.iter().enumerate() {
+        let field = format!("loads[{i}].amplitude");
+        let amplitude = match &l.amplitude {
+            Some(table) => Some(amplitude(&field, table, case)?),
+            None => None,
+        };
         loads.push(PointLoad {
             node: b.node(&format!("loads[{i}].node"), &l.node)?,
             force: b.vector(&format!("loads[{i}].force"), &l.force)?,
+            amplitude,
         });
     }
     Ok(loads)
+}
+
+/// A load's amplitude table: at least two `[t, a]` points, times ≥ 0 and strictly
+/// increasing, values finite and not all 0; only in a case whose steps are all dynamic (a
+/// static step's loads are constant).
+fn amplitude(field: &str, table: &[Vec<f64>], case: &CaseFile) -> Result<Amplitude, SceneError> {
+    if case.steps.iter().any(|s| s.kind != "dynamic") {
+        return err(
+            field,
+            "a load with an amplitude needs every step to be dynamic (a static step's loads are constant)",
+        );
+    }
+    if table.len() < 2 {
+        return err(
+            field,
+            format!(
+                "has {} point(s); give at least two [t, a] points (a constant load needs no amplitude)",
+                table.len()
+            ),
+        );
+    }
+    let mut points = Vec::with_capacity(table.len());
+    for (j, p) in table.iter().enumerate() {
+        let at = format!("{field}[{j}]");
+        let &[t, a] = p.as_slice() else {
+            return err(at, format!("has {} numbers; each point is [t, a]", p.len()));
+        };
+        let (t, a) = (in_range(&at, t)?, in_range(&at, a)?);
+        if t < 0.0 {
+            return err(at, format!("time {t} is before the start (t = 0)"));
+        }
+        if let Some(&(before, _)) = points.last()
+            && t <= before
+        {
+            return err(
+                at,
+                format!(
+                    "time {t} does not increase (the point before is at {before}); times must increase strictly"
+                ),
+            );
+        }
+        points.push((t, a));
+    }
+    if points.iter().all(|(_, a)| *a == 0.0) {
+        return err(
+            field,
+            "is 0 at every point, so the load does nothing; remove it",
+        );
+    }
+    Ok(Amplitude { points })
 }
 
 /// The case's initial velocities, in file order: at free or reference nodes (angular ones at

@@ -12,6 +12,7 @@ use super::linear::{StableIncrement, static_step};
 use super::model::{
     Config, Constraints, ContactMode, Counters, Forces, Model, Point, Rates, SolidPosition,
 };
+use super::ramps::RampedWork;
 use super::rows::{RowSampler, note_impacts};
 use super::space::{Lin, Space};
 use super::start::consistent_start;
@@ -237,6 +238,8 @@ struct TimeLoop<'a, S: Space, const FINITE: bool> {
     forces: Forces<S>,
     /// The stick points of the pairs with friction (`None` without friction).
     sticks: Option<Sticks<S>>,
+    /// The work of the loads that vary in time (`None` without them).
+    ramped: Option<RampedWork<S>>,
     velocities: Velocities<S>,
     /// Increment, stable increment, and the increments taken.
     h: f64,
@@ -306,6 +309,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
             acc_prev: model.zero_rates(),
             forces: model.zero_forces(),
             sticks,
+            ramped: RampedWork::new(model),
             velocities: Velocities::new(model),
             h: 0.0,
             stable: None,
@@ -379,6 +383,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
             let mut normal = model.zero_forces();
             let (mode, counters) = (ContactMode::Unilateral, &mut self.counters);
             model.forces(&self.cfg, mode, &mut normal, counters);
+            model.ramped_forces(&self.cfg, 0.0, &mut normal);
             sticks.start(model, &self.cfg, &self.velocities.v_n, &normal);
         }
         self.cfg_start = self.cfg.clone();
@@ -468,6 +473,11 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
             model.forces(cfg, mode, &mut self.forces, counters);
         } else {
             model.forces_with::<false>(cfg, mode, &mut self.forces, counters);
+        }
+        if let Some(ramped) = self.ramped.as_mut() {
+            let t = n as f64 * h;
+            model.ramped_forces(cfg, t, &mut self.forces);
+            ramped.add(model, cfg, t);
         }
         if let Some(sticks) = self.sticks.as_mut() {
             if row {
@@ -670,7 +680,8 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         if n == 0 {
             self.energy0 = kinetic + self.forces.elastic;
         }
-        let work = model.external_work(&self.cfg, &self.cfg_start);
+        let ramped = self.ramped.as_ref().map_or(0.0, |r| r.work);
+        let work = model.external_work(&self.cfg, &self.cfg_start) + ramped;
         let time = if self.sampler.on_steps {
             let times = &self.sampler.times;
             times[((n / plan.stride) as usize).min(times.len() - 1)]

@@ -13,6 +13,7 @@ pub mod linear;
 pub mod model;
 pub mod motion;
 pub mod on_request;
+pub mod ramps;
 pub mod rows;
 pub mod space;
 pub mod start;

@@ -10,8 +10,8 @@ use super::body_solve::{BodyOperator, BodySolve};
 use super::space::{BodyInertia, Lin, Space};
 pub use super::state::{Config, ContactMode, Counters, Forces, Rates, Vectors, fill_zero};
 use crate::scene::{
-    Attachment, Connection, ContactPair, ContactState, Dof, Element, Friction, Scene, StepKind,
-    Surface, surface_distance,
+    Amplitude, Attachment, Connection, ContactPair, ContactState, Dof, Element, Friction,
+    PointLoad, Scene, StepKind, Surface, surface_distance,
 };
 
 /// Where an element end or a load acts.
@@ -331,6 +331,8 @@ pub struct Model<S: Space, const FINITE: bool> {
     /// 1 / mass per particle (apart, so the time loop streams 8 bytes per particle).
     pub(super) inverse_masses: Vec<f64>,
     pub(super) loads: Vec<Load<S>>,
+    /// Loads scaled by an amplitude in time ([`super::ramps`]).
+    pub(super) ramped_loads: Vec<(Load<S>, Amplitude)>,
     /// Penalty stiffness.
     pub penalty: f64,
     /// Node → point.
@@ -566,13 +568,20 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 }
             })
             .collect();
+        let load = |l: &PointLoad| Load {
+            point: points[l.node],
+            force: S::v(&l.force),
+        };
         let loads: Vec<Load<S>> = scene
             .loads
             .iter()
-            .map(|l| Load {
-                point: points[l.node],
-                force: S::v(&l.force),
-            })
+            .filter(|l| l.amplitude.is_none())
+            .map(load)
+            .collect();
+        let ramped_loads = scene
+            .loads
+            .iter()
+            .filter_map(|l| Some((load(l), l.amplitude.clone()?)))
             .collect();
         let (line_springs, springs) = line_springs(scene.springs.iter().filter_map(two_point));
         let grounded_springs = grounded(&scene.springs);
@@ -590,6 +599,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             dashpots,
             contacts,
             loads,
+            ramped_loads,
             penalty,
             points,
         }

@@ -11,7 +11,11 @@
 //!   the two cross-check each other. [`AnalyticEngine`] falls back to it for every scene
 //!   without contact that no hand-derived form covers, so it refuses only contact scenes
 //!   outside the rigid-contact form.
+//! - [`friction`]: Coulomb friction: one particle on the plane face of a held body under
+//!   constant loads and at most one spring, along one line, by its stick and slip phases. Every
+//!   scene with friction goes to it, and it refuses what it does not cover.
 
+pub mod friction;
 pub mod linear;
 pub mod rigid;
 pub mod springs;
@@ -34,18 +38,10 @@ impl Engine for AnalyticEngine {
 
     fn run(&self, scene: &Scene, _settings: &RunSettings) -> Result<RunOutput, EngineError> {
         let start = Instant::now();
-        if scene.has_friction() {
-            return unsupported("contact with friction");
-        }
-        let hand = match scene.family {
-            Family::Springs => springs::solve(scene),
-            Family::RigidBody => rigid::solve(scene).map(|s| s.history),
-        };
-        // A scene without contact that no hand-derived form covers (another topology, an
-        // element off the line of action, any damping) is linear: solve it exactly.
-        let history = match hand {
-            Err(EngineError::Unsupported(_)) if scene.contacts.is_empty() => linear::solve(scene)?,
-            other => other?,
+        let history = if scene.has_friction() {
+            friction::solve(scene)?
+        } else {
+            frictionless(scene)?
         };
         Ok(RunOutput {
             engine: self.name().into(),
@@ -60,6 +56,20 @@ impl Engine for AnalyticEngine {
                 measures: BTreeMap::new(),
             },
         })
+    }
+}
+
+/// A scene without friction: its hand-derived form, else (without contact) the linear solver.
+fn frictionless(scene: &Scene) -> Result<History, EngineError> {
+    let hand = match scene.family {
+        Family::Springs => springs::solve(scene),
+        Family::RigidBody => rigid::solve(scene).map(|s| s.history),
+    };
+    // A scene without contact that no hand-derived form covers (another topology, an
+    // element off the line of action, any damping) is linear: solve it exactly.
+    match hand {
+        Err(EngineError::Unsupported(_)) if scene.contacts.is_empty() => linear::solve(scene),
+        other => other,
     }
 }
 

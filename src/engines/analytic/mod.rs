@@ -38,6 +38,9 @@ impl Engine for AnalyticEngine {
 
     fn run(&self, scene: &Scene, _settings: &RunSettings) -> Result<RunOutput, EngineError> {
         let start = Instant::now();
+        if scene.has_amplitudes() {
+            return unsupported("a load that varies in time (an amplitude)");
+        }
         let history = if scene.has_friction() {
             friction::solve(scene)?
         } else {

@@ -680,8 +680,10 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         if n == 0 {
             self.energy0 = kinetic + self.forces.elastic;
         }
-        let ramped = self.ramped.as_ref().map_or(0.0, |r| r.work);
-        let work = model.external_work(&self.cfg, &self.cfg_start) + ramped;
+        let mut work = model.external_work(&self.cfg, &self.cfg_start);
+        if let Some(ramped) = &self.ramped {
+            work += ramped.work;
+        }
         let time = if self.sampler.on_steps {
             let times = &self.sampler.times;
             times[((n / plan.stride) as usize).min(times.len() - 1)]

@@ -280,7 +280,13 @@ fn run_step<W: World>(
         }
         for l in &plan.loads {
             let at = world.state(l.body).point(&l.local);
-            world.add_force_at_point(l.body, &l.force, &at);
+            // A load that varies in time at the step's middle: the step's impulse, exact for
+            // an amplitude linear over the step.
+            let force = match &l.amplitude {
+                Some(a) => l.force * a.at(t - 0.5 * h),
+                None => l.force,
+            };
+            world.add_force_at_point(l.body, &force, &at);
         }
         world.step();
         let steps = done + k;

@@ -310,14 +310,16 @@ pub struct ContactSpec {
 }
 
 /// A point load.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct LoadSpec {
     /// Body.
     pub body: usize,
     /// Point in body coordinates.
     pub local: Vector3<f64>,
-    /// Force (world, constant).
+    /// Force (world; at amplitude 1).
     pub force: Vector3<f64>,
+    /// How it varies in time (`None`: constant).
+    pub amplitude: Option<crate::scene::Amplitude>,
 }
 
 /// Everything a rapier world is built from.
@@ -521,6 +523,7 @@ pub fn plan_with(scene: &Scene, holding: Holding) -> Result<Plan, EngineError> {
             body: nodes[l.node].body,
             local: nodes[l.node].local,
             force: l.force,
+            amplitude: l.amplitude.clone(),
         })
         .collect();
     Ok(Plan {

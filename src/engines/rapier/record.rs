@@ -152,10 +152,13 @@ impl Kinematics<'_> {
             .sum()
     }
 
+    /// The work of the constant loads since `start` (a load that varies in time is summed
+    /// step by step: [`Recorder::push`]).
     fn work(&self, s: &[BodyState], start: &[BodyState]) -> f64 {
         self.scene
             .loads
             .iter()
+            .filter(|l| l.amplitude.is_none())
             .map(|l| {
                 l.force
                     .dot(&(self.position(s, l.node) - self.position(start, l.node)))
@@ -185,6 +188,11 @@ pub struct Recorder<'a> {
     start: Option<(Vec<BodyState>, f64)>,
     /// The previous record, its dissipated energy and dissipation rate.
     previous: Option<(Record, f64, f64)>,
+    /// The work of the loads that vary in time up to the previous record, and up to the
+    /// last: each step's applied force (at its middle) times its point's travel in it.
+    ramped_work: (f64, f64),
+    /// Whether any load varies in time.
+    ramped: bool,
     /// Per contact, the impulse delivered from the start to the previous record.
     impulse: Vec<f64>,
     /// Per contact, the mean force of the last step.
@@ -251,6 +259,8 @@ impl<'a> Recorder<'a> {
             rows: Vec::with_capacity(scene.output_rows),
             start: None,
             previous: None,
+            ramped_work: (0.0, 0.0),
+            ramped: scene.has_amplitudes(),
             impulse: vec![0.0; nc],
             last_force: vec![0.0; nc],
             longest_step: 0.0,
@@ -281,6 +291,18 @@ impl<'a> Recorder<'a> {
         if self.start.is_none() {
             let energy0 = self.k.kinetic(&record.bodies) + self.k.elastic(&record.bodies);
             self.start = Some((record.bodies.clone(), energy0));
+        }
+        if let (true, Some((p, ..))) = (self.ramped, &self.previous) {
+            let middle = 0.5 * (p.time + record.time);
+            let step: f64 = (self.k.scene.loads.iter())
+                .filter(|l| l.amplitude.is_some())
+                .map(|l| {
+                    let travel = self.k.position(&record.bodies, l.node)
+                        - self.k.position(&p.bodies, l.node);
+                    l.force_at(middle).dot(&travel)
+                })
+                .sum();
+            self.ramped_work = (self.ramped_work.1, self.ramped_work.1 + step);
         }
         if let (Some(f), Some((p, ..))) = (&record.contact_force, &self.previous) {
             self.counted += 1;
@@ -337,8 +359,9 @@ impl<'a> Recorder<'a> {
             let Some((p, pd, _)) = &self.previous else {
                 break;
             };
-            let (state, dissipation) = if (p.time - t).abs() <= self.tol {
-                (p.bodies.clone(), *pd)
+            let (w0, w1) = self.ramped_work;
+            let (state, dissipation, ramped) = if (p.time - t).abs() <= self.tol {
+                (p.bodies.clone(), *pd, w0)
             } else {
                 let s = ((t - p.time) / (record.time - p.time)).clamp(0.0, 1.0);
                 (
@@ -348,9 +371,10 @@ impl<'a> Recorder<'a> {
                         .map(|(x, y)| x.lerp(y, s))
                         .collect(),
                     pd + s * (dissipated - pd),
+                    w0 + s * (w1 - w0),
                 )
             };
-            self.emit(t, &state, dissipation);
+            self.emit(t, &state, dissipation, ramped);
         }
         self.previous = Some((record, dissipated, power));
         self.resolve(false);
@@ -358,7 +382,7 @@ impl<'a> Recorder<'a> {
     }
 
     /// One output row at `t` from `state`; its contact-force columns are filled later.
-    fn emit(&mut self, t: f64, state: &[BodyState], dissipation: f64) {
+    fn emit(&mut self, t: f64, state: &[BodyState], dissipation: f64, ramped_work: f64) {
         let (start, energy0) = self.start.as_ref().expect("a record came first");
         let k = &self.k;
         let mut row = Vec::with_capacity(self.columns.len());
@@ -385,7 +409,10 @@ impl<'a> Recorder<'a> {
         }
         let kinetic = k.kinetic(state);
         let elastic = k.elastic(state);
-        let work = k.work(state, start);
+        let mut work = k.work(state, start);
+        if self.ramped {
+            work += ramped_work;
+        }
         row.extend([
             kinetic,
             elastic,
@@ -456,7 +483,7 @@ impl<'a> Recorder<'a> {
         };
         while self.next < self.times.len() {
             let t = self.times[self.next];
-            self.emit(t, &last.bodies, ld);
+            self.emit(t, &last.bodies, ld, self.ramped_work.1);
         }
         self.resolve(true);
         if let Some(row) = self.rows.iter().find(|r| r.iter().any(|x| !x.is_finite())) {

@@ -70,6 +70,11 @@ impl Engine for ReferenceEngine {
                 "reference: contact with friction".into(),
             ));
         }
+        if scene.has_amplitudes() {
+            return Err(EngineError::Unsupported(
+                "reference: a load that varies in time (an amplitude)".into(),
+            ));
+        }
         let mechanism = Mechanism::new(scene)?;
         let fine = solve(scene, &mechanism, TOLERANCE, 1.0)?;
         let finer = solve(scene, &mechanism, TOLERANCE / 2.0, 0.5)?;

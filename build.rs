@@ -35,13 +35,19 @@ fn commit() -> String {
     }
 }
 
-/// `$OUT_DIR/embedded_cases.rs`: the shipped case files (`cases/*.toml`, `cases/stress/*.toml`)
+/// `$OUT_DIR/embedded_cases.rs`: the shipped case files (`cases/*.toml` and those of its
+/// families, `cases/stress/*.toml` and `cases/friction/*.toml`)
 /// as `(path under cases/, text)`, sorted, for the binary to use where no case directory is
 /// given or found.
 fn embed_cases() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases");
     let mut files = Vec::new();
-    for (sub, dir) in [("", root.clone()), ("stress/", root.join("stress"))] {
+    let folders = [
+        ("", root.clone()),
+        ("stress/", root.join("stress")),
+        ("friction/", root.join("friction")),
+    ];
+    for (sub, dir) in folders {
         let Ok(entries) = std::fs::read_dir(&dir) else {
             continue;
         };
@@ -67,6 +73,7 @@ fn embed_cases() {
     std::fs::write(out, code).expect("write embedded_cases.rs");
     println!("cargo:rerun-if-changed=cases");
     println!("cargo:rerun-if-changed=cases/stress");
+    println!("cargo:rerun-if-changed=cases/friction");
 }
 
 fn main() {

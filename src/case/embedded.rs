@@ -91,7 +91,8 @@ fn holds_shipped(dir: &Path) -> bool {
     }) && super::discover_suite(dir).is_ok_and(|found| found.len() == FILES.len())
 }
 
-/// The shipped cases written under `root` as `cases-<fingerprint>/` (and its `stress/`): made
+/// The shipped cases written under `root` as `cases-<fingerprint>/` (and its families'
+/// folders): made
 /// in a directory of its own and renamed into place, so that a run never reads a half-written
 /// one; rewritten where it was edited.
 pub fn write_out(root: &Path) -> io::Result<PathBuf> {
@@ -141,7 +142,7 @@ pub fn write_out(root: &Path) -> io::Result<PathBuf> {
 mod tests {
     use super::*;
 
-    /// The shipped files are the repository's `cases/` and `cases/stress/`, one for one.
+    /// The shipped files are the repository's `cases/` and its families' folders, one for one.
     #[test]
     fn every_shipped_case_is_embedded() {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases");

@@ -176,29 +176,42 @@ pub fn discover(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
     Ok(v)
 }
 
+/// The folders of the case families beside the seed cases: the stress family and the
+/// friction family.
+pub const FAMILY_FOLDERS: [&str; 2] = ["stress", "friction"];
+
 /// The directory of the stress family beside the seed cases: `dir/stress`.
 pub fn stress_dir(dir: &Path) -> PathBuf {
     dir.join("stress")
 }
 
-/// The seed cases of `dir` and, where `dir/stress` exists, the stress family's: what a run
-/// with no case named runs.
+/// The directory of the friction family beside the seed cases: `dir/friction`.
+pub fn friction_dir(dir: &Path) -> PathBuf {
+    dir.join("friction")
+}
+
+/// The seed cases of `dir` and those of each family folder that exists
+/// ([`FAMILY_FOLDERS`]): what a run with no case named runs.
 pub fn discover_suite(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
     let mut v = discover(dir)?;
-    let stress = stress_dir(dir);
-    if stress.is_dir() {
-        v.extend(discover(&stress)?);
+    for folder in FAMILY_FOLDERS {
+        let family = dir.join(folder);
+        if family.is_dir() {
+            v.extend(discover(&family)?);
+        }
     }
     Ok(v)
 }
 
-/// Resolve a CASE argument: an id from `dir` (or from `dir/stress`), or a path to a TOML file.
+/// Resolve a CASE argument: an id from `dir` (or from a family folder of it), or a path to a
+/// TOML file.
 pub fn resolve(arg: &str, dir: &Path) -> Result<PathBuf, CaseError> {
     let as_path = PathBuf::from(arg);
     if as_path.extension().is_some_and(|x| x == "toml") && as_path.is_file() {
         return Ok(as_path);
     }
-    for d in [dir.to_path_buf(), stress_dir(dir)] {
+    let folders = FAMILY_FOLDERS.iter().map(|f| dir.join(f));
+    for d in std::iter::once(dir.to_path_buf()).chain(folders) {
         let in_dir = d.join(format!("{arg}.toml"));
         if in_dir.is_file() {
             return Ok(in_dir);

@@ -1,14 +1,40 @@
 //! One integration leg: Dormand–Prince from `(t, y)` towards a time with a fixed free basis and
-//! a fixed set of closed contacts, stopped at the end of the first accepted step by which a
-//! contact event has happened.
+//! a fixed set of closed contacts in fixed grips, stopped at the end of the first accepted step
+//! by which a contact event has happened.
+//!
+//! The state is the positions, the free velocities w and, in a scene with friction, the energy
+//! friction has dissipated (its rate the sliding pairs' power).
 
-use super::mechanism::{Mechanism, Placement};
+use super::mechanism::{Grip, Mechanism, Placement};
 use crate::engines::EngineError;
 use nalgebra::{DMatrix, DVector};
 use std::cell::{Cell, RefCell};
 
 /// Most integration steps between two output rows (each run is bounded in time).
 const MAX_STEPS_PER_ROW: u32 = 1_000_000;
+
+/// The sliding pairs' directions as the integration goes (each [`Grip::Slip`]'s reference is
+/// the slip's direction at the last accepted step), and which pairs' slip has stopped.
+#[derive(Debug, Clone)]
+pub(super) struct Tracking {
+    /// The grips, the sliding ones' references updated after every accepted step.
+    pub(super) grips: Vec<Grip>,
+    /// A sliding pair has stopped once v_t·s is below this: 0, or at the leg's start the
+    /// (round-off) value of a pair that has just started to slip from rest.
+    floors: Vec<f64>,
+    /// The sliding pairs whose slip has stopped by the last accepted step.
+    pub(super) stopped: Vec<bool>,
+}
+
+/// The free velocities in state `y`.
+pub(super) fn free_velocity(
+    m: &Mechanism,
+    basis: &DMatrix<f64>,
+    y: &ode_solvers::DVector<f64>,
+) -> DVector<f64> {
+    let np = m.position_len();
+    DVector::from_column_slice(&y.as_slice()[np..np + basis.ncols()])
+}
 
 /// The equations for the ODE solver over one dynamic step (fixed free basis) with a fixed
 /// set of closed contacts; after every accepted step it looks for a contact event and stops
@@ -18,6 +44,7 @@ struct Motion<'a> {
     basis: &'a DMatrix<f64>,
     active: &'a [bool],
     inside: &'a [bool],
+    tracking: &'a RefCell<Tracking>,
     error: &'a RefCell<Option<EngineError>>,
     fired: &'a Cell<bool>,
 }
@@ -26,13 +53,18 @@ impl ode_solvers::System<f64, ode_solvers::DVector<f64>> for Motion<'_> {
     fn system(&self, _t: f64, y: &ode_solvers::DVector<f64>, dy: &mut ode_solvers::DVector<f64>) {
         let m = self.mechanism;
         let np = m.position_len();
+        let nf = self.basis.ncols();
         let at = m.unpack(y.as_slice());
-        let w = DVector::from_column_slice(&y.as_slice()[np..]);
-        match m.evaluate(&at, self.basis, &w, self.active) {
+        let w = free_velocity(m, self.basis, y);
+        let tracking = self.tracking.borrow();
+        match m.evaluate(&at, self.basis, &w, self.active, &tracking.grips) {
             Ok(e) => {
                 let u = self.basis * &w;
                 m.position_rate(&at, &u, &mut dy.as_mut_slice()[..np]);
-                dy.as_mut_slice()[np..].copy_from_slice(e.acceleration.as_slice());
+                dy.as_mut_slice()[np..np + nf].copy_from_slice(e.acceleration.as_slice());
+                if let Some(rate) = dy.as_mut_slice().get_mut(np + nf) {
+                    *rate = e.dissipation;
+                }
             }
             Err(e) => {
                 dy.fill(0.0);
@@ -50,7 +82,14 @@ impl ode_solvers::System<f64, ode_solvers::DVector<f64>> for Motion<'_> {
         if self.error.borrow().is_some() {
             return true;
         }
-        match fired(self.mechanism, self.basis, self.active, self.inside, y) {
+        let tracking = &mut self.tracking.borrow_mut();
+        match fired(
+            self.mechanism,
+            self.basis,
+            (self.active, self.inside),
+            tracking,
+            y,
+        ) {
             Ok(true) => {
                 self.fired.set(true);
                 true
@@ -65,15 +104,18 @@ impl ode_solvers::System<f64, ode_solvers::DVector<f64>> for Motion<'_> {
 }
 
 /// Whether a contact event has happened by state `y`: an open pair's gap below zero, or a
-/// closed pair's force below zero. A pair that was `inside` at the leg's start (it has just
-/// rebounded, or just opened, and sits a few ulps inside while it leaves) strikes only while it
-/// closes (ġ < 0); any other pair strikes once its gap is below zero, so that a grazing impact
-/// caught only after the gap turned again is still found.
+/// closed pair's force below zero, a sliding pair's slip stopped (its relative tangential
+/// velocity turned against its last direction, `tracking.stopped`), a stuck pair's friction
+/// beyond μ_s λ_n. A pair that was `inside` at the leg's start (it has just rebounded, or just
+/// opened, and sits a few ulps inside while it leaves) strikes only while it closes (ġ < 0);
+/// any other pair strikes once its gap is below zero, so that a grazing impact caught only
+/// after the gap turned again is still found. Without an event, the sliding pairs' directions
+/// are updated.
 fn fired(
     mechanism: &Mechanism,
     basis: &DMatrix<f64>,
-    active: &[bool],
-    inside: &[bool],
+    (active, inside): (&[bool], &[bool]),
+    tracking: &mut Tracking,
     y: &ode_solvers::DVector<f64>,
 ) -> Result<bool, EngineError> {
     let m = mechanism;
@@ -87,10 +129,66 @@ fn fired(
         return Ok(true);
     }
     if active.iter().any(|a| *a) {
-        let e = m.evaluate(&at, basis, &w, active)?;
-        return Ok(e.contact.iter().zip(active).any(|(f, a)| *a && *f < 0.0));
+        let e = m.evaluate(&at, basis, &w, active, &tracking.grips)?;
+        let pulling = e.contact.iter().zip(active).any(|(f, a)| *a && *f < 0.0);
+        if !m.has_friction() {
+            return Ok(pulling);
+        }
+        let slipping = stick_fails(m, active, &tracking.grips, &e);
+        let stopped = slips_stopped(m, &at, &u, active, tracking);
+        return Ok(pulling || slipping || stopped);
     }
     Ok(false)
+}
+
+/// Whether a stuck pair's friction exceeds μ_s λ_n.
+fn stick_fails(
+    m: &Mechanism,
+    active: &[bool],
+    grips: &[Grip],
+    e: &super::mechanism::Evaluation,
+) -> bool {
+    (0..active.len()).any(|k| {
+        active[k]
+            && grips[k] == Grip::Stick
+            && m.friction(k)
+                .is_some_and(|f| e.friction[k].norm() > f.static_coefficient * e.contact[k])
+    })
+}
+
+/// Whether a sliding pair's relative tangential velocity has turned against its direction at
+/// the last accepted step (then `tracking.stopped` says which); where none has, each sliding
+/// pair's direction is updated to its velocity's.
+fn slips_stopped(
+    m: &Mechanism,
+    at: &Placement,
+    u: &DVector<f64>,
+    active: &[bool],
+    tracking: &mut Tracking,
+) -> bool {
+    let mut velocities = vec![None; active.len()];
+    for k in 0..active.len() {
+        if let (true, Grip::Slip { reference }) = (active[k], tracking.grips[k]) {
+            let v_t = m.slip_velocity(at, u, k);
+            let along = v_t.dot(&m.to_world(at, k, &reference));
+            tracking.stopped[k] = along < tracking.floors[k];
+            if along > 0.0 {
+                velocities[k] = Some(v_t);
+            }
+        }
+    }
+    if tracking.stopped.iter().any(|s| *s) {
+        return true;
+    }
+    for (k, v_t) in velocities.iter().enumerate() {
+        if let Some(v_t) = v_t {
+            tracking.grips[k] = Grip::Slip {
+                reference: m.to_body(at, k, &v_t.normalize()),
+            };
+            tracking.floors[k] = 0.0;
+        }
+    }
+    false
 }
 
 /// The placement, free velocities, full velocity and every pair's gap at state `y`.
@@ -101,9 +199,9 @@ pub(super) fn gaps_at(
     y: &ode_solvers::DVector<f64>,
 ) -> (Placement, DVector<f64>, DVector<f64>, Vec<f64>) {
     let at = m.unpack(y.as_slice());
-    let w = DVector::from_column_slice(&y.as_slice()[m.position_len()..]);
+    let w = free_velocity(m, basis, y);
     let u = basis * &w;
-    let (gaps, _, _) = m.constraints(&at, &u, active);
+    let (gaps, _, _) = m.constraints(&at, &u, active, &[]);
     (at, w, u, gaps)
 }
 
@@ -129,23 +227,48 @@ impl Leg<'_> {
             .collect()
     }
 
-    /// Integrates from `(t, y)` towards `to` and returns where it stopped: at `to`, or at the
-    /// end of the first accepted step by which a contact event has happened (then `true`).
+    /// The tracking of the sliding pairs for a leg from state `y` with `grips`.
+    fn tracking(&self, active: &[bool], grips: &[Grip], y: &ode_solvers::DVector<f64>) -> Tracking {
+        let m = self.mechanism;
+        let mut floors = vec![0.0; grips.len()];
+        if m.has_friction() {
+            let (at, _, u, _) = gaps_at(m, self.basis, active, y);
+            for (k, grip) in grips.iter().enumerate() {
+                if let (true, Grip::Slip { reference }) = (active[k], grip) {
+                    let along = m
+                        .slip_velocity(&at, &u, k)
+                        .dot(&m.to_world(&at, k, reference));
+                    floors[k] = along.min(0.0);
+                }
+            }
+        }
+        Tracking {
+            grips: grips.to_vec(),
+            floors,
+            stopped: vec![false; grips.len()],
+        }
+    }
+
+    /// Integrates from `(t, y)` towards `to` with the closed pairs `active` in `grips` and
+    /// returns where it stopped: at `to`, or at the end of the first accepted step by which a
+    /// contact event has happened.
     pub(super) fn run(
         &mut self,
-        active: &[bool],
+        (active, grips): (&[bool], &[Grip]),
         t: f64,
         y: &ode_solvers::DVector<f64>,
         to: f64,
-    ) -> Result<(f64, ode_solvers::DVector<f64>, bool), EngineError> {
+    ) -> Result<Reach, EngineError> {
         let failure = RefCell::new(None);
         let fired = Cell::new(false);
         let inside = self.inside(active, y);
+        let tracking = RefCell::new(self.tracking(active, grips, y));
         let motion = Motion {
             mechanism: self.mechanism,
             basis: self.basis,
             active,
             inside: &inside,
+            tracking: &tracking,
             error: &failure,
             fired: &fired,
         };
@@ -176,39 +299,50 @@ impl Leg<'_> {
         let stats = stats?;
         self.steps += u64::from(stats.accepted_steps);
         self.evaluations += u64::from(stats.num_eval);
-        let reached = *stepper.x_out().last().expect("the end time");
-        let state = stepper.y_out().last().expect("the end state").clone();
-        Ok((reached, state, fired.get()))
+        Ok(Reach {
+            time: *stepper.x_out().last().expect("the end time"),
+            state: stepper.y_out().last().expect("the end state").clone(),
+            event: fired.get(),
+            tracking: tracking.into_inner(),
+        })
     }
 
-    /// The first event after `t`: a leg from `(t, y)` stopped by one at `stopped` (state
-    /// `reached`) is bisected on its end time, none by `lo`, one by `hi`, to a few ulps.
+    /// The first event after `t`: a leg from `(t, y)` stopped by one (`reached`) is bisected
+    /// on its end time, none by `lo`, one by `hi`, to a few ulps; where it is, at `hi`.
     pub(super) fn first_event(
         &mut self,
-        active: &[bool],
+        closed: (&[bool], &[Grip]),
         t: f64,
         y: &ode_solvers::DVector<f64>,
-        stopped: f64,
-        reached: ode_solvers::DVector<f64>,
-    ) -> Result<(f64, ode_solvers::DVector<f64>), EngineError> {
-        let (mut lo, mut hi, mut at_hi) = (t, stopped, reached);
+        reached: Reach,
+    ) -> Result<Reach, EngineError> {
+        let (mut lo, mut hi) = (t, reached);
         for _ in 0..200 {
-            let mid = 0.5 * (lo + hi);
-            if mid <= lo || mid >= hi {
+            let mid = 0.5 * (lo + hi.time);
+            if mid <= lo || mid >= hi.time {
                 break;
             }
-            let (stopped, state, event) = self.run(active, t, y, mid)?;
-            if event {
-                if stopped < lo {
+            let reach = self.run(closed, t, y, mid)?;
+            if reach.event {
+                if reach.time < lo {
                     // The shorter integration took other steps and met the event before
                     // `lo`: the bracket restarts from the leg's start.
                     lo = t;
                 }
-                (hi, at_hi) = (stopped, state);
+                hi = reach;
             } else {
                 lo = mid;
             }
         }
-        Ok((hi, at_hi))
+        Ok(hi)
     }
+}
+
+/// Where a leg stopped: its time and state, whether an event stopped it, and the sliding
+/// pairs' tracking there.
+pub(super) struct Reach {
+    pub(super) time: f64,
+    pub(super) state: ode_solvers::DVector<f64>,
+    pub(super) event: bool,
+    pub(super) tracking: Tracking,
 }

@@ -34,13 +34,18 @@
 //!
 //!   [[A, −Bᵀ], [B, 0]] [ẇ; λ] = [b; −Ġu],
 //!
-//! λ being the contact forces (on the node λ n: compressive positive).
+//! λ being the contact forces (on the node λ n: compressive positive). A pair with friction adds
+//! its stuck node's tangential rows, or its sliding node's friction to its normal's column
+//! ([`friction`]).
+
+mod friction;
 
 use crate::engines::EngineError;
 use crate::scene::{
-    Attachment, Connection, ContactState, Dimension, Dof, Element, NodeId, Scene, Solid, Step,
-    Surface, surface_distance,
+    Attachment, Connection, ContactState, Dimension, Dof, Element, Friction, NodeId, Scene, Solid,
+    Step, Surface, surface_distance,
 };
+pub use friction::Grip;
 use nalgebra::{DMatrix, DVector, Matrix3, Quaternion, UnitQuaternion, Vector3};
 
 /// Where a node lives in the coordinates.
@@ -64,6 +69,7 @@ struct Body {
 /// A contact pair's constant data.
 #[derive(Debug, Clone)]
 struct Contact {
+    name: String,
     particle: usize,
     body: usize,
     /// The surface in the body frame, its reference node at the origin.
@@ -75,6 +81,8 @@ struct Contact {
     restitution: f64,
     /// Closed at t = 0.
     closed: bool,
+    /// Coulomb friction, if any.
+    friction: Option<Friction>,
 }
 
 /// The mechanism: constant data of a scene, and its equations.
@@ -89,6 +97,8 @@ pub struct Mechanism {
     dashpots: Vec<Element>,
     loads: Vec<(NodeId, Vector3<f64>)>,
     contacts: Vec<Contact>,
+    /// Whether any pair has friction.
+    frictional: bool,
     initial: Vec<Vector3<f64>>,
     frames: Vec<Matrix3<f64>>,
 }
@@ -111,6 +121,11 @@ pub struct Evaluation {
     pub acceleration: DVector<f64>,
     /// Contact forces, compressive positive, per pair.
     pub contact: Vec<f64>,
+    /// Friction force on each pair's node (tangential; zero for a pair without a grip); empty
+    /// in a scene without friction.
+    pub friction: Vec<Vector3<f64>>,
+    /// Power of the friction of the sliding pairs, μ_k λ_n d·v_t summed (dissipated: ≥ 0).
+    pub dissipation: f64,
 }
 
 fn refused<T>(what: impl Into<String>) -> Result<T, EngineError> {
@@ -192,7 +207,15 @@ impl Mechanism {
                 },
             };
             let closed = c.initially == ContactState::Closed;
+            if c.friction.is_some() && !closed {
+                return refused(format!(
+                    "contact `{}`: with friction, a pair must start closed (the tangential \
+                     impulse of an impact is not modelled)",
+                    c.name
+                ));
+            }
             contacts.push(Contact {
+                name: c.name.clone(),
                 particle,
                 body: c.body,
                 surface,
@@ -203,6 +226,7 @@ impl Mechanism {
                 },
                 restitution: c.restitution,
                 closed,
+                friction: c.friction,
             });
         }
         for e in scene.springs.iter().chain(&scene.dashpots) {
@@ -227,6 +251,7 @@ impl Mechanism {
             springs: scene.springs.clone(),
             dashpots: scene.dashpots.clone(),
             loads: scene.loads.iter().map(|l| (l.node, l.force)).collect(),
+            frictional: contacts.iter().any(|c| c.friction.is_some()),
             contacts,
             initial: scene.nodes.iter().map(|n| n.position).collect(),
             frames: scene.nodes.iter().map(|n| n.frame).collect(),
@@ -580,7 +605,8 @@ impl Mechanism {
     }
 
     /// Each contact's gap above the level it closes at (negative: penetrating), the velocity
-    /// rows G (on u) and Ġu of the closed (`active`) contacts.
+    /// rows G (on u) and Ġu of the closed (`active`) contacts: each one's normal row, in pair
+    /// order, then the tangential rows of the stuck ones ([`Grip::Stick`]; `grips` empty: none).
     ///
     /// With s = Rᵀ(p − x) the node in the body frame and φ(s) the signed distance to the
     /// surface (closed-form geometry), ġ = n·(ṗ − v − ω × (p − x)) with n = R ∇φ, for any
@@ -591,9 +617,15 @@ impl Mechanism {
         at: &Placement,
         u: &DVector<f64>,
         active: &[bool],
+        grips: &[Grip],
     ) -> (Vec<f64>, DMatrix<f64>, DVector<f64>) {
         let n = self.velocity_len();
-        let rows = active.iter().filter(|a| **a).count();
+        let normals = active.iter().filter(|a| **a).count();
+        let rows = if self.frictional {
+            normals + self.stick_rows(active, grips)
+        } else {
+            normals
+        };
         let mut gaps = Vec::with_capacity(self.contacts.len());
         let mut g = DMatrix::zeros(rows, n);
         let mut gdot_u = DVector::zeros(rows);
@@ -615,17 +647,15 @@ impl Mechanism {
             let v = u.fixed_rows::<3>(k).into_owned();
             let w = u.fixed_rows::<3>(k + 3).into_owned();
             let arm = p - x;
-            for a in 0..3 {
-                g[(row, 3 * c.particle + a)] += normal[a];
-                g[(row, k + a)] -= normal[a];
-                g[(row, k + 3 + a)] -= arm.cross(&normal)[a];
-            }
+            add_row(&mut g, row, &normal, &arm, 3 * c.particle, k);
             let relative = pd - v;
-            let wn = w.cross(&normal);
             let sliding = rot.inverse() * (relative - w.cross(&arm));
-            gdot_u[row] = wn.dot(&relative) - w.dot(&(relative.cross(&normal) + arm.cross(&wn)))
+            gdot_u[row] = row_rate(&normal, &w, &relative, &arm)
                 + sliding.dot(&(curvature(&c.surface, &local) * sliding));
             row += 1;
+        }
+        if rows > normals {
+            self.add_stick_rows(at, u, (active, grips), &mut g, &mut gdot_u, normals);
         }
         (gaps, g, gdot_u)
     }
@@ -644,13 +674,15 @@ impl Mechanism {
         (rot * normal0).dot(&(pd - v - w.cross(&(p - x))))
     }
 
-    /// Accelerations of the free coordinates and contact forces at a placement and velocity.
+    /// Accelerations of the free coordinates, contact forces and friction at a placement and
+    /// velocity, with the closed pairs `active` and their `grips`.
     pub fn evaluate(
         &self,
         at: &Placement,
         basis: &DMatrix<f64>,
         w: &DVector<f64>,
         active: &[bool],
+        grips: &[Grip],
     ) -> Result<Evaluation, EngineError> {
         if basis.ncols() == 0 {
             // Nothing is free to move: no acceleration, and a held node's contact force is a
@@ -658,12 +690,18 @@ impl Mechanism {
             return Ok(Evaluation {
                 acceleration: DVector::zeros(0),
                 contact: vec![0.0; active.len()],
+                friction: if self.frictional {
+                    vec![Vector3::zeros(); active.len()]
+                } else {
+                    Vec::new()
+                },
+                dissipation: 0.0,
             });
         }
         let u = basis * w;
         let (mass, inertial) = self.inertia(at, &u);
         let force = self.applied(at, &u)? + inertial;
-        let (_, g, gdot_u) = self.constraints(at, &u, active);
+        let (_, g, gdot_u) = self.constraints(at, &u, active, grips);
         let nf = basis.ncols();
         let nc = g.nrows();
         let mut kkt = DMatrix::zeros(nf + nc, nf + nc);
@@ -672,6 +710,16 @@ impl Mechanism {
         kkt.view_mut((0, 0), (nf, nf)).copy_from(&a);
         kkt.view_mut((0, nf), (nf, nc)).copy_from(&(-b.transpose()));
         kkt.view_mut((nf, 0), (nc, nf)).copy_from(&b);
+        let slips = if self.frictional {
+            self.slip_columns(at, &u, active, grips)
+        } else {
+            Vec::new()
+        };
+        for slip in &slips {
+            // The normal force λ_n also pushes μ_k λ_n against the slip.
+            let mut column = kkt.view_mut((0, nf + slip.row), (nf, 1));
+            column += basis.transpose() * &slip.generalized * slip.mu;
+        }
         let mut rhs = DVector::zeros(nf + nc);
         rhs.rows_mut(0, nf).copy_from(&(basis.transpose() * force));
         rhs.rows_mut(nf, nc).copy_from(&(-gdot_u));
@@ -682,24 +730,30 @@ impl Mechanism {
                     .into(),
             )
         })?;
-        let mut closed = solution
-            .rows(nf, nc)
+        let normals = active.iter().filter(|a| **a).count();
+        let normal_forces = solution.rows(nf, normals);
+        let mut closed = normal_forces.iter().copied();
+        let contact: Vec<f64> = active
             .iter()
-            .copied()
-            .collect::<Vec<_>>()
-            .into_iter();
+            .map(|a| {
+                if *a {
+                    closed.next().unwrap_or(0.0)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let (friction, dissipation) = if self.frictional {
+            let sticking = solution.rows(nf + normals, nc - normals);
+            self.friction_forces(at, (active, grips), &contact, sticking.as_slice(), &slips)
+        } else {
+            (Vec::new(), 0.0)
+        };
         Ok(Evaluation {
             acceleration: solution.rows(0, nf).into_owned(),
-            contact: active
-                .iter()
-                .map(|a| {
-                    if *a {
-                        closed.next().unwrap_or(0.0)
-                    } else {
-                        0.0
-                    }
-                })
-                .collect(),
+            contact,
+            friction,
+            dissipation,
         })
     }
 
@@ -739,29 +793,32 @@ impl Mechanism {
     }
 
     /// The free velocity closest to u (in the kinetic-energy norm) that satisfies the closed
-    /// contacts' constraints: the projection on T, then the impulse that makes ġ = 0.
+    /// contacts' constraints: the projection on T, then the impulse that makes ġ = 0 (and a
+    /// stuck node's tangential relative velocity 0).
     pub fn admissible(
         &self,
         at: &Placement,
         basis: &DMatrix<f64>,
         u: &DVector<f64>,
-        active: &[bool],
+        (active, grips): (&[bool], &[Grip]),
     ) -> Result<DVector<f64>, EngineError> {
         let w = basis.transpose() * u;
-        self.impact(at, basis, &w, active, None)
+        self.impact(at, basis, &w, (active, grips), None)
     }
 
     /// The free velocity after an impact: the impulse along the closed contacts' rows that
     /// leaves their ġ = 0 and, for `striking = Some((k, e))`, turns contact k's approach rate
     /// ġ⁻ into −e ġ⁻ (Newton's law of restitution; k need not be closed). Frictionless, so the
     /// impulse acts along the normals only and the kinetic energy changes by the factor the
-    /// law prescribes.
+    /// law prescribes. A stuck pair's tangential rows are held too: with `striking` none, this
+    /// is the projection that sticks a node (the solver strikes no pair while a pair with
+    /// friction is closed: that impulse would need Coulomb's law).
     pub fn impact(
         &self,
         at: &Placement,
         basis: &DMatrix<f64>,
         w: &DVector<f64>,
-        active: &[bool],
+        (active, grips): (&[bool], &[Grip]),
         striking: Option<(usize, f64)>,
     ) -> Result<DVector<f64>, EngineError> {
         let mut rows = active.to_vec();
@@ -773,7 +830,7 @@ impl Mechanism {
         }
         let full = basis * w;
         let (mass, _) = self.inertia(at, &full);
-        let (_, g, _) = self.constraints(at, &full, &rows);
+        let (_, g, _) = self.constraints(at, &full, &rows, grips);
         let a = basis.transpose() * mass * basis;
         let b = g * basis;
         let singular =
@@ -789,6 +846,37 @@ impl Mechanism {
         let impulse = s.lu().solve(&(rate - target)).ok_or_else(singular)?;
         Ok(w - a_inv * b.transpose() * impulse)
     }
+}
+
+/// Set row `row` of G to direction `e` at a pair's node (u's columns `particle` for ṗ and
+/// `body` for the body's v and ω): the row of e·(ṗ − v − ω × (p − x)), `arm` = p − x.
+fn add_row(
+    g: &mut DMatrix<f64>,
+    row: usize,
+    e: &Vector3<f64>,
+    arm: &Vector3<f64>,
+    particle: usize,
+    body: usize,
+) {
+    let moment = arm.cross(e);
+    for a in 0..3 {
+        g[(row, particle + a)] += e[a];
+        g[(row, body + a)] -= e[a];
+        g[(row, body + 3 + a)] -= moment[a];
+    }
+}
+
+/// The velocity terms of d/dt [e·(ṗ − v − ω × (p − x))] for a direction e that turns with the
+/// body (ė = ω × e): (ω × e)·(ṗ − v) − ω·((ṗ − v) × e + (p − x) × (ω × e)), `relative` =
+/// ṗ − v.
+fn row_rate(
+    e: &Vector3<f64>,
+    w: &Vector3<f64>,
+    relative: &Vector3<f64>,
+    arm: &Vector3<f64>,
+) -> f64 {
+    let we = w.cross(e);
+    we.dot(relative) - w.dot(&(relative.cross(e) + arm.cross(&we)))
 }
 
 /// Hessian of a surface's signed distance at `s` (body frame, relative to the reference

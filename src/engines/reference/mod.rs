@@ -22,6 +22,21 @@
 //! the contact force's smallest margin over its largest (`contact_margin`) and an `impacts`
 //! column. Every row is valid.
 //!
+//! Coulomb friction (a pair's `friction`) is event-driven too ([`mechanism::Grip`]). A stuck
+//! node's tangential velocity relative to the body point it touches is a constraint, its
+//! multipliers λ_t the friction force; a sliding node is pushed by μ_k λ_n against that
+//! velocity, λ_n solved with the friction in the normal's column. A slip stops when its
+//! relative tangential velocity reaches zero; the node then sticks if the force that takes is
+//! within μ_s λ_n, and otherwise slides on at once along the force that drives it (a
+//! reversal); a stuck node slips when |λ_t| reaches μ_s λ_n. In 3D the slip follows the
+//! relative velocity as it turns. The transitions are located by bisection like the contact
+//! events and reported as `stick_<i>_time`, `slip_<i>_time` and `reversal_<i>_time` (the first
+//! [`IMPACTS_REPORTED`] of each) with their counts `sticks`, `slips`, `reversals`; the energy
+//! friction dissipated, μ_k λ_n |v_t| integrated with the state, is the measure
+//! `frictional_dissipation`. Not solved: a pair with friction that starts open, and an impact
+//! while a pair with friction is closed (Coulomb's law for the impulse is not modelled); the
+//! run fails at such an impact with its time.
+//!
 //! Static steps set the prescribed DOFs and solve the equilibrium of the free ones by Newton's
 //! method (a finite-difference Jacobian; the converged point does not depend on it). Not
 //! solved (refused with a reason): a contact node that is a body point, a held DOF on a body
@@ -56,6 +71,8 @@ struct Solution {
     steps: u64,
     evaluations: u64,
     events: Vec<ContactEvent>,
+    /// The energy friction dissipated, in a scene with friction.
+    dissipation: Option<f64>,
 }
 
 impl Engine for ReferenceEngine {
@@ -65,11 +82,6 @@ impl Engine for ReferenceEngine {
 
     fn run(&self, scene: &Scene, _settings: &RunSettings) -> Result<RunOutput, EngineError> {
         let start = Instant::now();
-        if scene.has_friction() {
-            return Err(EngineError::Unsupported(
-                "reference: contact with friction".into(),
-            ));
-        }
         if scene.has_amplitudes() {
             return Err(EngineError::Unsupported(
                 "reference: a load that varies in time (an amplitude)".into(),
@@ -96,33 +108,10 @@ impl Engine for ReferenceEngine {
             if valid < fine.history.rows.len() {
                 measures.insert("valid_until".into(), fine.history.rows[valid][0]);
             }
-            let mut impacts = 0;
-            let mut openings = 0;
-            for event in &fine.events {
-                match *event {
-                    ContactEvent::Impact {
-                        time,
-                        speed,
-                        rebound,
-                        ..
-                    } => {
-                        impacts += 1;
-                        if impacts <= IMPACTS_REPORTED {
-                            measures.insert(format!("impact_{impacts}_time"), time);
-                            measures.insert(format!("impact_{impacts}_speed"), speed);
-                            measures.insert(format!("impact_{impacts}_rebound"), rebound);
-                        }
-                    }
-                    ContactEvent::Opening { time, .. } => {
-                        openings += 1;
-                        if openings <= IMPACTS_REPORTED {
-                            measures.insert(format!("opening_{openings}_time"), time);
-                        }
-                    }
-                }
-            }
-            measures.insert("impacts".into(), impacts as f64);
-            measures.insert("openings".into(), openings as f64);
+            report_events(&fine.events, &mut measures);
+        }
+        if let Some(dissipation) = fine.dissipation {
+            measures.insert("frictional_dissipation".into(), dissipation);
         }
         let mut counters = BTreeMap::new();
         counters.insert("integration_steps".into(), fine.steps);
@@ -143,6 +132,34 @@ impl Engine for ReferenceEngine {
     }
 }
 
+/// The contact events as measures: the first [`IMPACTS_REPORTED`] of each kind with their
+/// times (`impact_<i>_time`, with `_speed` and `_rebound`; `opening_<i>_time`; in a scene with
+/// friction `stick_<i>_time`, `slip_<i>_time`, `reversal_<i>_time`), and how many of each
+/// (`impacts`, `openings`; `sticks`, `slips`, `reversals` where there are any).
+fn report_events(events: &[ContactEvent], measures: &mut BTreeMap<String, f64>) {
+    let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
+    for kind in ["impact", "opening"] {
+        counts.insert(kind, 0);
+    }
+    for event in events {
+        let kind = event.kind();
+        let count = counts.entry(kind).or_insert(0);
+        *count += 1;
+        if *count > IMPACTS_REPORTED {
+            continue;
+        }
+        let i = *count;
+        measures.insert(format!("{kind}_{i}_time"), event.time());
+        if let ContactEvent::Impact { speed, rebound, .. } = *event {
+            measures.insert(format!("impact_{i}_speed"), speed);
+            measures.insert(format!("impact_{i}_rebound"), rebound);
+        }
+    }
+    for (kind, count) in counts {
+        measures.insert(format!("{kind}s"), count as f64);
+    }
+}
+
 /// Rows before the first invalid one.
 fn valid_rows(history: &History) -> usize {
     let column = history.columns.len() - 1;
@@ -153,15 +170,23 @@ fn valid_rows(history: &History) -> usize {
         .unwrap_or(history.rows.len())
 }
 
-/// The largest change of any column between two histories, over that column's peak.
+/// Below this fraction of the largest column's peak, a column's peak is round-off of an exact
+/// zero (a sliding node's sideways displacement of 1e-15 m beside forces of 10 N): its change
+/// over its peak says nothing, and [`largest_change`] leaves it out.
+const ROUND_OFF_PEAK: f64 = 1e-12;
+
+/// The largest change of any column between two histories, over that column's peak (columns
+/// whose peak is round-off, [`ROUND_OFF_PEAK`], left out).
 fn largest_change(a: &History, b: &History) -> f64 {
+    let measured = 1..a.columns.len() - 1;
+    let peaks: Vec<f64> = measured
+        .clone()
+        .map(|c| a.rows.iter().fold(0.0_f64, |m, r| m.max(r[c].abs())))
+        .collect();
+    let floor = ROUND_OFF_PEAK * peaks.iter().fold(0.0_f64, |m, p| m.max(*p));
     let mut largest = 0.0_f64;
-    for c in 1..a.columns.len() - 1 {
-        if a.columns[c] == IMPACTS_COLUMN {
-            continue;
-        }
-        let peak = a.rows.iter().fold(0.0_f64, |m, r| m.max(r[c].abs()));
-        if peak == 0.0 {
+    for (c, peak) in measured.zip(peaks) {
+        if a.columns[c] == IMPACTS_COLUMN || peak == 0.0 || peak < floor {
             continue;
         }
         let change = a
@@ -197,4 +222,52 @@ pub enum ContactEvent {
         /// Time.
         time: f64,
     },
+    /// The pair stuck: its slip stopped (or it was at rest at the start) and the tangential
+    /// force that holds it is within μ_s λ_n.
+    Stick {
+        /// Pair index.
+        contact: usize,
+        /// Time.
+        time: f64,
+    },
+    /// The pair began to slide from rest: it was stuck and its tangential force reached
+    /// μ_s λ_n (or it was at rest at the start and could not stick).
+    Slip {
+        /// Pair index.
+        contact: usize,
+        /// Time.
+        time: f64,
+    },
+    /// The pair's slip stopped and, unable to stick, it slid on at once along the force that
+    /// drives it (a turning point).
+    Reversal {
+        /// Pair index.
+        contact: usize,
+        /// Time.
+        time: f64,
+    },
+}
+
+impl ContactEvent {
+    /// The event's name in its measures.
+    fn kind(&self) -> &'static str {
+        match self {
+            ContactEvent::Impact { .. } => "impact",
+            ContactEvent::Opening { .. } => "opening",
+            ContactEvent::Stick { .. } => "stick",
+            ContactEvent::Slip { .. } => "slip",
+            ContactEvent::Reversal { .. } => "reversal",
+        }
+    }
+
+    /// When it happened.
+    fn time(&self) -> f64 {
+        match *self {
+            ContactEvent::Impact { time, .. }
+            | ContactEvent::Opening { time, .. }
+            | ContactEvent::Stick { time, .. }
+            | ContactEvent::Slip { time, .. }
+            | ContactEvent::Reversal { time, .. } => time,
+        }
+    }
 }

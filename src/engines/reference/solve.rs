@@ -1,10 +1,12 @@
 //! One whole solution at one relative tolerance ([`solve`]): the steps in order, each static
 //! one solved for its equilibrium, each dynamic one integrated leg by leg ([`Leg`]) from row to
-//! row, its contact events located ([`Leg::first_event`]) and resolved (impacts, openings)
-//! where they happen.
+//! row, its contact events located ([`Leg::first_event`]) and resolved (impacts, openings,
+//! and the friction's stops, sticks and slips, [`settle`]) where they happen.
 
-use super::leg::{Leg, gaps_at};
-use super::mechanism::{Mechanism, Placement, twist};
+mod settle;
+
+use super::leg::{Leg, free_velocity, gaps_at};
+use super::mechanism::{Grip, Mechanism, Placement, twist};
 use super::{ContactEvent, Solution};
 use crate::contract::{IMPACTS_COLUMN, VALID_COLUMN};
 use crate::engines::{EngineError, History};
@@ -25,22 +27,22 @@ const MAX_IMPACT_PASSES: usize = 1000;
 pub(super) const RESTING_SPEED: f64 = 1e-6;
 
 /// Open every closed pair that pulls (negative force) at `y`, and let it go without an
-/// impulse.
+/// impulse (and without a grip).
 fn release(
     mechanism: &Mechanism,
     basis: &DMatrix<f64>,
-    active: &mut [bool],
+    (active, grips): (&mut [bool], &mut [Grip]),
     y: &ode_solvers::DVector<f64>,
     time: f64,
     events: &mut Vec<ContactEvent>,
 ) -> Result<(), EngineError> {
-    let np = mechanism.position_len();
     let at = mechanism.unpack(y.as_slice());
-    let w = DVector::from_column_slice(&y.as_slice()[np..]);
-    let e = mechanism.evaluate(&at, basis, &w, active)?;
+    let w = free_velocity(mechanism, basis, y);
+    let e = mechanism.evaluate(&at, basis, &w, active, grips)?;
     for (k, (closed, force)) in active.iter_mut().zip(&e.contact).enumerate() {
         if *closed && *force < 0.0 {
             *closed = false;
+            grips[k] = Grip::Free;
             events.push(ContactEvent::Opening { contact: k, time });
         }
     }
@@ -161,6 +163,10 @@ struct Solver<'a> {
     u: DVector<f64>,
     /// Which contact pairs are closed.
     active: Vec<bool>,
+    /// The closed pairs' friction states (every one [`Grip::Free`] without friction).
+    grips: Vec<Grip>,
+    /// The energy friction has dissipated by the start of the next step.
+    dissipation: f64,
     /// The contact events so far, in time order.
     events: Vec<ContactEvent>,
     /// The fastest approach met so far (resting impacts are judged against it).
@@ -205,6 +211,8 @@ impl<'a> Solver<'a> {
             at: mechanism.initial_placement(),
             u: DVector::zeros(mechanism.velocity_len()),
             active: mechanism.initially_closed(),
+            grips: vec![Grip::Free; mechanism.contact_count()],
+            dissipation: 0.0,
             events: Vec::new(),
             fastest: 0.0,
             t0: 0.0,
@@ -244,13 +252,19 @@ impl<'a> Solver<'a> {
             self.first_motion(&basis);
         }
         let w = m
-            .admissible(&self.at, &basis, &self.u, &self.active)
+            .admissible(&self.at, &basis, &self.u, (&self.active, &self.grips))
             .map_err(started)?;
         let np = m.position_len();
-        let mut y = ode_solvers::DVector::zeros(np + w.len());
+        let nf = w.len();
+        let mut y = ode_solvers::DVector::zeros(np + nf + usize::from(m.has_friction()));
         m.pack(&self.at, &mut y.as_mut_slice()[..np]);
-        y.as_mut_slice()[np..].copy_from_slice(w.as_slice());
-        release(m, &basis, &mut self.active, &y, t0, &mut self.events).map_err(started)?;
+        y.as_mut_slice()[np..np + nf].copy_from_slice(w.as_slice());
+        if let Some(d) = y.as_mut_slice().get_mut(np + nf) {
+            *d = self.dissipation;
+        }
+        let closed = (self.active.as_mut_slice(), self.grips.as_mut_slice());
+        release(m, &basis, closed, &y, t0, &mut self.events).map_err(started)?;
+        self.settle(&basis, &mut y, t0, None).map_err(started)?;
         let mut leg = Leg {
             mechanism: m,
             basis: &basis,
@@ -271,7 +285,10 @@ impl<'a> Solver<'a> {
         self.steps += leg.steps;
         self.evaluations += leg.evaluations;
         self.at = m.unpack(y.as_slice());
-        self.u = &basis * DVector::from_column_slice(&y.as_slice()[np..]);
+        self.u = &basis * free_velocity(m, &basis, &y);
+        if let Some(d) = y.as_slice().get(np + nf) {
+            self.dissipation = *d;
+        }
         self.t0 = end;
         Ok(())
     }
@@ -327,17 +344,21 @@ impl<'a> Solver<'a> {
             } else {
                 target
             };
-            let (stopped, reached, event) = leg.run(&self.active, t, &y, to).map_err(during(t))?;
-            if !event {
-                (t, y) = (to, reached);
+            let closed = (self.active.as_slice(), self.grips.as_slice());
+            let mut reach = leg.run(closed, t, &y, to).map_err(during(t))?;
+            if !reach.event {
+                (t, y, self.grips) = (to, reach.state, reach.tracking.grips);
                 continue;
             }
-            (t, y) = leg
-                .first_event(&self.active, t, &y, stopped, reached)
-                .map_err(during(t))?;
+            reach = leg.first_event(closed, t, &y, reach).map_err(during(t))?;
+            (t, y, self.grips) = (reach.time, reach.state, reach.tracking.grips);
             let w = self.strike(basis, t, &y)?;
-            y.as_mut_slice()[m.position_len()..].copy_from_slice(w.as_slice());
-            release(m, basis, &mut self.active, &y, t, &mut self.events).map_err(during(t))?;
+            let np = m.position_len();
+            y.as_mut_slice()[np..np + w.len()].copy_from_slice(w.as_slice());
+            let closed = (self.active.as_mut_slice(), self.grips.as_mut_slice());
+            release(m, basis, closed, &y, t, &mut self.events).map_err(during(t))?;
+            let stopped = Some(reach.tracking.stopped.as_slice());
+            self.settle(basis, &mut y, t, stopped).map_err(during(t))?;
             if t >= target - self.tol {
                 t = target;
             }
@@ -371,6 +392,7 @@ impl<'a> Solver<'a> {
                     continue;
                 }
                 any = true;
+                self.refuse_impact_with_friction(k, t)?;
                 w = self.impact(k, speed, (&placed, basis, &w), &mut struck[k], t)?;
             }
             if !any {
@@ -399,7 +421,13 @@ impl<'a> Solver<'a> {
         let rests = e == 0.0 || speed <= RESTING_SPEED * self.fastest;
         let restitution = if rests { 0.0 } else { e };
         let w = m
-            .impact(placed, basis, w, &self.active, Some((k, restitution)))
+            .impact(
+                placed,
+                basis,
+                w,
+                (&self.active, &self.grips),
+                Some((k, restitution)),
+            )
             .map_err(during(t))?;
         let rebound = m.gap_rate(placed, &(basis * &w), k);
         match *struck {
@@ -434,12 +462,12 @@ impl<'a> Solver<'a> {
     ) -> Result<(), EngineError> {
         let m = self.mechanism;
         let at = m.unpack(y.as_slice());
-        let w = DVector::from_column_slice(&y.as_slice()[m.position_len()..]);
+        let w = free_velocity(m, basis, y);
         let full = basis * &w;
         let evaluation = m
-            .evaluate(&at, basis, &w, &self.active)
+            .evaluate(&at, basis, &w, &self.active, &self.grips)
             .map_err(during(target))?;
-        let (gaps, _, _) = m.constraints(&at, &full, &self.active);
+        let (gaps, _, _) = m.constraints(&at, &full, &self.active, &[]);
         self.drift = gaps
             .iter()
             .zip(&self.active)
@@ -517,6 +545,7 @@ impl<'a> Solver<'a> {
             steps: self.steps,
             evaluations: self.evaluations,
             events: self.events,
+            dissipation: self.mechanism.has_friction().then_some(self.dissipation),
         }
     }
 }

@@ -308,3 +308,48 @@ fn a_ramped_pull_breaks_the_node_away_at_mu_s_n_and_it_slides_against_mu_k_n() {
         .fold(0.0_f64, |m, e| m.max(e.abs()));
     assert!(balance < 1e-6 * work, "balance {balance:e} of work {work}");
 }
+
+/// A history of the stick case's contract columns with `ux_node` from `node` and the contact
+/// force N = m g cos θ.
+fn stick_history(scene: &Scene, node: impl Fn(usize) -> f64) -> History {
+    let columns = ["t", "rz", "ux", "ux_node", "contact_force"];
+    let n = G * 20f64.to_radians().cos();
+    History {
+        columns: columns.iter().map(|c| c.to_string()).collect(),
+        rows: (0..scene.output_rows)
+            .map(|i| vec![i as f64 * 1e-3, 0.0, 0.0, node(i), n])
+            .collect(),
+    }
+}
+
+#[test]
+fn an_exact_column_at_round_off_is_judged_in_its_unit_and_a_small_one_over_its_peak() {
+    use crosscheck::comparison::{compare, round_off};
+    let scene = friction_case("friction_incline_stick");
+    // The stick case's scale: its farthest node 0.5 m from the origin, so lengths below
+    // 5e-13 m are round-off.
+    assert_eq!(round_off(&scene, "ux_node"), 1e-12 * 0.5);
+    // An exact solution that holds the node to round-off (±1e-17 m), against an engine
+    // whose penalty sinks it 3.15e-7 m into the face: an error of 3.15e-7 m, not 3e10 of a
+    // round-off peak.
+    let exact = stick_history(&scene, |i| if i % 2 == 0 { 1e-17 } else { -1e-17 });
+    let penalty = stick_history(&scene, |_| 3.15e-7);
+    let c = compare(&scene, &exact, &penalty);
+    let node = c.columns.iter().find(|c| c.column == "ux_node").unwrap();
+    assert!(
+        !node.relative && (node.max - 3.15e-7).abs() < 1e-16,
+        "{node:?}"
+    );
+    assert_eq!(
+        c.worst_max,
+        Some(0.0),
+        "only the contact force is judged over its peak"
+    );
+    // A small motion that is not round-off (a peak of 1e-9 m, 2000 × the floor) stays judged
+    // over its peak: 1e-10 m off is 0.1 of it.
+    let small = stick_history(&scene, |i| 1e-9 * (i as f64 / 500.0));
+    let off = stick_history(&scene, |i| 1e-9 * (i as f64 / 500.0) + 1e-10);
+    let c = compare(&scene, &small, &off);
+    let node = c.columns.iter().find(|c| c.column == "ux_node").unwrap();
+    assert!(node.relative && (node.max - 0.1).abs() < 1e-9, "{node:?}");
+}

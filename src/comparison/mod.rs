@@ -8,8 +8,9 @@
 //! - `rms`: the root-mean-square error divided by the same peak;
 //! - `end`: the error at the last valid row divided by the same peak.
 //!
-//! A column whose exact solution is identically zero over its window (a held DOF, a contact
-//! force before the first impact) has no peak to divide by: it is compared in its own
+//! A column whose exact solution is zero over its window (a held DOF, a contact force before
+//! the first impact, a node that friction holds), identically or to round-off
+//! ([`round_off`]), has no peak to divide by: it is compared in its own
 //! unit ([`ColumnError::relative`] false, [`ColumnError::unit`]) and never enters
 //! [`Comparison::worst_max`], the largest *relative* error, which is what tolerances apply to.
 //! A comparison over no rows (the exact solution is invalid from the start) has no worst
@@ -178,8 +179,9 @@ pub fn compare(scene: &Scene, reference: &History, candidate: &History) -> Compa
             let (a, b) = (&a[..n], &b[..n]);
             let peak = peak(a);
             // An exact solution that is zero over the rows compared (a held DOF, a contact
-            // force before the first impact) has no peak: compare in the column's unit.
-            let relative = peak > 0.0;
+            // force before the first impact), or only round-off away from it, has no peak:
+            // compare in the column's unit.
+            let relative = peak > round_off(scene, name);
             let (errors, scale): (Vec<f64>, f64) = match rotated_body(scene, name) {
                 Some(body) => {
                     let (errors, scale) =
@@ -257,6 +259,33 @@ pub fn unit(scene: &Scene, column: &str) -> &'static str {
         Some(Probe::ContactForce { .. }) => "N",
         Some(Probe::Zero { .. }) | None => "",
     }
+}
+
+/// The largest magnitude an exact solution's `column` may have and still be zero: 1e-12 of
+/// the scene's own scale in the column's unit (a few thousand units of round-off): its extent
+/// (the largest distance of a node from the origin) for lengths, the extent over the duration
+/// for speeds, 1 rad for rotations, the largest load for forces; 0 where the scene has no
+/// such scale.
+pub fn round_off(scene: &Scene, column: &str) -> f64 {
+    const ROUND_OFF: f64 = 1e-12;
+    let extent = scene
+        .nodes
+        .iter()
+        .fold(0.0_f64, |m, n| m.max(n.position.norm()));
+    let load = scene.loads.iter().fold(0.0_f64, |m, l| {
+        let most = l.amplitude.as_ref().map_or(1.0, |a| {
+            a.points.iter().fold(0.0_f64, |m, (_, v)| m.max(v.abs()))
+        });
+        m.max(l.force.norm() * most)
+    });
+    ROUND_OFF
+        * match unit(scene, column) {
+            "m" => extent,
+            "m/s" => extent / scene.duration(),
+            "rad" => 1.0,
+            "N" => load,
+            _ => 0.0,
+        }
 }
 
 /// Largest |e_balance| divided by the largest kinetic + elastic energy.

@@ -353,3 +353,62 @@ fn an_exact_column_at_round_off_is_judged_in_its_unit_and_a_small_one_over_its_p
     let node = c.columns.iter().find(|c| c.column == "ux_node").unwrap();
     assert!(node.relative && (node.max - 0.1).abs() < 1e-9, "{node:?}");
 }
+
+/// A slide-stop history: v = v0 − a t until t* = v0/a, then at rest but for a speed between
+/// ½ and 1½ × `ringing`; `side` on the sideways column throughout.
+fn slide_history(scene: &Scene, ringing: f64, side: f64) -> History {
+    let (v0, a) = (2.0, 0.5 * G);
+    let stop = v0 / a;
+    let columns = [
+        "t",
+        "rz",
+        "ux",
+        "ux_node",
+        "contact_force",
+        "us_node",
+        "vs_node",
+        "us_side",
+    ];
+    let rows = (0..scene.output_rows)
+        .map(|i| {
+            let t = i as f64 * 1e-3;
+            let s = t.min(stop);
+            let x = v0 * s - 0.5 * a * s * s;
+            let v = if t < stop {
+                v0 - a * t
+            } else {
+                ringing * (1.0 + 0.5 * (i as f64).sin())
+            };
+            vec![t, 0.0, 0.0, x, G, x, v, side]
+        })
+        .collect();
+    History {
+        columns: columns.iter().map(|c| c.to_string()).collect(),
+        rows,
+    }
+}
+
+#[test]
+fn the_friction_events_rule_reads_a_known_slide() {
+    use crosscheck::comparison::friction::{REST, measure};
+    let scene = friction_case("friction_slide_stop_3d");
+    // At rest below REST × 2 (the exact peak speed): v0 − a t ≤ 0.02 from t = 0.403670 s,
+    // the first output row at or after it is 0.404 s.
+    let exact = slide_history(&scene, 0.0, 0.0);
+    let ringing = slide_history(&scene, 0.6 * REST * 2.0, 3e-6);
+    let f = measure(&scene, &exact, &ringing).unwrap();
+    assert_eq!(f.exact.starts, Some(0.0));
+    assert_eq!(f.exact.rests, Some(0.404));
+    // A ringing under the threshold is at rest; the sideways column (exact 0) is what strays.
+    assert_eq!(f.engine.rests, Some(0.404));
+    assert_eq!(f.engine.stray, 3e-6);
+    let d = 4.0 / (2.0 * 0.5 * G);
+    assert!((f.engine.end - d).abs() < 1e-12, "ends at {}", f.engine.end);
+    // A ringing over it is still moving at the end.
+    let moving = slide_history(&scene, 2.5 * REST * 2.0, 0.0);
+    assert_eq!(measure(&scene, &exact, &moving).unwrap().engine.rests, None);
+    // A frictionless scene has no friction events.
+    let mut frictionless = scene.clone();
+    frictionless.contacts[0].friction = None;
+    assert!(measure(&frictionless, &exact, &ringing).is_none());
+}

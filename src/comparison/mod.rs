@@ -26,6 +26,7 @@ pub mod attribution;
 pub mod contact;
 pub mod discrepancy;
 pub mod equivalence;
+pub mod friction;
 pub mod invariance;
 pub mod judge;
 pub mod on_request;

@@ -171,6 +171,11 @@ pub struct EngineSummary {
     /// ([`comparison::contact`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub impacts: Option<Impacts>,
+    /// A case with friction: when the node moves and rests, where it ends, how far it strays
+    /// where the exact solution does not move, beside the exact solution's
+    /// ([`comparison::friction`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub friction: Option<comparison::friction::FrictionEvents>,
     /// Why this cell misses its tolerance, or is far from `explicit`: its controls and the
     /// cause they show ([`crate::comparison::attribution`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -582,6 +587,7 @@ fn engine_summary(
             order_fit: None,
             floor: None,
             impacts: None,
+            friction: None,
             attribution: None,
             cost_to_accuracy: Vec::new(),
             critical_increment: None,
@@ -614,6 +620,8 @@ fn engine_summary(
                 order_fit: None,
                 floor: None,
                 impacts: contact::measure(scene, &s.history, &s.info.measures, s.info.increment),
+                friction: baseline
+                    .and_then(|(_, b)| comparison::friction::measure(scene, b, &s.history)),
                 attribution: None,
                 cost_to_accuracy: Vec::new(),
                 critical_increment: None,

@@ -266,6 +266,7 @@ fn accuracy(s: &Summary, inputs: &Inputs) -> String {
 
     cross_check_section(w, s);
     crate::report::contact::section(w, s);
+    crate::report::friction::section(w, s);
     o
 }
 

@@ -26,6 +26,7 @@ pub mod element_cost;
 pub mod figures;
 pub mod first_screen;
 pub mod format;
+pub mod friction;
 pub mod gate;
 pub mod judge;
 pub mod markdown;

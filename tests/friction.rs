@@ -412,3 +412,23 @@ fn the_friction_events_rule_reads_a_known_slide() {
     frictionless.contacts[0].friction = None;
     assert!(measure(&frictionless, &exact, &ringing).is_none());
 }
+
+#[test]
+fn counters_show_friction_only_where_a_scene_has_it() {
+    // One pair evaluated every increment, slipping in each until the stop at v0/(μg) =
+    // 0.407747 s (40775 increments of 1e-5 s), and in a few more while the stick takes the
+    // load at the stop: within its loading time √(m/k)/h = 32 increments (measured 4).
+    let out = run(&friction_case("friction_slide_stop_2d"));
+    let counter = |name: &str| out.info.counters.get(name).copied();
+    assert_eq!(counter("friction_evaluations"), Some(out.info.steps + 1));
+    let slips = counter("slip_increments").unwrap() as f64;
+    assert!(
+        (slips - 40775.0).abs() <= 32.0,
+        "slipped in {slips} increments"
+    );
+    // Without friction, no friction counter at all.
+    let mut frictionless = friction_case("friction_slide_stop_2d");
+    frictionless.contacts[0].friction = None;
+    let out = run(&frictionless);
+    assert!(!out.info.counters.contains_key("friction_evaluations"));
+}

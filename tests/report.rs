@@ -66,13 +66,13 @@ fn run_into_temporary_directory() -> &'static (tempfile::TempDir, Summary, Strin
 fn sweep_orders_and_floors_are_in_the_summary_and_the_report() {
     let (out, summary, report) = run_into_temporary_directory();
     let mut checked = 0;
-    // The sweep covers the seed cases (the stress family, contact cases included, is the
-    // stability map's).
-    for c in summary
-        .cases
-        .iter()
-        .filter(|c| !c.id.starts_with("stress_") && !c.id.starts_with("contact_"))
-    {
+    // The sweep covers the seed cases (the stress and friction families are the stability
+    // map's).
+    for c in summary.cases.iter().filter(|c| {
+        !c.id.starts_with("stress_")
+            && !c.id.starts_with("contact_")
+            && !c.id.starts_with("friction_")
+    }) {
         let sweep = std::fs::read_to_string(out.path().join("sweep.csv")).unwrap();
         assert!(
             sweep.lines().any(|l| l.starts_with(&format!("{},", c.id))),
@@ -127,9 +127,9 @@ fn sweep_orders_and_floors_are_in_the_summary_and_the_report() {
 #[test]
 fn summary_and_report_agree() {
     let (out, summary, report) = run_into_temporary_directory();
-    // The 13 seed cases and the 22 of the stress family (11 of them contact that opens and
-    // closes).
-    assert_eq!(summary.cases.len(), 35);
+    // The 13 seed cases, the 22 of the stress family (11 of them contact that opens and
+    // closes) and the 10 of the friction family.
+    assert_eq!(summary.cases.len(), 45);
 
     for c in &summary.cases {
         let scene = case::load(&case::resolve(&c.id, &case::cases_dir()).unwrap()).unwrap();
@@ -217,13 +217,13 @@ fn summary_and_report_agree() {
             );
         }
     }
-    // Every judged cell has a tolerance: 35 cases × 6 judged engines (every engine but the two
+    // Every judged cell has a tolerance: 45 cases × 6 judged engines (every engine but the two
     // exact solutions), less the 11 cells with nothing to compare: `explicit_small` does not
     // apply to contact_balls_oblique, has no closed form on the other 9 cases whose contact
     // strikes (5 drops, the tetrahedron, the wedge, the rattle, the ball slide) and is compared
     // over no rows on contact_reopen (its closed form is valid at no row).
     let checks = summary.tolerance_checks();
-    assert_eq!(checks.len(), 35 * common::STEPPING.len() - 11);
+    assert_eq!(checks.len(), 45 * common::STEPPING.len() - 11);
     assert!(checks.iter().all(|c| c.tolerance.is_some()));
     assert!(report.contains(&format!(
         "**{} of {} cells meet their tolerance.**",
@@ -296,7 +296,7 @@ fn verdict_matrix_equals_the_summary_and_every_link_resolves() {
     }
     assert_eq!(
         cells,
-        35 * common::STEPPING.len(),
+        45 * common::STEPPING.len(),
         "every case × engine but the two exact solutions"
     );
     let mut links = 0;
@@ -361,6 +361,9 @@ fn equivalent_cases_are_found_and_agree() {
         ("springs_grounded_b", "springs_grounded_a"),
         ("springs_grounded_c", "springs_grounded_a"),
         ("springs_n2n_c", "springs_n2n_b"),
+        // The 3D slide-stop along x is the 2D one (a constant contact force, which every
+        // friction case under its weight shares, makes no equivalence).
+        ("friction_slide_stop_3d", "friction_slide_stop_2d"),
     ];
     expected.sort();
     assert_eq!(found, expected);
@@ -388,7 +391,7 @@ fn equivalent_cases_are_found_and_agree() {
 /// The stability map is in REPORT.md, one table row per engine whose counts are those of its
 /// CSV, each engine is also run at its own step, and the explicit engine's edge is at the
 /// stable increment on every case without contact that opens and closes: unstable at every
-/// ratio above 1, never below. It maps the 32 cases with a stable increment (not the free
+/// ratio above 1, never below. It maps the 42 cases with a stable increment (not the free
 /// spins).
 #[test]
 fn the_stability_map_is_in_the_report_and_matches_its_csvs() {
@@ -410,7 +413,7 @@ fn the_stability_map_is_in_the_report_and_matches_its_csvs() {
         let (grid, own) = (of("grid"), of("own step"));
         assert_eq!(
             grid.len(),
-            32 * crosscheck::comparison::stability::RATIOS.len()
+            42 * crosscheck::comparison::stability::RATIOS.len()
         );
         // Its own step wherever its job ran (not where it does not apply).
         let mut applies: Vec<&str> = grid

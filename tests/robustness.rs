@@ -186,7 +186,8 @@ fn runs_are_deterministic_across_thread_counts() {
         .iter()
         .filter(|e| e.stepping().is_some())
         .count();
-    // 35 cases: the 13 seed cases and the 22 of the stress family; 10 of those (contact that
+    // 45 cases: the 13 seed cases, the 22 of the stress family and the 10 of the friction
+    // family; 10 of the stress family's (contact that
     // opens and closes from t = 0) have no closed form, so neither its CSV nor budgets (a
     // budget splits the error against the closed form), and on one of them (two balls, one
     // free to turn) `explicit_small` does not apply: no CSV, no budget.
@@ -194,8 +195,8 @@ fn runs_are_deterministic_across_thread_counts() {
     let small_refused = 1;
     assert_eq!(
         snaps[0].len(),
-        35 * crosscheck::run::registry::all().len() - without_closed_form - small_refused
-            + (35 - without_closed_form) * stepping
+        45 * crosscheck::run::registry::all().len() - without_closed_form - small_refused
+            + (45 - without_closed_form) * stepping
             + 2
     );
     assert_eq!(snaps[0], snaps[1]);

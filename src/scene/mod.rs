@@ -752,8 +752,20 @@ impl Scene {
         if !self.contacts.is_empty() {
             out.push(format!("contact({})", self.contacts.len()));
         }
+        let rough = self
+            .contacts
+            .iter()
+            .filter(|c| c.friction.is_some())
+            .count();
+        if rough > 0 {
+            out.push(format!("friction({rough})"));
+        }
         if !self.loads.is_empty() {
             out.push(format!("loads({})", self.loads.len()));
+        }
+        let ramped = self.loads.iter().filter(|l| l.amplitude.is_some()).count();
+        if ramped > 0 {
+            out.push(format!("amplitudes({ramped})"));
         }
         if self.steps.iter().any(|s| s.kind == StepKind::Static) {
             out.push("static_step".into());

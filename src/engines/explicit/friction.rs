@@ -32,6 +32,8 @@ pub struct Sticks<S: Space> {
     pub dissipated: f64,
     /// Increments at which some pair slipped.
     pub slips: u64,
+    /// Pair evaluations.
+    pub evaluations: u64,
 }
 
 impl<S: Space> Sticks<S> {
@@ -53,6 +55,7 @@ impl<S: Space> Sticks<S> {
             slipping: vec![false; model.contacts.len()],
             dissipated: 0.0,
             slips: 0,
+            evaluations: 0,
         })
     }
 
@@ -160,6 +163,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             let (Some(friction), Some(point)) = (c.friction, sticks.points[k].as_mut()) else {
                 continue;
             };
+            sticks.evaluations += 1;
             let arm = self.body_frame_arm(cfg, k);
             let normal_force = out.contact[k];
             if normal_force <= 0.0 {
@@ -189,12 +193,19 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             if ENERGY {
                 out.elastic += 0.5 * k_t * elastic.dot(&elastic);
             }
-            let f = self.to_world(cfg, c.body, &(elastic * -k_t));
-            out.add_particle(c.particle, f);
-            out.b[c.body] -= f;
-            out.m[c.body] -= S::moment(&self.contact_arm(cfg, k), &f);
+            self.push_tangential(cfg, k, &(elastic * -k_t), out);
         }
         sticks.slips += u64::from(slipped);
+    }
+
+    /// Add a tangential force `f` (the body's frame) on pair `k`'s node, and its reaction on
+    /// the body at the node, to `out`.
+    fn push_tangential(&self, cfg: &Config<S>, k: usize, f: &S::V, out: &mut Forces<S>) {
+        let c = &self.contacts[k];
+        let f = self.to_world(cfg, c.body, f);
+        out.add_particle(c.particle, f);
+        out.b[c.body] -= f;
+        out.m[c.body] -= S::moment(&self.contact_arm(cfg, k), &f);
     }
 
     /// The stick springs of the pairs with friction about the nodes' places at t = 0, added
@@ -209,10 +220,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             let n = self.body_frame_normal(k, &arm);
             let offset = arm - start;
             let tangential = offset - n * n.dot(&offset);
-            let f = self.to_world(cfg, c.body, &(tangential * -self.penalty));
-            out.add_particle(c.particle, f);
-            out.b[c.body] -= f;
-            out.m[c.body] -= S::moment(&self.contact_arm(cfg, k), &f);
+            self.push_tangential(cfg, k, &(tangential * -self.penalty), out);
         }
     }
 }

@@ -206,6 +206,10 @@ pub fn integrate<S: Space, const FINITE: bool>(
             _ => static_step(&model, &mut run.cfg, &held, &mut run.counters)?,
         }
     }
+    if let Some(sticks) = &run.sticks {
+        run.counters.friction_evaluations = sticks.evaluations;
+        run.counters.slip_increments = sticks.slips;
+    }
     Ok(Integration {
         history: History {
             columns: run.columns,

@@ -153,6 +153,10 @@ impl Engine for ExplicitEngine {
         if c.impact_balances > 0 {
             counters.insert("impact_balances".to_string(), c.impact_balances);
         }
+        if scene.has_friction() {
+            counters.insert("friction_evaluations".into(), c.friction_evaluations);
+            counters.insert("slip_increments".into(), c.slip_increments);
+        }
         if let Some(n) = pilot_increments {
             counters.insert("pilot_increments".to_string(), n);
         }

@@ -323,4 +323,8 @@ pub struct Counters {
     pub body_solves: u64,
     /// Increments that added a force balancing an impact's work ([`super::impacts`]).
     pub impact_balances: u64,
+    /// Friction evaluations of a pair ([`super::friction`]; none without friction).
+    pub friction_evaluations: u64,
+    /// Increments in which some pair slipped.
+    pub slip_increments: u64,
 }

@@ -6,47 +6,42 @@
 //! - one contact pair, planar, closed at t = 0, with friction (μ_s, μ_k), whose node is the
 //!   particle: a free node with a mass, held in no DOF;
 //! - every other node immobile: on a body, or a free node held still in every translation;
-//! - constant point loads on the particle (loads elsewhere act on immobile nodes) whose resultant
-//!   F presses it into the face: N = −n·F > 0, n the face's outward normal;
+//! - point loads on the particle (loads elsewhere act on immobile nodes), constant or scaled by a
+//!   tabular amplitude, whose resultant F(t) presses it into the face at every time of the run:
+//!   N(t) = −n·F(t) > 0, n the face's outward normal;
 //! - at most one spring, `fixed_direction` from the particle to another node, its direction d
 //!   in the face's plane; no dashpot;
-//! - the initial velocity v₀ in the face's plane, and v₀, the loads' tangential part
-//!   F_t = F + N n and d on one line e of that plane (always so in 2D).
+//! - the initial velocity v₀ in the face's plane, and v₀, d, the constant loads' tangential part
+//!   and each amplitude-scaled load's tangential part (F_t = F + (−n·F) n) on one line e of
+//!   that plane (always so in 2D).
 //!
 //! Anything else is refused, with the reason.
 //!
 //! # Model
 //!
-//! The particle stays on the face (N is constant and pressing) and moves along e: u = x e.
-//! With f = F_t·e, k the spring's stiffness (0 without one) and m the particle's mass,
+//! The particle stays on the face (N stays pressing) and moves along e: u = x e. With
+//! f(t) = F_t(t)·e, k the spring's stiffness (0 without one) and m the particle's mass,
 //!
 //! - slipping along s = ±1: m ẍ = f − k x − s μ_k N;
 //! - at rest: x stays while |f − k x| ≤ μ_s N (stick), else it slips along sgn(f − k x).
 //!
-//! A slip phase from (x, v) has the closed form
-//!
-//! - k = 0: uniform acceleration a = (f − s μ_k N)/m; it stops after τ = −v/a when s a < 0
-//!   (at x + v τ/2), else never;
-//! - k > 0: harmonic at ω = √(k/m) about c = (f − s μ_k N)/k. With z = s(x − c) and
-//!   w = s v/ω ≥ 0, s(x − c) = A cos(ωτ − φ), A = √(z² + w²), φ = atan2(w, z) ∈ (0, π]: it
-//!   stops after τ = φ/ω at c + s A.
-//!
-//! At a stop the stick condition decides between rest for good (the loads are constant) and a
-//! new slip. Each output row is evaluated from the start state of the phase it falls in.
-//! Outputs: displacement and velocity of the particle along a direction from x e and ẋ e,
-//! every other node's 0, rotations 0, the contact force N, the gap 0, and `valid` 1.
+//! The amplitudes' times cut the run into segments over which f and N are linear in time (one
+//! segment where every load is constant). Within a segment each stick and slip phase has a
+//! closed form, and so do its end: the stop of a slip, the break-away of a stick, or the
+//! segment's end (`friction_phases`). Each output row is evaluated from the start
+//! state of the phase it falls in. Outputs: displacement and velocity of the particle along a
+//! direction from x e and ẋ e, every other node's 0, rotations 0, the contact force N(t), the
+//! gap 0, and `valid` 1.
 
+use super::friction_phases::{Line, Segment, state_at};
 use super::unsupported;
 use crate::contract::VALID_COLUMN;
 use crate::engines::{EngineError, History};
 use crate::scene::{
-    Attachment, Connection, ContactState, Dof, Friction, GEOMETRY_TOLERANCE, NodeId, Probe, Scene,
-    StepKind, parallel,
+    Amplitude, Attachment, Connection, ContactState, Dof, GEOMETRY_TOLERANCE, NodeId, PointLoad,
+    Probe, Scene, StepKind, parallel,
 };
 use nalgebra::Vector3;
-
-/// The most phases (stick-slip transitions) a scene may have before its duration ends.
-const MAX_PHASES: usize = 1_000_000;
 
 /// Solve a friction scene in its scope (see the module doc) exactly.
 pub fn solve(scene: &Scene) -> Result<History, EngineError> {
@@ -63,7 +58,7 @@ pub fn solve(scene: &Scene) -> Result<History, EngineError> {
                     scene
                         .columns
                         .iter()
-                        .map(|c| setup.probe(&c.probe, x, v) + 0.0),
+                        .map(|c| setup.probe(&c.probe, t, x, v) + 0.0),
                 )
                 .chain(std::iter::once(1.0))
                 .collect()
@@ -76,9 +71,12 @@ pub fn solve(scene: &Scene) -> Result<History, EngineError> {
     Ok(History { columns, rows })
 }
 
-/// The scene reduced to its line: the particle, the line e and the motion along it.
+/// The scene reduced to its line: the particle, the face's normal n, the loads on the particle,
+/// the line e and the motion along it.
 struct Setup {
     particle: NodeId,
+    n: Vector3<f64>,
+    loads: Vec<PointLoad>,
     e: Vector3<f64>,
     line: Line,
 }
@@ -98,32 +96,39 @@ impl Setup {
         }
         let particle = contact.node;
         others_immobile(scene, particle)?;
-        let (force, normal_force) = pressing(scene, particle, &n)?;
+        let loads: Vec<PointLoad> = scene
+            .loads
+            .iter()
+            .filter(|l| l.node == particle)
+            .cloned()
+            .collect();
         let v0 = in_plane_velocity(scene, particle, &n)?;
-        let tangential = force + normal_force * n;
         let spring = spring(scene, particle, &n)?;
-        let e = line(&[
+        let mut candidates = vec![(
+            "the spring's direction",
             spring.map_or(Vector3::zeros(), |s| s.1),
-            if tangential.norm() > GEOMETRY_TOLERANCE * force.norm() {
-                tangential
-            } else {
-                Vector3::zeros()
-            },
-            v0,
-        ])?;
+        )];
+        candidates.extend(tangential_parts(&loads, &n));
+        candidates.push(("the initial velocity", v0));
+        let e = line(&candidates)?;
         let line = Line {
             mass: scene.nodes[particle].mass,
             stiffness: spring.map_or(0.0, |s| s.0),
-            load: tangential.dot(&e),
             v0: v0.dot(&e),
             friction,
-            normal_force,
+            segments: segments(&loads, &n, &e, scene.duration())?,
         };
-        Ok(Setup { particle, e, line })
+        Ok(Setup {
+            particle,
+            n,
+            loads,
+            e,
+            line,
+        })
     }
 
-    /// A probe's value with the particle at x e moving at v e.
-    fn probe(&self, probe: &Probe, x: f64, v: f64) -> f64 {
+    /// A probe's value at t with the particle at x e moving at v e.
+    fn probe(&self, probe: &Probe, t: f64, x: f64, v: f64) -> f64 {
         match probe {
             Probe::Displacement { node, direction } if *node == self.particle => {
                 direction.dot(&self.e) * x
@@ -131,7 +136,7 @@ impl Setup {
             Probe::Velocity { node, direction } if *node == self.particle => {
                 direction.dot(&self.e) * v
             }
-            Probe::ContactForce { .. } => self.line.normal_force,
+            Probe::ContactForce { .. } => -self.n.dot(&resultant(&self.loads, t)),
             // Every other node is immobile; the particle stays on the face.
             Probe::Displacement { .. }
             | Probe::Velocity { .. }
@@ -142,26 +147,103 @@ impl Setup {
     }
 }
 
-/// The resultant load on the particle and the normal force N = −n·F it presses with (> 0).
-fn pressing(
-    scene: &Scene,
-    particle: NodeId,
-    n: &Vector3<f64>,
-) -> Result<(Vector3<f64>, f64), EngineError> {
-    let force: Vector3<f64> = scene
-        .loads
+/// The resultant of `loads` at t.
+fn resultant(loads: &[PointLoad], t: f64) -> Vector3<f64> {
+    loads.iter().map(|l| l.force_at(t)).sum()
+}
+
+/// The candidates for the line from the loads (zero where negligible): the constant loads'
+/// tangential part, then each amplitude-scaled load's.
+fn tangential_parts(loads: &[PointLoad], n: &Vector3<f64>) -> Vec<(&'static str, Vector3<f64>)> {
+    let tangential = |force: Vector3<f64>| {
+        let part = force - n.dot(&force) * n;
+        if part.norm() > GEOMETRY_TOLERANCE * force.norm() {
+            part
+        } else {
+            Vector3::zeros()
+        }
+    };
+    let constant: Vector3<f64> = loads
         .iter()
-        .filter(|l| l.node == particle)
+        .filter(|l| l.amplitude.is_none())
         .map(|l| l.force)
         .sum();
-    let normal_force = -n.dot(&force);
-    if normal_force <= 0.0 {
-        return refuse(format!(
-            "loads that press the particle into the face (their normal component is {:e} outward)",
-            -normal_force
-        ));
+    std::iter::once(("the loads' tangential part", tangential(constant)))
+        .chain(
+            loads
+                .iter()
+                .filter(|l| l.amplitude.is_some())
+                .map(|l| ("a ramped load's tangential part", tangential(l.force))),
+        )
+        .collect()
+}
+
+/// The segments over which the loads on the particle are linear in time until `end` (the run's
+/// end): cut at every amplitude time inside (0, `end`), the last open-ended (linear up to `end`,
+/// the only part the phases reach); the normal force must press at every cut and at `end`, so
+/// (linear between them) throughout the run.
+fn segments(
+    loads: &[PointLoad],
+    n: &Vector3<f64>,
+    e: &Vector3<f64>,
+    end: f64,
+) -> Result<Vec<Segment>, EngineError> {
+    let mut cuts: Vec<f64> = loads
+        .iter()
+        .filter_map(|l| l.amplitude.as_ref())
+        .flat_map(|a| a.points.iter().map(|p| p.0))
+        .filter(|t| *t > 0.0 && *t < end)
+        .collect();
+    cuts.sort_by(f64::total_cmp);
+    cuts.dedup();
+    for t in std::iter::once(0.0)
+        .chain(cuts.iter().copied())
+        .chain([end])
+    {
+        let normal = -n.dot(&resultant(loads, t));
+        if normal <= 0.0 {
+            return refuse(format!(
+                "loads that press the particle into the face throughout (at t = {t}, their normal component is {:e} outward)",
+                -normal
+            ));
+        }
     }
-    Ok((force, normal_force))
+    let starts = std::iter::once(0.0).chain(cuts.iter().copied());
+    let ends = cuts.iter().copied().chain([f64::INFINITY]);
+    Ok(starts
+        .zip(ends)
+        .map(|(start, stop)| {
+            let force = resultant(loads, start);
+            let n0 = -n.dot(&force);
+            // Each amplitude's slope in the segment, where it is linear: at its middle (of the
+            // run's rest in the last).
+            let middle = 0.5 * (start + stop.min(end));
+            let rate: Vector3<f64> = loads
+                .iter()
+                .filter_map(|l| l.amplitude.as_ref().map(|a| l.force * slope(a, middle)))
+                .sum();
+            let n1 = -n.dot(&rate);
+            Segment {
+                start,
+                end: stop,
+                f0: (force + n0 * n).dot(e),
+                f1: (rate + n1 * n).dot(e),
+                n0,
+                n1,
+            }
+        })
+        .collect())
+}
+
+/// The slope of a tabular amplitude at t (0 before its first time and after its last).
+fn slope(amplitude: &Amplitude, t: f64) -> f64 {
+    let p = &amplitude.points;
+    let i = p.partition_point(|(ti, _)| *ti <= t);
+    if i == 0 || i == p.len() {
+        return 0.0;
+    }
+    let ((t0, a0), (t1, a1)) = (p[i - 1], p[i]);
+    (a1 - a0) / (t1 - t0)
 }
 
 /// The particle's initial velocity, in the face's plane.
@@ -268,151 +350,24 @@ fn spring(
     }
 }
 
-/// The line the candidates (spring direction, tangential load, initial velocity; zero where
-/// absent) lie on: the first nonzero one's direction (any, where all are zero: x stays 0). A
-/// candidate off it is refused: the slip direction would turn.
-fn line(candidates: &[Vector3<f64>]) -> Result<Vector3<f64>, EngineError> {
-    let names = [
-        "the spring's direction",
-        "the loads' tangential part",
-        "the initial velocity",
-    ];
-    let present: Vec<(usize, Vector3<f64>)> = candidates
+/// The line the named candidates (zero where absent) lie on: the first nonzero one's direction
+/// (any, where all are zero: x stays 0). A candidate off it is refused: the slip direction
+/// would turn.
+fn line(candidates: &[(&str, Vector3<f64>)]) -> Result<Vector3<f64>, EngineError> {
+    let present: Vec<(&str, Vector3<f64>)> = candidates
         .iter()
-        .enumerate()
         .filter(|(_, c)| c.norm() > 0.0)
-        .map(|(i, c)| (i, c.normalize()))
+        .map(|(name, c)| (*name, c.normalize()))
         .collect();
     let Some(&(first, e)) = present.first() else {
         return Ok(Vector3::zeros());
     };
     match present.iter().find(|(_, c)| !parallel(c, &e)) {
-        Some((i, _)) => refuse(format!(
-            "{} and {} on one line (the slip direction would turn)",
-            names[first], names[*i]
+        Some((other, _)) => refuse(format!(
+            "{first} and {other} on one line (the slip direction would turn)"
         )),
         None => Ok(e),
     }
-}
-
-/// The motion along the line: m ẍ = f − k x − friction, from x = 0, ẋ = v₀.
-#[derive(Debug, Clone, Copy)]
-struct Line {
-    mass: f64,
-    stiffness: f64,
-    load: f64,
-    v0: f64,
-    friction: Friction,
-    normal_force: f64,
-}
-
-/// A phase's motion, from the state at its start.
-#[derive(Debug, Clone, Copy)]
-enum Motion {
-    /// At rest at x.
-    Stick { x: f64 },
-    /// Slipping under constant acceleration a.
-    Uniform { x: f64, v: f64, a: f64 },
-    /// Slipping on the spring: harmonic at ω about a centre.
-    Harmonic {
-        x: f64,
-        v: f64,
-        centre: f64,
-        omega: f64,
-    },
-}
-
-impl Motion {
-    /// Position and velocity τ after the phase's start.
-    fn state(&self, tau: f64) -> (f64, f64) {
-        match *self {
-            Motion::Stick { x } => (x, 0.0),
-            Motion::Uniform { x, v, a } => (x + v * tau + 0.5 * a * tau * tau, v + a * tau),
-            Motion::Harmonic {
-                x,
-                v,
-                centre,
-                omega,
-            } => {
-                let (sin, cos) = (omega * tau).sin_cos();
-                let y = x - centre;
-                (
-                    centre + y * cos + v / omega * sin,
-                    -y * omega * sin + v * cos,
-                )
-            }
-        }
-    }
-}
-
-/// A phase: its start time and motion.
-#[derive(Debug, Clone, Copy)]
-struct Phase {
-    start: f64,
-    motion: Motion,
-}
-
-impl Line {
-    /// The phases that start before `end`, in order, each from the state where the previous
-    /// one stops.
-    fn phases(&self, end: f64) -> Result<Vec<Phase>, EngineError> {
-        let mut phases = Vec::new();
-        let (mut t, mut x, mut v) = (0.0, 0.0, self.v0);
-        loop {
-            let s = if v != 0.0 {
-                v.signum()
-            } else {
-                let net = self.load - self.stiffness * x;
-                if net.abs() <= self.friction.static_coefficient * self.normal_force {
-                    phases.push(Phase {
-                        start: t,
-                        motion: Motion::Stick { x },
-                    });
-                    return Ok(phases);
-                }
-                net.signum()
-            };
-            let (motion, stop) = self.slip(x, v, s);
-            phases.push(Phase { start: t, motion });
-            match stop {
-                Some((tau, at)) if t + tau <= end => (t, x, v) = (t + tau, at, 0.0),
-                _ => return Ok(phases),
-            }
-            if phases.len() >= MAX_PHASES {
-                return refuse(format!(
-                    "at most {MAX_PHASES} stick-slip phases (the duration holds more)"
-                ));
-            }
-        }
-    }
-
-    /// Slip along `s` from (x, v) (v = 0 or of sign s): the motion and, where it stops, after
-    /// how long and where.
-    fn slip(&self, x: f64, v: f64, s: f64) -> (Motion, Option<(f64, f64)>) {
-        let force = self.load - s * self.friction.kinetic_coefficient * self.normal_force;
-        if self.stiffness == 0.0 {
-            let a = force / self.mass;
-            let stop = (s * a < 0.0).then(|| (-v / a, x - v * v / (2.0 * a)));
-            return (Motion::Uniform { x, v, a }, stop);
-        }
-        let omega = (self.stiffness / self.mass).sqrt();
-        let centre = force / self.stiffness;
-        let (z, w) = (s * (x - centre), (s * v / omega).abs());
-        let stop = (w.atan2(z) / omega, centre + s * z.hypot(w));
-        let motion = Motion::Harmonic {
-            x,
-            v,
-            centre,
-            omega,
-        };
-        (motion, Some(stop))
-    }
-}
-
-/// Position and velocity at t, from the phase it falls in (a phase's start belongs to it).
-fn state_at(phases: &[Phase], t: f64) -> (f64, f64) {
-    let k = phases.partition_point(|p| p.start <= t).max(1) - 1;
-    phases[k].motion.state(t - phases[k].start)
 }
 
 fn refuse<T>(what: impl Into<String>) -> Result<T, EngineError> {

@@ -12,10 +12,14 @@
 //!   without contact that no hand-derived form covers, so it refuses only contact scenes
 //!   outside the rigid-contact form.
 //! - [`friction`]: Coulomb friction: one particle on the plane face of a held body under
-//!   constant loads and at most one spring, along one line, by its stick and slip phases. Every
-//!   scene with friction goes to it, and it refuses what it does not cover.
+//!   constant or tabular-amplitude loads and at most one spring, along one line, by its stick and
+//!   slip phases. Every scene with friction goes to it, and it refuses what it does not cover.
+//!
+//! A load that varies in time (an amplitude) is taken only by the friction form: a scene
+//! without friction that has one is refused.
 
 pub mod friction;
+mod friction_phases;
 pub mod linear;
 pub mod rigid;
 pub mod springs;
@@ -38,11 +42,12 @@ impl Engine for AnalyticEngine {
 
     fn run(&self, scene: &Scene, _settings: &RunSettings) -> Result<RunOutput, EngineError> {
         let start = Instant::now();
-        if scene.has_amplitudes() {
-            return unsupported("a load that varies in time (an amplitude)");
-        }
         let history = if scene.has_friction() {
             friction::solve(scene)?
+        } else if scene.has_amplitudes() {
+            return unsupported(
+                "a load that varies in time (an amplitude) in a scene without friction (only the friction closed form takes amplitudes)",
+            );
         } else {
             frictionless(scene)?
         };

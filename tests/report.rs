@@ -172,7 +172,19 @@ fn summary_and_report_agree() {
                 r.engine
             );
             let baseline = r.baseline.as_deref().unwrap();
-            assert_eq!(Some(baseline), comparison::baseline(&r.engine));
+            let own = comparison::baseline(&r.engine);
+            if Some(baseline) != own {
+                // Where its own model's exact solution did not run (`reference` refuses a load
+                // that varies in time), the closed form judges the engine.
+                let missing = c.runs.iter().find(|x| Some(x.engine.as_str()) == own);
+                assert!(
+                    missing.is_none_or(|x| x.error.is_some()),
+                    "{} {}",
+                    c.id,
+                    r.engine
+                );
+                assert_eq!(baseline, comparison::CLOSED_FORM);
+            }
             let judged = r.against_baseline.as_ref().unwrap();
             assert_eq!(
                 &comparison::compare(&scene, &csv(baseline), &h),
@@ -436,7 +448,10 @@ fn the_stability_map_is_in_the_report_and_matches_its_csvs() {
             .count();
         assert_eq!(cells[3], format!("{accurate} of {judged}"), "{line}");
         if engine.starts_with("explicit") {
-            for r in grid.iter().filter(|r| !r[0].starts_with("contact_")) {
+            // Contact that opens and closes, and friction's pairs pressed by a weight, can stay
+            // bounded past 1×: their penalty mode exists only while the pair is closed.
+            let unilateral = |id: &str| id.starts_with("contact_") || id.starts_with("friction_");
+            for r in grid.iter().filter(|r| !unilateral(&r[0])) {
                 let ratio: f64 = r[3].parse().unwrap();
                 assert_eq!(r[6] == "unstable", ratio > 1.0, "{engine}: {r:?}");
             }

@@ -147,3 +147,34 @@ fn rapier_friction_is_isotropic_and_f32s_sideways_drift_is_round_off() {
     let diagonal = run(&case("friction_isotropy_45"), Precision::F32, None).0;
     assert!(largest(&diagonal, "us_side") < 1e-12);
 }
+
+/// rapier has one friction coefficient: a pair whose static coefficient is above its kinetic
+/// one (the ramp case's μ_s = 0.5, μ_k = 0.3) is refused, naming the pair, rather than run at
+/// μ_k, where it would break away at μ_k N (0.294 s) instead of μ_s N (0.4905 s). The same
+/// scene with μ_s lowered to μ_k runs.
+#[test]
+fn rapier_refuses_a_static_coefficient_above_the_kinetic_one() {
+    let scene = case("friction_ramp_breakaway");
+    for precision in [Precision::F64, Precision::F32] {
+        match RapierEngine::matched(precision).run(&scene, &RunSettings::default()) {
+            Err(crosscheck::engines::EngineError::Unsupported(m)) => {
+                assert!(
+                    m.contains("contact `face`") && m.contains("static friction 0.5"),
+                    "{m}"
+                )
+            }
+            other => panic!("{precision:?}: {:?}", other.map(|o| o.info.increment)),
+        }
+    }
+    let mut single = scene.clone();
+    for pair in &mut single.contacts {
+        let f = pair.friction.as_mut().unwrap();
+        f.static_coefficient = f.kinetic_coefficient;
+    }
+    let (h, _) = run(&single, Precision::F64, None);
+    // With one coefficient μ_k = 0.3 the pull r·t reaches μ_k N = 2.943 N at 0.2943 s: the
+    // node has moved by then (the exact μ_s answer has it at rest until 0.4905 s).
+    let moved_at = |u: &[f64], t: &[f64]| t[u.iter().position(|x| x.abs() > 1e-6).unwrap()];
+    let at = moved_at(&column(&h, "ux_node"), &column(&h, "t"));
+    assert!((0.294..0.31).contains(&at), "moves at {at} s");
+}

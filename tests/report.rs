@@ -172,19 +172,7 @@ fn summary_and_report_agree() {
                 r.engine
             );
             let baseline = r.baseline.as_deref().unwrap();
-            let own = comparison::baseline(&r.engine);
-            if Some(baseline) != own {
-                // Where its own model's exact solution did not run (`reference` refuses a load
-                // that varies in time), the closed form judges the engine.
-                let missing = c.runs.iter().find(|x| Some(x.engine.as_str()) == own);
-                assert!(
-                    missing.is_none_or(|x| x.error.is_some()),
-                    "{} {}",
-                    c.id,
-                    r.engine
-                );
-                assert_eq!(baseline, comparison::CLOSED_FORM);
-            }
+            assert_eq!(Some(baseline), comparison::baseline(&r.engine));
             let judged = r.against_baseline.as_ref().unwrap();
             assert_eq!(
                 &comparison::compare(&scene, &csv(baseline), &h),

@@ -190,20 +190,13 @@ fn runs_are_deterministic_across_thread_counts() {
     // family; 10 of the stress family's (contact that
     // opens and closes from t = 0) have no closed form, so neither its CSV nor budgets (a
     // budget splits the error against the closed form), and on one of them (two balls, one
-    // free to turn) `explicit_small` does not apply: no CSV, no budget. `reference` does not
-    // take a load that varies in time (the ramp case): no CSV of its own, and no budget for
-    // the stepping engines judged against it (all but `explicit_small`).
+    // free to turn) `explicit_small` does not apply: no CSV, no budget.
     let without_closed_form = 10;
     let small_refused = 1;
-    let reference_refused = 1;
     assert_eq!(
         snaps[0].len(),
-        45 * crosscheck::run::registry::all().len()
-            - without_closed_form
-            - small_refused
-            - reference_refused
+        45 * crosscheck::run::registry::all().len() - without_closed_form - small_refused
             + (45 - without_closed_form) * stepping
-            - reference_refused * (stepping - 1)
             + 2
     );
     assert_eq!(snaps[0], snaps[1]);

@@ -2,8 +2,12 @@
 //! a fixed set of closed contacts in fixed grips, stopped at the end of the first accepted step
 //! by which a contact event has happened.
 //!
-//! The state is the positions, the free velocities w and, in a scene with friction, the energy
-//! friction has dissipated (its rate the sliding pairs' power).
+//! The state is the positions, the free velocities w, in a scene with friction the energy
+//! friction has dissipated (its rate the sliding pairs' power), and in a scene whose loads vary
+//! in time the time itself (its rate 1), which the loads' amplitudes are evaluated at: the
+//! equations the integrator sees are autonomous. ode_solvers 0.6.2's Dop853 evaluates its 12th
+//! stage at the step's start instead of its end (its node c₁₂ is 0, not 1; ode-solvers pull
+//! request 42), which is exact only for equations that do not read the time argument.
 
 use super::mechanism::{Grip, Mechanism, Placement};
 use crate::engines::EngineError;
@@ -12,6 +16,11 @@ use std::cell::{Cell, RefCell};
 
 /// Most integration steps between two output rows (each run is bounded in time).
 const MAX_STEPS_PER_ROW: u32 = 1_000_000;
+
+/// The shortest leg the bisection integrates, relative to its end time: Dop853 refuses a step
+/// below 10 ε |t| (step size underflow), so an event closer than this to a leg's start (a
+/// break-away that falls on a leg's boundary) is located to this, 1e-14 |t|.
+const SHORTEST_LEG: f64 = 100.0 * f64::EPSILON;
 
 /// The sliding pairs' directions as the integration goes (each [`Grip::Slip`]'s reference is
 /// the slip's direction at the last accepted step), and which pairs' slip has stopped.
@@ -50,6 +59,8 @@ struct Motion<'a> {
 }
 
 impl ode_solvers::System<f64, ode_solvers::DVector<f64>> for Motion<'_> {
+    /// The rates at state `y`. The time argument is not read (see the module's doc): where the
+    /// loads vary in time, the state carries the time.
     fn system(&self, _t: f64, y: &ode_solvers::DVector<f64>, dy: &mut ode_solvers::DVector<f64>) {
         let m = self.mechanism;
         let np = m.position_len();
@@ -57,13 +68,17 @@ impl ode_solvers::System<f64, ode_solvers::DVector<f64>> for Motion<'_> {
         let at = m.unpack(y.as_slice());
         let w = free_velocity(m, self.basis, y);
         let tracking = self.tracking.borrow();
-        match m.evaluate(&at, self.basis, &w, self.active, &tracking.grips) {
+        let time = state_time(m, y);
+        match m.evaluate(&at, self.basis, &w, self.active, &tracking.grips, time) {
             Ok(e) => {
                 let u = self.basis * &w;
                 m.position_rate(&at, &u, &mut dy.as_mut_slice()[..np]);
                 dy.as_mut_slice()[np..np + nf].copy_from_slice(e.acceleration.as_slice());
-                if let Some(rate) = dy.as_mut_slice().get_mut(np + nf) {
-                    *rate = e.dissipation;
+                if m.has_friction() {
+                    dy[np + nf] = e.dissipation;
+                }
+                if m.varies_in_time() {
+                    dy[y.len() - 1] = 1.0;
                 }
             }
             Err(e) => {
@@ -75,7 +90,7 @@ impl ode_solvers::System<f64, ode_solvers::DVector<f64>> for Motion<'_> {
 
     fn solout(
         &mut self,
-        _t: f64,
+        t: f64,
         y: &ode_solvers::DVector<f64>,
         _dy: &ode_solvers::DVector<f64>,
     ) -> bool {
@@ -88,7 +103,7 @@ impl ode_solvers::System<f64, ode_solvers::DVector<f64>> for Motion<'_> {
             self.basis,
             (self.active, self.inside),
             tracking,
-            y,
+            (t, y),
         ) {
             Ok(true) => {
                 self.fired.set(true);
@@ -103,20 +118,20 @@ impl ode_solvers::System<f64, ode_solvers::DVector<f64>> for Motion<'_> {
     }
 }
 
-/// Whether a contact event has happened by state `y`: an open pair's gap below zero, or a
-/// closed pair's force below zero, a sliding pair's slip stopped (its relative tangential
+/// Whether a contact event has happened by state `y` at time `t`: an open pair's gap below zero,
+/// or a closed pair's force below zero, a sliding pair's slip stopped (its relative tangential
 /// velocity turned against its last direction, `tracking.stopped`), a stuck pair's friction
-/// beyond μ_s λ_n. A pair that was `inside` at the leg's start (it has just rebounded, or just
-/// opened, and sits a few ulps inside while it leaves) strikes only while it closes (ġ < 0);
-/// any other pair strikes once its gap is below zero, so that a grazing impact caught only
-/// after the gap turned again is still found. Without an event, the sliding pairs' directions
-/// are updated.
+/// beyond μ_s λ_n (the forces at `t`: a load's amplitude moves them). A pair that was `inside`
+/// at the leg's start (it has just rebounded, or just opened, and sits a few ulps inside while
+/// it leaves) strikes only while it closes (ġ < 0); any other pair strikes once its gap is
+/// below zero, so that a grazing impact caught only after the gap turned again is still found.
+/// Without an event, the sliding pairs' directions are updated.
 fn fired(
     mechanism: &Mechanism,
     basis: &DMatrix<f64>,
     (active, inside): (&[bool], &[bool]),
     tracking: &mut Tracking,
-    y: &ode_solvers::DVector<f64>,
+    (t, y): (f64, &ode_solvers::DVector<f64>),
 ) -> Result<bool, EngineError> {
     let m = mechanism;
     if m.contact_count() == 0 {
@@ -129,7 +144,7 @@ fn fired(
         return Ok(true);
     }
     if active.iter().any(|a| *a) {
-        let e = m.evaluate(&at, basis, &w, active, &tracking.grips)?;
+        let e = m.evaluate(&at, basis, &w, active, &tracking.grips, t)?;
         let pulling = e.contact.iter().zip(active).any(|(f, a)| *a && *f < 0.0);
         if !m.has_friction() {
             return Ok(pulling);
@@ -189,6 +204,26 @@ fn slips_stopped(
         }
     }
     false
+}
+
+/// The time state `y` carries, where the loads vary in time (its last entry); 0 otherwise,
+/// where nothing reads it.
+pub(super) fn state_time(m: &Mechanism, y: &ode_solvers::DVector<f64>) -> f64 {
+    if m.varies_in_time() {
+        y[y.len() - 1]
+    } else {
+        0.0
+    }
+}
+
+/// State `y` at time `t`: with the time it carries set to `t`, where the loads vary in time.
+fn start(m: &Mechanism, t: f64, y: &ode_solvers::DVector<f64>) -> ode_solvers::DVector<f64> {
+    let mut y = y.clone();
+    if m.varies_in_time() {
+        let last = y.len() - 1;
+        y[last] = t;
+    }
+    y
 }
 
 /// The placement, free velocities, full velocity and every pair's gap at state `y`.
@@ -251,7 +286,8 @@ impl Leg<'_> {
 
     /// Integrates from `(t, y)` towards `to` with the closed pairs `active` in `grips` and
     /// returns where it stopped: at `to`, or at the end of the first accepted step by which a
-    /// contact event has happened.
+    /// contact event has happened. The time a state carries starts at `t` (it accumulates no
+    /// round-off from leg to leg).
     pub(super) fn run(
         &mut self,
         (active, grips): (&[bool], &[Grip]),
@@ -277,7 +313,7 @@ impl Leg<'_> {
             t,
             to,
             to - t,
-            y.clone(),
+            start(self.mechanism, t, y),
             self.rtol,
             self.rtol * 1e-3,
             0.9,
@@ -308,7 +344,8 @@ impl Leg<'_> {
     }
 
     /// The first event after `t`: a leg from `(t, y)` stopped by one (`reached`) is bisected
-    /// on its end time, none by `lo`, one by `hi`, to a few ulps; where it is, at `hi`.
+    /// on its end time, none by `lo`, one by `hi`, to a few ulps (an event within
+    /// [`SHORTEST_LEG`] of `t`, to that); where it is, at `hi`.
     pub(super) fn first_event(
         &mut self,
         closed: (&[bool], &[Grip]),
@@ -319,7 +356,7 @@ impl Leg<'_> {
         let (mut lo, mut hi) = (t, reached);
         for _ in 0..200 {
             let mid = 0.5 * (lo + hi.time);
-            if mid <= lo || mid >= hi.time {
+            if mid <= lo || mid >= hi.time || mid - t <= SHORTEST_LEG * mid.abs() {
                 break;
             }
             let reach = self.run(closed, t, y, mid)?;

@@ -22,8 +22,9 @@
 //! so its mass block is [[m 1, −m[c]×], [m[c]×, J_O]]; a particle's is m 1. Springs and dashpots
 //! of the three kinds act as the scene says (grounded: along a node's frame axis or about a
 //! rotation axis; fixed direction: along a constant global direction; axial: along the current
-//! line joining the nodes); loads are constant global forces at nodes. A force f at a body point
-//! p adds f to F and (p − x) × f to M_O.
+//! line joining the nodes); loads are global forces at nodes, constant or their force times their
+//! amplitude at the time t of the evaluation (linear between the table's points). A force f at a
+//! body point p adds f to F and (p − x) × f to M_O.
 //!
 //! A closed contact pair is a constraint: the node keeps its distance to the surface,
 //! g = g₀ (a plane: g = n·(p_N − a) with n = R n₀ and a = x + R r_f; a solid: the signed
@@ -42,8 +43,8 @@ mod friction;
 
 use crate::engines::EngineError;
 use crate::scene::{
-    Attachment, Connection, ContactState, Dimension, Dof, Element, Friction, NodeId, Scene, Solid,
-    Step, Surface, surface_distance,
+    Attachment, Connection, ContactState, Dimension, Dof, Element, Friction, NodeId, PointLoad,
+    Scene, Solid, Step, Surface, surface_distance,
 };
 pub use friction::Grip;
 use nalgebra::{DMatrix, DVector, Matrix3, Quaternion, UnitQuaternion, Vector3};
@@ -95,10 +96,12 @@ pub struct Mechanism {
     bodies: Vec<Body>,
     springs: Vec<Element>,
     dashpots: Vec<Element>,
-    loads: Vec<(NodeId, Vector3<f64>)>,
+    loads: Vec<PointLoad>,
     contacts: Vec<Contact>,
     /// Whether any pair has friction.
     frictional: bool,
+    /// Whether any load has an amplitude.
+    ramped: bool,
     initial: Vec<Vector3<f64>>,
     frames: Vec<Matrix3<f64>>,
 }
@@ -250,7 +253,8 @@ impl Mechanism {
             bodies,
             springs: scene.springs.clone(),
             dashpots: scene.dashpots.clone(),
-            loads: scene.loads.iter().map(|l| (l.node, l.force)).collect(),
+            loads: scene.loads.clone(),
+            ramped: scene.has_amplitudes(),
             frictional: contacts.iter().any(|c| c.friction.is_some()),
             contacts,
             initial: scene.nodes.iter().map(|n| n.position).collect(),
@@ -266,6 +270,11 @@ impl Mechanism {
     /// Length of the position part of the state.
     pub fn position_len(&self) -> usize {
         3 * self.particles.len() + 7 * self.bodies.len()
+    }
+
+    /// Whether a load varies in time (has an amplitude).
+    pub fn varies_in_time(&self) -> bool {
+        self.ramped
     }
 
     /// Number of contact pairs.
@@ -477,11 +486,17 @@ impl Mechanism {
         }
     }
 
-    /// Generalised force of the springs, dashpots and loads on u (no inertia terms).
-    pub fn applied(&self, at: &Placement, u: &DVector<f64>) -> Result<DVector<f64>, EngineError> {
+    /// Generalised force of the springs, dashpots and loads on u (no inertia terms) at time `t`
+    /// (the loads' amplitudes there).
+    pub fn applied(
+        &self,
+        at: &Placement,
+        u: &DVector<f64>,
+        t: f64,
+    ) -> Result<DVector<f64>, EngineError> {
         let mut f = DVector::zeros(self.velocity_len());
-        for (node, force) in &self.loads {
-            self.apply(at, &mut f, *node, *force);
+        for load in &self.loads {
+            self.apply(at, &mut f, load.node, load.force_at(t));
         }
         for (elements, viscous) in [(&self.springs, false), (&self.dashpots, true)] {
             for e in elements {
@@ -675,7 +690,8 @@ impl Mechanism {
     }
 
     /// Accelerations of the free coordinates, contact forces and friction at a placement and
-    /// velocity, with the closed pairs `active` and their `grips`.
+    /// velocity, with the closed pairs `active` and their `grips`, at time `t` (the loads'
+    /// amplitudes there).
     pub fn evaluate(
         &self,
         at: &Placement,
@@ -683,6 +699,7 @@ impl Mechanism {
         w: &DVector<f64>,
         active: &[bool],
         grips: &[Grip],
+        t: f64,
     ) -> Result<Evaluation, EngineError> {
         if basis.ncols() == 0 {
             // Nothing is free to move: no acceleration, and a held node's contact force is a
@@ -700,7 +717,7 @@ impl Mechanism {
         }
         let u = basis * w;
         let (mass, inertial) = self.inertia(at, &u);
-        let force = self.applied(at, &u)? + inertial;
+        let force = self.applied(at, &u, t)? + inertial;
         let (_, g, gdot_u) = self.constraints(at, &u, active, grips);
         let nf = basis.ncols();
         let nc = g.nrows();

@@ -38,7 +38,7 @@ fn release(
 ) -> Result<(), EngineError> {
     let at = mechanism.unpack(y.as_slice());
     let w = free_velocity(mechanism, basis, y);
-    let e = mechanism.evaluate(&at, basis, &w, active, grips)?;
+    let e = mechanism.evaluate(&at, basis, &w, active, grips, time)?;
     for (k, (closed, force)) in active.iter_mut().zip(&e.contact).enumerate() {
         if *closed && *force < 0.0 {
             *closed = false;
@@ -59,12 +59,13 @@ fn during(t: f64) -> impl Fn(EngineError) -> EngineError {
     }
 }
 
-/// Newton's method on the equilibrium of the free DOFs of a static step.
+/// Newton's method on the equilibrium of the free DOFs of a static step, under the loads at
+/// time `t`.
 fn equilibrium(
     mechanism: &Mechanism,
     basis: &DMatrix<f64>,
     at: &mut Placement,
-    length: f64,
+    (length, t): (f64, f64),
 ) -> Result<(), EngineError> {
     let nf = basis.ncols();
     if nf == 0 {
@@ -77,7 +78,7 @@ fn equilibrium(
     }
     let still = DVector::zeros(mechanism.velocity_len());
     let residual = |p: &Placement| -> Result<DVector<f64>, EngineError> {
-        Ok(basis.transpose() * mechanism.applied(p, &still)?)
+        Ok(basis.transpose() * mechanism.applied(p, &still, t)?)
     };
     let displaced = |p: &Placement, d: &DVector<f64>| {
         let du = basis * d;
@@ -144,12 +145,28 @@ pub(super) fn solve(
     Ok(solver.finish())
 }
 
+/// The times of every load's amplitude table, in order, each once (none without amplitudes).
+fn kinks(scene: &Scene) -> Vec<f64> {
+    let mut kinks: Vec<f64> = scene
+        .loads
+        .iter()
+        .filter_map(|l| l.amplitude.as_ref())
+        .flat_map(|a| a.points.iter().map(|(t, _)| *t))
+        .collect();
+    kinks.sort_by(f64::total_cmp);
+    kinks.dedup();
+    kinks
+}
+
 /// The state of a solution between steps and rows.
 struct Solver<'a> {
     scene: &'a Scene,
     mechanism: &'a Mechanism,
     /// The output times.
     times: Vec<f64>,
+    /// The times where a load's amplitude changes slope (its table's times), in order: the
+    /// integration stops there too, so that no step straddles a kink of the force.
+    kinks: Vec<f64>,
     /// Two times closer than this are the same (a row on a step's boundary).
     tol: f64,
     /// A leg's length: a fraction of the output interval ([`EVENT_CHECKS_PER_ROW`]); the last
@@ -230,6 +247,7 @@ impl<'a> Solver<'a> {
             steps: 0,
             evaluations: 0,
             times,
+            kinks: kinks(scene),
         }
     }
 
@@ -244,7 +262,8 @@ impl<'a> Solver<'a> {
         m.prescribe(step, &mut self.at);
         let duration = match step.kind {
             StepKind::Static => {
-                return equilibrium(m, &basis, &mut self.at, self.length).map_err(started);
+                let scales = (self.length, t0);
+                return equilibrium(m, &basis, &mut self.at, scales).map_err(started);
             }
             StepKind::Dynamic { duration } => duration,
         };
@@ -256,11 +275,16 @@ impl<'a> Solver<'a> {
             .map_err(started)?;
         let np = m.position_len();
         let nf = w.len();
-        let mut y = ode_solvers::DVector::zeros(np + nf + usize::from(m.has_friction()));
+        let (friction, ramps) = (m.has_friction(), m.varies_in_time());
+        let len = np + nf + usize::from(friction) + usize::from(ramps);
+        let mut y = ode_solvers::DVector::zeros(len);
         m.pack(&self.at, &mut y.as_mut_slice()[..np]);
         y.as_mut_slice()[np..np + nf].copy_from_slice(w.as_slice());
-        if let Some(d) = y.as_mut_slice().get_mut(np + nf) {
-            *d = self.dissipation;
+        if friction {
+            y[np + nf] = self.dissipation;
+        }
+        if ramps {
+            y[len - 1] = t0;
         }
         let closed = (self.active.as_mut_slice(), self.grips.as_mut_slice());
         release(m, &basis, closed, &y, t0, &mut self.events).map_err(started)?;
@@ -286,8 +310,8 @@ impl<'a> Solver<'a> {
         self.evaluations += leg.evaluations;
         self.at = m.unpack(y.as_slice());
         self.u = &basis * free_velocity(m, &basis, &y);
-        if let Some(d) = y.as_slice().get(np + nf) {
-            self.dissipation = *d;
+        if friction {
+            self.dissipation = y[np + nf];
         }
         self.t0 = end;
         Ok(())
@@ -315,16 +339,22 @@ impl<'a> Solver<'a> {
     /// Where the step integrating from `t` to `end` goes next, and whether it writes a row
     /// there: the step reports the output times up to its end (the last step: all the rest);
     /// a time on a boundary belongs to the later step. A step that another dynamic step
-    /// follows is integrated past its last row to its end, where the next one starts.
+    /// follows is integrated past its last row to its end, where the next one starts. An
+    /// amplitude's kink before that is a target of its own, without a row.
     fn next_target(&self, t: f64, end: f64) -> Option<(f64, bool)> {
         let last = self.dynamic_index == self.dynamic_count;
         let times = &self.times;
-        if self.next < times.len() && (last || times[self.next] < end - self.tol) {
-            Some((times[self.next], true))
+        let target = if self.next < times.len() && (last || times[self.next] < end - self.tol) {
+            (times[self.next], true)
         } else if !last && t < end - self.tol {
-            Some((end, false))
+            (end, false)
         } else {
-            None
+            return None;
+        };
+        let i = self.kinks.partition_point(|k| *k <= t + self.tol);
+        match self.kinks.get(i) {
+            Some(&kink) if kink < target.0 - self.tol => Some((kink, false)),
+            _ => Some(target),
         }
     }
 
@@ -465,7 +495,7 @@ impl<'a> Solver<'a> {
         let w = free_velocity(m, basis, y);
         let full = basis * &w;
         let evaluation = m
-            .evaluate(&at, basis, &w, &self.active, &self.grips)
+            .evaluate(&at, basis, &w, &self.active, &self.grips, target)
             .map_err(during(target))?;
         let (gaps, _, _) = m.constraints(&at, &full, &self.active, &[]);
         self.drift = gaps

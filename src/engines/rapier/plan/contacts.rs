@@ -17,6 +17,16 @@ pub(super) fn colliders(
     let mut contacts = Vec::new();
     for pair in &scene.contacts {
         let face_body = body_of_scene_body[pair.body];
+        if let Some(f) = pair
+            .friction
+            .filter(|f| f.static_coefficient > f.kinetic_coefficient)
+        {
+            return unsupported(format!(
+                "contact `{}`: static friction {} above kinetic {}; rapier has one friction \
+                 coefficient, so the pair would stick and break away at the kinetic one",
+                pair.name, f.static_coefficient, f.kinetic_coefficient
+            ));
+        }
         let r = nodes[pair.node];
         if r.body == face_body {
             return unsupported(format!(
@@ -50,6 +60,7 @@ pub(super) fn colliders(
             body: face_body,
             surface,
             restitution: pair.restitution,
+            // μ_s = μ_k here (a larger static coefficient is refused above).
             friction: pair.friction.map_or(0.0, |f| f.kinetic_coefficient),
         });
     }

@@ -133,7 +133,7 @@ impl Solver<'_> {
         let w = free_velocity(m, basis, y);
         let mut slid = vec![false; self.grips.len()];
         for _ in 0..MAX_CHANGES {
-            let e = m.evaluate(&at, basis, &w, &self.active, &self.grips)?;
+            let e = m.evaluate(&at, basis, &w, &self.active, &self.grips, t)?;
             let pulling: Vec<usize> = (0..self.active.len())
                 .filter(|k| self.active[*k] && e.contact[*k] < 0.0)
                 .collect();
@@ -156,7 +156,7 @@ impl Solver<'_> {
                 reference: m.to_body(&at, k, &drive),
             };
             slid[k] = true;
-            let after = m.evaluate(&at, basis, &w, &self.active, &self.grips)?;
+            let after = m.evaluate(&at, basis, &w, &self.active, &self.grips, t)?;
             let u = basis * &w;
             let rate = basis * &after.acceleration;
             if m.slip_acceleration(&at, &u, &rate, k).dot(&drive) <= 0.0 {

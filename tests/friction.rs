@@ -9,7 +9,7 @@
 //! about its stop point with amplitude μ·m·g/k and speed μ·g·√(m/k), and never slips again.
 use crosscheck::case;
 use crosscheck::engines::{History, RunOutput, RunSettings};
-use crosscheck::scene::Scene;
+use crosscheck::scene::{IncrementRule, Scene};
 use std::path::Path;
 
 const G: f64 = 9.81;
@@ -431,4 +431,67 @@ fn counters_show_friction_only_where_a_scene_has_it() {
     frictionless.contacts[0].friction = None;
     let out = run(&frictionless);
     assert!(!out.info.counters.contains_key("friction_evaluations"));
+}
+
+/// A run of explicit at `ratio` × its own stable increment.
+fn run_at_stable_ratio(scene: &Scene, ratio: f64) -> RunOutput {
+    let settings = RunSettings {
+        increment: Some(IncrementRule::StableRatio(ratio)),
+        ..RunSettings::default()
+    };
+    crosscheck::run::registry::named("explicit")
+        .unwrap()
+        .run(scene, &settings)
+        .unwrap_or_else(|e| panic!("{}: {e}", scene.id))
+}
+
+#[test]
+fn a_stuck_node_does_not_chatter_at_the_stable_increment() {
+    // The slide-stop case at 0.95 × the stable increment 2√(m/k) (h = 6.0e-4 s, 60 × the
+    // case's own): the node stops within the increment where v0 − μ g t crosses 0, and the
+    // stick catches it with a speed of up to μ g h, which it turns into a tangential force of
+    // up to μ g h √(k m) ≈ 9.3 N, above μ m g = 4.9 N. So it slips in some of the increments
+    // that follow the stop while it takes the load (measured: 10), then holds for the rest of
+    // the run (0.19 s, half as long as the slide): its undamped ringing reaches the cone at
+    // most by round-off, dissipating nothing measurable.
+    let (v0, mu) = (2.0, 0.5);
+    let stop = v0 / (mu * G);
+    let out = run_at_stable_ratio(&friction_case("friction_slide_stop_2d"), 0.95);
+    let h = out.info.increment;
+    let exact_stable = 2.0 * (1.0 / K).sqrt();
+    assert!((h - 0.95 * exact_stable).abs() < 1e-9, "increment {h:e}");
+    let slips = out.info.counters["slip_increments"] as f64;
+    let sliding = (stop / h).ceil();
+    // Settling: at most 16 increments with slip after the stop (measured 10).
+    assert!(
+        slips >= sliding - 1.0 && slips <= sliding + 16.0,
+        "slipped in {slips} increments, slide {sliding}"
+    );
+    let t = column(&out.history, "t");
+    let (x, d) = (
+        column(&out.history, "ux_node"),
+        column(&out.history, "e_frictional"),
+    );
+    // From 50 increments after the stop (0.03 s) on: rows are interpolated through increments
+    // by a quadratic, so a row reads the dissipated energy to about the size of one
+    // increment's change. 1e-9 J is what a slip of 2e-10 m dissipates against μ m g, 1e-4 of
+    // the stick's elastic range (measured 2.5e-10 J over the 0.16 s).
+    let after = t.iter().position(|t| *t > stop + 50.0 * h).unwrap();
+    let spread = |v: &[f64]| {
+        v.iter().fold(f64::MIN, |m, x| m.max(*x)) - v.iter().fold(f64::MAX, |m, x| m.min(*x))
+    };
+    let settled = spread(&d[after..]);
+    assert!(settled < 1e-9, "dissipated {settled:e} once settled");
+    // It rings on its stick within its elastic range 2μmg/k, where it stopped: within a
+    // step's travel at the end of the slide, ½ μ g h², and that range of v0²/(2μg).
+    let held = 2.0 * mu * G / K;
+    let ring = spread(&x[after..]);
+    assert!(ring < 1.01 * held, "rings over {ring:e}, bound {held:e}");
+    let distance = v0 * v0 / (2.0 * mu * G);
+    let reach = 0.5 * mu * G * h * h + held;
+    assert!(
+        (x[after] - distance).abs() < reach,
+        "stopped at {}, exact {distance}",
+        x[after]
+    );
 }

@@ -539,6 +539,7 @@ fn memory_is_independent_of_the_number_of_steps() {
                 time: f64::from(k) * dt,
                 bodies: states.clone(),
                 contact_force: force,
+                friction: None,
             })
             .unwrap();
         most_middles = most_middles.max(recorder.edges_held());

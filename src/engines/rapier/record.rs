@@ -1,6 +1,6 @@
 //! From the stepped states to the output contract: `t`, the scene's columns, then the energy
-//! columns `e_kinetic, e_elastic, e_viscous, w_external, e_balance`, at exactly the scene's
-//! output times.
+//! columns `e_kinetic, e_elastic, e_viscous, [e_frictional,] w_external, e_balance`
+//! (`e_frictional` on a scene with friction), at exactly the scene's output times.
 //!
 //! An output time that falls on a step (within 1e-9 of the duration) is read from that step;
 //! otherwise positions and velocities are interpolated linearly between the two steps around it
@@ -12,8 +12,11 @@
 //! current node positions per element kind (grounded: the DOF's displacement or twist;
 //! fixed-direction: d·(u_B − u_A); axial: current length − undeformed length), nothing for
 //! contact; viscous ∫ Σ c·rate² dt (trapezoid on steps, interpolated between them); external
-//! work F·(displacement of the load point since the start of the first dynamic step); balance =
-//! kinetic + elastic + viscous − work − (kinetic + elastic at the start). Since rapier's springs
+//! work F·(displacement of the load point since the start of the first dynamic step); frictional
+//! Σ over steps and contact points of −P·s/h, P the step's friction impulse on the ball's body,
+//! s the point's slip over the step, h its length (rapier's own path times its friction force,
+//! interpolated between steps); balance = kinetic + elastic + viscous [+ frictional] − work −
+//! (kinetic + elastic at the start). Since rapier's springs
 //! are implicit, the balance drifts negative: that drift is rapier's numerical energy loss.
 //!
 //! A contact force is what rapier's impulses deliver over a window centred on the row: each

@@ -178,3 +178,109 @@ fn rapier_refuses_a_static_coefficient_above_the_kinetic_one() {
     let at = moved_at(&column(&h, "ux_node"), &column(&h, "t"));
     assert!((0.294..0.31).contains(&at), "moves at {at} s");
 }
+
+/// A run of rapier in its default configuration: the history and its substep h/4.
+fn run_default(scene: &Scene) -> (History, f64) {
+    let out = RapierEngine::default_configuration(Precision::F64)
+        .run(scene, &RunSettings::default())
+        .unwrap_or_else(|e| panic!("{}: {e}", scene.id));
+    let substeps = crosscheck::engines::rapier::backend::DEFAULT_SOLVER_ITERATIONS as f64;
+    (out.history, out.info.increment / substeps)
+}
+
+/// The slide stop's frictional dissipation, read from rapier's friction impulses, is μ m g
+/// times rapier's own slide distance; the balance's residual is what rapier lost besides:
+/// semi-implicit Euler's lag, μ m g · v0 h'/2, first order in the substep h'.
+#[test]
+fn rapier_f64s_friction_dissipates_mu_m_g_along_its_own_path_and_its_balance_is_its_lag() {
+    let scene = case("friction_slide_stop_2d");
+    let (h, substep) = run(&scene, Precision::F64, None);
+    let friction = MU * G; // μ m g with m = 1
+    let (dissipated, distance) = (last(&h, "e_frictional"), last(&h, "ux_node"));
+    // Each step's friction impulse (μ N h, 4 equal substeps) times the step's slip over h is
+    // μ N times the slip: the sum is μ m g · distance but for the step where the node stops,
+    // whose friction is below μ N over a slip of at most μ g h² = 4.9e-10 m (≤ 2.4e-9 J), and
+    // round-off (measured 7.4e-11 J in all).
+    assert!(
+        (dissipated - friction * distance).abs() < 2.5e-9,
+        "e_frictional {dissipated:e} against mu m g d = {:e}",
+        friction * distance
+    );
+    // The kinetic energy friction took, ½ m v0² − e_kinetic, is more by the lag: rapier's
+    // velocity falls at exactly μ g but it covers d − v0 h'/2 (measured 1.2263e-5 J against
+    // μ m g v0 h'/2 = 1.22625e-5; what is left is O(μ g h'), 1e-5 of it).
+    let lag = friction * V0 * substep / 2.0;
+    let taken = 0.5 * V0 * V0 - last(&h, "e_kinetic");
+    assert!(
+        ((taken - dissipated) - lag).abs() < 1e-3 * lag,
+        "kinetic energy taken {taken:e}, dissipated {dissipated:e}, lag {lag:e}"
+    );
+    // The balance is the lag and the load's work through the node's sinking into the face
+    // (2.4e-8 J: rapier's contact stores no energy), both lost by rapier's integration.
+    let balance = last(&h, "e_balance");
+    let sinking = last(&h, "w_external");
+    assert!(
+        (balance + sinking + lag).abs() < 1e-3 * lag,
+        "e_balance {balance:e} against -(lag {lag:e} + sinking {sinking:e})"
+    );
+    // First order: at half the increment (2 h', h = 4 h') the lag, and the balance less the
+    // sinking, halve.
+    let (half, _) = run(&scene, Precision::F64, Some(2.0 * substep));
+    let ratio = (last(&half, "e_balance") + last(&half, "w_external")) / (balance + sinking);
+    assert!((ratio - 0.5).abs() < 1e-3, "balance ratio at h/2: {ratio}");
+}
+
+/// On the incline the node sticks after the first substep, which advances it by g sinθ h'²
+/// before friction acts; the friction that then holds it dissipates the tangential weight's
+/// work through that slip, m g sinθ · g sinθ h'², and nothing after.
+#[test]
+fn rapier_f64s_friction_dissipates_only_the_first_substeps_slip_on_the_incline() {
+    let scene = case("friction_incline_stick");
+    let tangential = G * 20f64.to_radians().sin(); // m = 1
+    for (name, (h, substep)) in [
+        ("matched", run(&scene, Precision::F64, None)),
+        ("default", run_default(&scene)),
+    ] {
+        let expected = tangential * tangential * substep * substep;
+        let dissipated = last(&h, "e_frictional");
+        // The slip is g sinθ h'² to 5 digits (docs/rapier.md: 2.0970e-11 and 5.8250e-5 m).
+        assert!(
+            (dissipated - expected).abs() < 1e-3 * expected,
+            "{name}: e_frictional {dissipated:e} against {expected:e}"
+        );
+        // Nothing more once it holds: the column is flat over the last half of the run.
+        let e = column(&h, "e_frictional");
+        let drift = e.last().unwrap() - e[e.len() / 2];
+        assert!(drift.abs() < 1e-3 * expected, "{name}: drift {drift:e}");
+    }
+}
+
+/// The stick-slip oscillator: friction dissipates μ N times the path rapier's node covers;
+/// the balance's residual is the spring's implicit motor (backward Euler, which loses energy
+/// at the rate ω² h' E), so it is first order and at most ω² h' E0 t_stop.
+#[test]
+fn rapier_f64s_friction_dissipates_mu_n_along_the_stick_slip_path() {
+    let scene = case("friction_spring_stickslip");
+    let (mu, v0, k) = (0.3, 3.0, 100.0);
+    let (h, substep) = run(&scene, Precision::F64, None);
+    let u = column(&h, "ux_node");
+    let path: f64 = u.windows(2).map(|w| (w[1] - w[0]).abs()).sum();
+    let dissipated = last(&h, "e_frictional");
+    // Rows every 2e-3 s: a turning point inside a row interval hides at most its curvature's
+    // share, ½ a δt² with a ≤ k |x| + μ g ≤ 30 m/s², 6e-5 m per turning point, 6 of them:
+    // 3.6e-4 m of path, 1.1e-3 J at μ N = 2.943 N.
+    let along = mu * G * path;
+    assert!(
+        (dissipated - along).abs() < 1.1e-3,
+        "e_frictional {dissipated:e} against mu N path = {along:e}"
+    );
+    let balance = last(&h, "e_balance") + last(&h, "w_external");
+    let bound = k * substep * 0.5 * v0 * v0 * 1.718097;
+    assert!(
+        balance < 0.0 && -balance < bound,
+        "balance {balance:e}, bound {bound:e}"
+    );
+    let (half, _) = run(&scene, Precision::F64, Some(2.0 * substep));
+    let ratio = (last(&half, "e_balance") + last(&half, "w_external")) / balance;
+    assert!((ratio - 0.5).abs() < 0.02, "balance ratio at h/2: {ratio}");
+}

@@ -74,14 +74,9 @@ fn every_case_meets_the_contract() {
             let expected: Vec<String> = std::iter::once("t".to_string())
                 .chain(s.columns.iter().map(|c| c.name.clone()))
                 .chain(
-                    [
-                        "e_kinetic",
-                        "e_elastic",
-                        "e_viscous",
-                        "w_external",
-                        "e_balance",
-                    ]
-                    .map(String::from),
+                    crosscheck::contract::energy_columns(s.has_friction())
+                        .into_iter()
+                        .map(String::from),
                 )
                 .collect();
             assert_eq!(h.columns, expected, "{} / {}", s.id, e.name());
@@ -539,6 +534,7 @@ fn memory_is_independent_of_the_number_of_steps() {
                 time: f64::from(k) * dt,
                 bodies: states.clone(),
                 contact_force: force,
+                friction: None,
             })
             .unwrap();
         most_middles = most_middles.max(recorder.edges_held());

@@ -5,7 +5,8 @@
 //! Per step: every dynamic body's user forces are reset and each point load is added at its
 //! material point's current world position (constant direction, so the load moves with the
 //! body); the world steps; the state of every body and the normal impulse of every contact pair
-//! are read back in f64. The collision detection runs once before the first step so that the
+//! are read back in f64, and on a scene with friction each pair's friction impulses with their
+//! points. The collision detection runs once before the first step so that the
 //! contact pairs exist from it on. Between dynamic steps the step's ground joints are replaced and the
 //! velocity components it holds are zeroed.
 
@@ -42,6 +43,21 @@ pub struct Run {
     /// Gyroscopic forces on every rigid body (`None`: the release's default, off on 0.34 and
     /// on from 0.35; a control experiment sets it).
     pub gyroscopic: Option<bool>,
+    /// The scene has friction: each step's friction impulses are read back
+    /// ([`World::friction_impulses`]), and in 3D the solver uses its Coulomb friction model,
+    /// which writes them back (the default simplified model does not).
+    pub friction: bool,
+}
+
+/// A friction impulse at one contact point: the step's impulse on the ball's body (world,
+/// summed over the substeps; the face's body takes its opposite) and the point where it acts
+/// (world, where the step's contact detection put it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrictionImpulse {
+    /// Impulse on the ball's body.
+    pub impulse: Vector3<f64>,
+    /// Contact point.
+    pub at: Vector3<f64>,
 }
 
 /// A collider's material: rapier combines each coefficient of a contact's two colliders by
@@ -64,6 +80,9 @@ pub struct Record {
     /// Per contact pair: normal impulse of the step ending here over its length (`None` at the
     /// start of a dynamic step).
     pub contact_force: Option<Vec<f64>>,
+    /// Per contact pair, the friction impulses of the step ending here at its contact points
+    /// (`None` at the start of a dynamic step and on a scene without friction).
+    pub friction: Option<Vec<Vec<FrictionImpulse>>>,
 }
 
 /// What a run was: its size and step count (the states themselves go to the recorder as they
@@ -129,6 +148,9 @@ pub trait World: Sized {
     fn step(&mut self);
     /// The normal impulse of the last step between colliders `a` and `b` (0 without a pair).
     fn contact_impulse(&self, a: usize, b: usize) -> f64;
+    /// The friction impulses of the last step between colliders `a` and `b`, one per contact
+    /// point of the pair, on `a`'s body (none without a pair).
+    fn friction_impulses(&self, a: usize, b: usize) -> Vec<FrictionImpulse>;
     /// Whether the solver quarantined a body (0.35 on; never on 0.34).
     fn quarantined(&self) -> bool;
     /// Colliders, joints and bodies in the world.
@@ -165,6 +187,7 @@ pub fn simulate<W: World>(
             time: t0,
             bodies: read(&world, plan),
             contact_force: None,
+            friction: None,
         })?;
         steps += run_step(&mut world, plan, run, (step, t0), steps, record)?;
         t0 += step.duration;
@@ -309,10 +332,16 @@ fn run_step<W: World>(
                 "rapier: the state became non-finite by t = {t:e} (dt = {dt:e})"
             )));
         }
+        let friction = run.friction.then(|| {
+            (plan.contacts.iter())
+                .map(|c| world.friction_impulses(c.ball, c.slab))
+                .collect()
+        });
         record(Record {
             time: t,
             bodies,
             contact_force: Some(forces),
+            friction,
         })?;
     }
     Ok(n)

@@ -449,6 +449,7 @@ impl RapierEngine {
             zero_step_first: self.zero_step_first,
             impulse_scale: self.impulse_scale,
             gyroscopic: self.gyroscopic,
+            friction: scene.has_friction(),
         };
         let mut recorder = record::Recorder::new(scene, &plan);
         let mut sink = |r: backend::Record| recorder.push(r);

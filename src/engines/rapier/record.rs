@@ -1,6 +1,6 @@
 //! From the stepped states to the output contract: `t`, the scene's columns, then the energy
-//! columns `e_kinetic, e_elastic, e_viscous, w_external, e_balance`, at exactly the scene's
-//! output times.
+//! columns `e_kinetic, e_elastic, e_viscous, [e_frictional,] w_external, e_balance`
+//! (`e_frictional` on a scene with friction), at exactly the scene's output times.
 //!
 //! An output time that falls on a step (within 1e-9 of the duration) is read from that step;
 //! otherwise positions and velocities are interpolated linearly between the two steps around it
@@ -12,8 +12,11 @@
 //! current node positions per element kind (grounded: the DOF's displacement or twist;
 //! fixed-direction: d·(u_B − u_A); axial: current length − undeformed length), nothing for
 //! contact; viscous ∫ Σ c·rate² dt (trapezoid on steps, interpolated between them); external
-//! work F·(displacement of the load point since the start of the first dynamic step); balance =
-//! kinetic + elastic + viscous − work − (kinetic + elastic at the start). Since rapier's springs
+//! work F·(displacement of the load point since the start of the first dynamic step); frictional
+//! Σ over steps and contact points of −P·s/h, P the step's friction impulse on the ball's body,
+//! s the point's slip over the step, h its length (rapier's own path times its friction force,
+//! interpolated between steps); balance = kinetic + elastic + viscous [+ frictional] − work −
+//! (kinetic + elastic at the start). Since rapier's springs
 //! are implicit, the balance drifts negative: that drift is rapier's numerical energy loss.
 //!
 //! A contact force is what rapier's impulses deliver over a window centred on the row: each
@@ -32,9 +35,9 @@
 //! and the impulse at the window edges that rows still need. Its memory is that of the output,
 //! whatever the number of steps.
 
-use super::backend::Record;
+use super::backend::{FrictionImpulse, Record};
 use super::plan::{BodyState, Plan, twist};
-use crate::contract::ENERGY_COLUMNS;
+use crate::contract::energy_columns;
 use crate::engines::{EngineError, History};
 use crate::scene::{Connection, Dof, Element, Probe, Scene};
 use nalgebra::Vector3;
@@ -166,6 +169,32 @@ impl Kinematics<'_> {
             .sum()
     }
 
+    /// The energy friction dissipated in a step of length `h` from `before` to `after`: per
+    /// contact point, minus its impulse on the ball's body over h (the step's mean force) dotted
+    /// with the point's slip over the step, the travel of the ball's body point there less the
+    /// face's (both body points taken where the point is at the step's start).
+    fn friction_work(
+        &self,
+        (before, after): (&[BodyState], &[BodyState]),
+        impulses: &[Vec<FrictionImpulse>],
+        h: f64,
+    ) -> f64 {
+        let travel = |b: usize, at: &Vector3<f64>| {
+            let local = before[b].rotation.inverse() * (at - before[b].position);
+            after[b].point(&local) - at
+        };
+        (self.plan.contacts.iter())
+            .zip(impulses)
+            .flat_map(|(c, points)| {
+                let ball = self.plan.colliders[c.ball].body;
+                let face = self.plan.colliders[c.slab].body;
+                points
+                    .iter()
+                    .map(move |p| -p.impulse.dot(&(travel(ball, &p.at) - travel(face, &p.at))) / h)
+            })
+            .sum()
+    }
+
     /// Gap of a contact pair (negative: penetration).
     fn gap(&self, s: &[BodyState], k: usize) -> f64 {
         let c = &self.plan.contacts[k];
@@ -193,6 +222,9 @@ pub struct Recorder<'a> {
     ramped_work: (f64, f64),
     /// Whether any load varies in time.
     ramped: bool,
+    /// On a scene with friction, the energy friction dissipated up to the previous record and
+    /// up to the last (`None` without friction).
+    frictional: Option<(f64, f64)>,
     /// Per contact, the impulse delivered from the start to the previous record.
     impulse: Vec<f64>,
     /// Per contact, the mean force of the last step.
@@ -229,7 +261,11 @@ impl<'a> Recorder<'a> {
     pub fn new(scene: &'a Scene, plan: &'a Plan) -> Self {
         let columns: Vec<String> = std::iter::once("t".to_string())
             .chain(scene.columns.iter().map(|c| c.name.clone()))
-            .chain(ENERGY_COLUMNS.iter().map(|s| s.to_string()))
+            .chain(
+                energy_columns(scene.has_friction())
+                    .iter()
+                    .map(|s| s.to_string()),
+            )
             .collect();
         let contact_columns = scene
             .columns
@@ -261,6 +297,7 @@ impl<'a> Recorder<'a> {
             previous: None,
             ramped_work: (0.0, 0.0),
             ramped: scene.has_amplitudes(),
+            frictional: scene.has_friction().then_some((0.0, 0.0)),
             impulse: vec![0.0; nc],
             last_force: vec![0.0; nc],
             longest_step: 0.0,
@@ -303,6 +340,16 @@ impl<'a> Recorder<'a> {
                 })
                 .sum();
             self.ramped_work = (self.ramped_work.1, self.ramped_work.1 + step);
+        }
+        if let (Some((_, f1)), Some((p, ..))) = (self.frictional, &self.previous) {
+            let step = match &record.friction {
+                Some(impulses) => {
+                    let states = (&p.bodies[..], &record.bodies[..]);
+                    self.k.friction_work(states, impulses, record.time - p.time)
+                }
+                None => 0.0,
+            };
+            self.frictional = Some((f1, f1 + step));
         }
         if let (Some(f), Some((p, ..))) = (&record.contact_force, &self.previous) {
             self.counted += 1;
@@ -360,8 +407,10 @@ impl<'a> Recorder<'a> {
                 break;
             };
             let (w0, w1) = self.ramped_work;
+            let frictional = self.frictional.map(|(f0, f1)| (f0, f1 - f0));
             let (state, dissipation, ramped) = if (p.time - t).abs() <= self.tol {
-                (p.bodies.clone(), *pd, w0)
+                let frictional = frictional.map(|(f0, _)| f0);
+                (p.bodies.clone(), (*pd, frictional), w0)
             } else {
                 let s = ((t - p.time) / (record.time - p.time)).clamp(0.0, 1.0);
                 (
@@ -370,7 +419,10 @@ impl<'a> Recorder<'a> {
                         .zip(&record.bodies)
                         .map(|(x, y)| x.lerp(y, s))
                         .collect(),
-                    pd + s * (dissipated - pd),
+                    (
+                        pd + s * (dissipated - pd),
+                        frictional.map(|(f0, df)| f0 + s * df),
+                    ),
                     w0 + s * (w1 - w0),
                 )
             };
@@ -381,8 +433,15 @@ impl<'a> Recorder<'a> {
         Ok(())
     }
 
-    /// One output row at `t` from `state`; its contact-force columns are filled later.
-    fn emit(&mut self, t: f64, state: &[BodyState], dissipation: f64, ramped_work: f64) {
+    /// One output row at `t` from `state`, with the energy dashpots and (on a scene with
+    /// friction) friction dissipated by then; its contact-force columns are filled later.
+    fn emit(
+        &mut self,
+        t: f64,
+        state: &[BodyState],
+        (dissipation, frictional): (f64, Option<f64>),
+        ramped_work: f64,
+    ) {
         let (start, energy0) = self.start.as_ref().expect("a record came first");
         let k = &self.k;
         let mut row = Vec::with_capacity(self.columns.len());
@@ -413,13 +472,23 @@ impl<'a> Recorder<'a> {
         if self.ramped {
             work += ramped_work;
         }
-        row.extend([
-            kinetic,
-            elastic,
-            dissipation,
-            work,
-            kinetic + elastic + dissipation - work - energy0,
-        ]);
+        match frictional {
+            None => row.extend([
+                kinetic,
+                elastic,
+                dissipation,
+                work,
+                kinetic + elastic + dissipation - work - energy0,
+            ]),
+            Some(f) => row.extend([
+                kinetic,
+                elastic,
+                dissipation,
+                f,
+                work,
+                kinetic + elastic + dissipation + f - work - energy0,
+            ]),
+        }
         self.rows.push(row);
         self.next += 1;
         if !self.contact_columns.is_empty() {
@@ -483,7 +552,8 @@ impl<'a> Recorder<'a> {
         };
         while self.next < self.times.len() {
             let t = self.times[self.next];
-            self.emit(t, &last.bodies, ld, self.ramped_work.1);
+            let frictional = self.frictional.map(|(_, f1)| f1);
+            self.emit(t, &last.bodies, (ld, frictional), self.ramped_work.1);
         }
         self.resolve(true);
         if let Some(row) = self.rows.iter().find(|r| r.iter().any(|x| !x.is_finite())) {

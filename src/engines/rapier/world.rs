@@ -46,6 +46,17 @@ macro_rules! dimension_helpers {
         fn gyroscopic(b: RigidBodyBuilder, _: Option<bool>) -> RigidBodyBuilder {
             b
         }
+        /// The friction impulse on a manifold's first body (world) from its tangent impulse:
+        /// rapier's tangent is `orthonormal_basis` of the force direction −normal.
+        fn friction_impulse(
+            normal: rp::math::Vector,
+            impulse: &TangentImpulse<Real>,
+        ) -> Vector3<f64> {
+            let [t] = (-normal).orthonormal_basis();
+            unvector(t * impulse[0])
+        }
+        /// One friction model in 2D.
+        fn coulomb_friction(_: &mut IntegrationParameters) {}
         fn mass_properties(
             com: &Vector3<f64>,
             mass: f64,
@@ -97,6 +108,25 @@ macro_rules! dimension_helpers {
                 None => b,
             }
         }
+        /// The friction impulse on a manifold's first body (world) from its tangent impulse:
+        /// rapier's tangents are t1 = `orthonormal_vector` of the force direction d = −normal
+        /// and d × t1 (0.35 and 0.36; 0.34 takes t1 along the slip velocity the solver starts
+        /// from where it exceeds 1e-4 m/s, which this basis does not follow).
+        fn friction_impulse(
+            normal: rp::math::Vector,
+            impulse: &TangentImpulse<Real>,
+        ) -> Vector3<f64> {
+            let d = -normal;
+            let t1 = d.orthonormal_vector();
+            unvector(t1 * impulse[0] + d.cross(t1) * impulse[1])
+        }
+        /// The Coulomb friction model: one friction constraint per contact point, whose step
+        /// impulse rapier writes back to the point (the default simplified model writes back
+        /// only the last substep's, for warm-starting; on a manifold of one point, which every
+        /// pair here is, the two models solve the same constraint).
+        fn coulomb_friction(p: &mut IntegrationParameters) {
+            p.friction_model = rp::dynamics::FrictionModel::Coulomb;
+        }
         fn mass_properties(
             com: &Vector3<f64>,
             mass: f64,
@@ -137,6 +167,7 @@ macro_rules! dimension_helpers {
 macro_rules! release_helpers {
     (current) => {
         release_helpers!(static_softness);
+        release_helpers!(solver_manifolds);
         fn detect(world: &mut PhysicsWorld) {
             world.detect_collisions(&(), &());
         }
@@ -147,6 +178,7 @@ macro_rules! release_helpers {
     };
     (v0_35) => {
         release_helpers!(static_softness);
+        release_helpers!(solver_manifolds);
         fn quarantined(world: &PhysicsWorld) -> bool {
             !world.quarantine().is_empty()
         }
@@ -161,8 +193,17 @@ macro_rules! release_helpers {
         fn quarantined(_: &PhysicsWorld) -> bool {
             false
         }
+        fn solver_manifolds(pair: &ContactPair) -> &[ContactManifold] {
+            &pair.manifolds
+        }
         release_helpers!(collision_pipeline);
         const ZERO_STEP_ALWAYS: bool = true;
+    };
+    (solver_manifolds) => {
+        /// The manifolds the solver wrote its impulses to.
+        fn solver_manifolds(pair: &ContactPair) -> &[ContactManifold] {
+            pair.solver_manifolds()
+        }
     };
     (static_softness) => {
         fn set_softness(p: &mut IntegrationParameters, softness: SpringCoefficients<Real>) {
@@ -216,6 +257,7 @@ macro_rules! world {
         /// A world of one rapier crate.
         mod $module {
             use crate::engines::EngineError;
+            use crate::engines::rapier::backend::FrictionImpulse;
             use crate::engines::rapier::backend::{Material, Run};
             use crate::engines::rapier::plan::{
                 BodyKind, BodySpec, BodyState, ColliderSpec, Frame, JointKind, JointSpec, Shape,
@@ -228,10 +270,12 @@ macro_rules! world {
                 SpringJointBuilder,
             };
             use rp::geometry::{
-                ColliderBuilder, ColliderHandle, Group, InteractionGroups, InteractionTestMode,
+                ColliderBuilder, ColliderHandle, ContactManifold, ContactPair, Group,
+                InteractionGroups, InteractionTestMode,
             };
-            use rp::math::Real;
+            use rp::math::{Real, TangentImpulse};
             use rp::pipeline::PhysicsWorld;
+            use rp::utils::OrthonormalBasis;
             use $krate as rp;
 
             dimension_helpers!($dim);
@@ -302,6 +346,9 @@ macro_rules! world {
                     set_recycling(&mut p, m.contact_recycling);
                 } else if let Some(hz) = run.default_softness {
                     set_softness(&mut p, SpringCoefficients::new(hz as Real, 1.0));
+                }
+                if run.friction {
+                    coulomb_friction(&mut p);
                 }
                 p
             }
@@ -490,6 +537,24 @@ macro_rules! world {
                     let (a, b) = (self.colliders[a], self.colliders[b]);
                     let pair = self.world.narrow_phase.contact_pair(a, b);
                     pair.map_or(0.0, |p| p.total_impulse_magnitude() as f64)
+                }
+
+                fn friction_impulses(&self, a: usize, b: usize) -> Vec<FrictionImpulse> {
+                    let (a, b) = (self.colliders[a], self.colliders[b]);
+                    let Some(pair) = self.world.narrow_phase.contact_pair(a, b) else {
+                        return Vec::new();
+                    };
+                    // The impulses are on the pair's first collider's body.
+                    let sign = if pair.collider1 == a { 1.0 } else { -1.0 };
+                    let pose = self.world.colliders[pair.collider1].position();
+                    let points = solver_manifolds(pair).iter().flat_map(|m| {
+                        let normal = m.data.normal;
+                        m.points.iter().map(move |p| FrictionImpulse {
+                            impulse: sign * friction_impulse(normal, &p.data.tangent_impulse),
+                            at: unvector(pose.transform_point(p.local_p1)),
+                        })
+                    });
+                    points.collect()
                 }
 
                 fn quarantined(&self) -> bool {

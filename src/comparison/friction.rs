@@ -31,6 +31,14 @@ pub struct Motion {
     /// The largest |value| of its displacement columns in the face's plane whose exact solution
     /// is zero: creep on a stick, drift off a slide's line.
     pub stray: f64,
+    /// The energy friction dissipated by the last row (its `e_frictional`; `None`: the history
+    /// has no energy columns, as an exact solution's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dissipated: Option<f64>,
+    /// Its energy balance at the last row (`e_balance`): with friction's dissipation counted,
+    /// the energy its integration lost or gained.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub balance: Option<f64>,
 }
 
 /// One engine's motion beside the exact solution's, read by the same rule.
@@ -121,10 +129,13 @@ pub fn motion(h: &History, speed: &str, along: &str, still: &[&str], rest: f64) 
         .filter_map(|c| h.column(c))
         .map(|x| super::peak(&x))
         .fold(0.0, f64::max);
+    let last = |name: &str| h.column(name).and_then(|c| c.last().copied());
     Some(Motion {
         starts,
         rests,
         end: *x.last()?,
         stray,
+        dissipated: last(crate::contract::E_FRICTIONAL),
+        balance: last(crate::contract::E_BALANCE),
     })
 }

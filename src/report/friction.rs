@@ -3,8 +3,8 @@
 //! move, beside the exact solution read by the same rule ([`crate::comparison::friction`]).
 
 use super::format::{sci, sci_or_dash};
-use crate::comparison::friction::{Motion, REST};
-use crate::comparison::summary::{CaseSummary, Summary};
+use crate::comparison::friction::{FrictionEvents, Motion, REST};
+use crate::comparison::summary::{CaseSummary, EngineSummary, Summary};
 use std::fmt::Write;
 
 /// Write the section (nothing when no case has friction).
@@ -29,8 +29,8 @@ pub fn section(w: &mut String, s: &Summary) {
          *ends* its displacement along its velocity column's direction at the last row, and \
          *strays* the largest motion in the face's plane along a column whose exact solution \
          does not move (creep on a stick, drift off an isotropic slide's line). Penalty \
-         friction (`explicit`) sticks elastically, by μN/k. rapier has one coefficient: a \
-         pair whose static and kinetic coefficients differ gets the kinetic one \
+         friction (`explicit`) sticks elastically, by μN/k. rapier has one coefficient and \
+         refuses a pair whose static coefficient is above its kinetic one \
          (`docs/rapier.md`).\n"
     );
     let _ = writeln!(
@@ -38,15 +38,62 @@ pub fn section(w: &mut String, s: &Summary) {
         "| case | engine | moves (s) | exact | rests (s) | exact | ends | exact | strays |"
     );
     let _ = writeln!(w, "|---|---|---:|---:|---:|---:|---:|---:|---:|");
-    for c in cases {
-        for r in c
+    for (c, r, f) in judged(&cases) {
+        let _ = writeln!(w, "{}", row(&c.id, &r.engine, &f.engine, &f.exact));
+    }
+    energy(w, &cases);
+}
+
+/// Every case's engines with friction events, older releases left out.
+fn judged<'a>(
+    cases: &[&'a CaseSummary],
+) -> Vec<(&'a CaseSummary, &'a EngineSummary, &'a FrictionEvents)> {
+    cases
+        .iter()
+        .flat_map(|c| c.runs.iter().map(move |r| (*c, r)))
+        .filter(|(_, r)| !crate::contract::on_older_release(&r.engine))
+        .filter_map(|(c, r)| Some((c, r, r.friction.as_ref()?)))
+        .collect()
+}
+
+/// The energy table: what friction dissipated against `reference`'s exact
+/// `frictional_dissipation`, and the balance left at the end, as an amount and a mean rate.
+fn energy(w: &mut String, cases: &[&CaseSummary]) {
+    let _ = writeln!(
+        w,
+        "\nThe energy friction dissipated by the end (`e_frictional`, Abaqus's ALLFD) beside \
+         `reference`'s exact `frictional_dissipation`, and the energy balance left at the end \
+         (`e_balance`, friction counted), also as a mean rate over the run. rapier reports no \
+         dissipation: its `e_frictional` is read from its friction impulses times each contact \
+         point's slip over a step, so its balance is its own numerical dissipation, first order \
+         in the increment (halving the increment halves it: `docs/rapier.md`, \
+         `tests/friction_rapier.rs`).\n"
+    );
+    let _ = writeln!(
+        w,
+        "| case | engine | dissipated (J) | exact | balance (J) | balance per second (W) |"
+    );
+    let _ = writeln!(w, "|---|---|---:|---:|---:|---:|");
+    for (c, r, f) in judged(cases) {
+        let Some(dissipated) = f.engine.dissipated else {
+            continue;
+        };
+        let exact = c
             .runs
             .iter()
-            .filter(|r| !crate::contract::on_older_release(&r.engine))
-        {
-            let Some(f) = &r.friction else { continue };
-            let _ = writeln!(w, "{}", row(&c.id, &r.engine, &f.engine, &f.exact));
-        }
+            .find(|x| x.engine == crate::comparison::FINITE_ROTATION_REFERENCE)
+            .and_then(|x| x.measures.get("frictional_dissipation").copied());
+        let balance = f.engine.balance;
+        let _ = writeln!(
+            w,
+            "| {} | `{}` | {} | {} | {} | {} |",
+            c.id,
+            r.engine,
+            sci(dissipated),
+            sci_or_dash(exact),
+            sci_or_dash(balance),
+            sci_or_dash(balance.map(|b| b / c.duration)),
+        );
     }
 }
 

@@ -41,7 +41,42 @@ pub fn section(w: &mut String, s: &Summary) {
     for (c, r, f) in judged(&cases) {
         let _ = writeln!(w, "{}", row(&c.id, &r.engine, &f.engine, &f.exact));
     }
+    events(w, &cases);
     energy(w, &cases);
+}
+
+/// The exact events of each case, as `reference` locates them (by bisection, to its
+/// integrator's tolerance): where each stick, slip and reversal of the slip falls.
+fn events(w: &mut String, cases: &[&CaseSummary]) {
+    let _ = writeln!(
+        w,
+        "\nThe exact events, as `reference` locates them (by bisection, to its integrator's \
+         tolerance): the times the rows above place within an output interval.\n"
+    );
+    let _ = writeln!(w, "| case | exact events (s) |");
+    let _ = writeln!(w, "|---|---|");
+    for c in cases {
+        let Some(r) = c
+            .runs
+            .iter()
+            .find(|x| x.engine == crate::comparison::FINITE_ROTATION_REFERENCE)
+        else {
+            continue;
+        };
+        let mut found: Vec<(f64, String)> = r
+            .measures
+            .iter()
+            .filter_map(|(name, t)| {
+                let kind = name.strip_suffix("_time")?;
+                let (what, i) = kind.rsplit_once('_')?;
+                matches!(what, "stick" | "slip" | "reversal")
+                    .then(|| (*t, format!("{what} {i} at {t:.7}")))
+            })
+            .collect();
+        found.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let listed: Vec<String> = found.into_iter().map(|(_, s)| s).collect();
+        let _ = writeln!(w, "| {} | {} |", c.id, listed.join("; "));
+    }
 }
 
 /// Every case's engines with friction events, older releases left out.

@@ -323,28 +323,28 @@ fn stick_history(scene: &Scene, node: impl Fn(usize) -> f64) -> History {
 }
 
 #[test]
-fn an_exact_column_at_round_off_is_judged_in_its_unit_and_a_small_one_over_its_peak() {
-    use crosscheck::comparison::{compare, round_off};
+fn an_exact_displacement_at_round_off_is_judged_over_the_scenes_extent() {
+    use crosscheck::comparison::{compare, round_off, scene_scale};
     let scene = friction_case("friction_incline_stick");
     // The stick case's scale: its farthest node 0.5 m from the origin, so lengths below
     // 5e-13 m are round-off.
+    assert_eq!(scene_scale(&scene, "ux_node"), 0.5);
     assert_eq!(round_off(&scene, "ux_node"), 1e-12 * 0.5);
     // An exact solution that holds the node to round-off (±1e-17 m), against an engine
-    // whose penalty sinks it 3.15e-7 m into the face: an error of 3.15e-7 m, not 3e10 of a
-    // round-off peak.
+    // whose penalty sinks it 3.15e-7 m into the face: an error of 3.15e-7 m over the scene's
+    // 0.5 m, 6.3e-7, not 3e10 of a round-off peak, and judged: the worst of the columns.
     let exact = stick_history(&scene, |i| if i % 2 == 0 { 1e-17 } else { -1e-17 });
     let penalty = stick_history(&scene, |_| 3.15e-7);
     let c = compare(&scene, &exact, &penalty);
     let node = c.columns.iter().find(|c| c.column == "ux_node").unwrap();
     assert!(
-        !node.relative && (node.max - 3.15e-7).abs() < 1e-16,
+        node.relative && (node.max - 6.3e-7).abs() < 1e-16,
         "{node:?}"
     );
-    assert_eq!(
-        c.worst_max,
-        Some(0.0),
-        "only the contact force is judged over its peak"
-    );
+    assert_eq!(c.worst_max, Some(node.max), "creep is judged");
+    // A rotation held at zero has no scale: compared in radians, not judged.
+    let rz = c.columns.iter().find(|c| c.column == "rz").unwrap();
+    assert!(!rz.relative && rz.max == 0.0, "{rz:?}");
     // A small motion that is not round-off (a peak of 1e-9 m, 2000 × the floor) stays judged
     // over its peak: 1e-10 m off is 0.1 of it.
     let small = stick_history(&scene, |i| 1e-9 * (i as f64 / 500.0));

@@ -178,16 +178,29 @@ pub fn compare(scene: &Scene, reference: &History, candidate: &History) -> Compa
                 return None;
             }
             let (a, b) = (&a[..n], &b[..n]);
-            let peak = peak(a);
-            // An exact solution that is zero over the rows compared (a held DOF, a contact
-            // force before the first impact), or only round-off away from it, has no peak:
-            // compare in the column's unit.
-            let relative = peak > round_off(scene, name);
+            // An exact solution that is zero over the rows compared (a held DOF, a node that
+            // friction holds, a contact force before the first impact), or only round-off away
+            // from it, has no peak of its own. A displacement's errors are then divided by the
+            // scene's extent ([`scene_scale`]: a creep of 1e-5 m on a scene 1 m across is
+            // 1e-5); any other column is compared in its unit (a contact force before an
+            // impact has no scale an instantaneous impact's impulse could be judged against).
+            let own = peak(a) > round_off(scene, name);
+            let peak = match (own, unit(scene, name)) {
+                (true, _) => peak(a),
+                (false, "m") => scene_scale(scene, name),
+                (false, _) => 0.0,
+            };
+            let relative = peak > 0.0;
             let (errors, scale): (Vec<f64>, f64) = match rotated_body(scene, name) {
                 Some(body) => {
                     let (errors, scale) =
                         orientation::errors(scene, body, (reference, candidate), (a, b), first..n);
-                    (errors, if relative { scale } else { 1.0 })
+                    let scale = match (own, relative) {
+                        (true, _) => scale,
+                        (false, true) => peak,
+                        (false, false) => 1.0,
+                    };
+                    (errors, scale)
                 }
                 None => (
                     a[first..]
@@ -269,6 +282,13 @@ pub fn unit(scene: &Scene, column: &str) -> &'static str {
 /// such scale.
 pub fn round_off(scene: &Scene, column: &str) -> f64 {
     const ROUND_OFF: f64 = 1e-12;
+    ROUND_OFF * scene_scale(scene, column)
+}
+
+/// The scene's own scale in `column`'s unit: its extent (the largest distance of a node from
+/// the origin) for lengths, the extent over the duration for speeds, 1 rad for rotations, the
+/// largest load for forces; 0 where the scene has no such scale.
+pub fn scene_scale(scene: &Scene, column: &str) -> f64 {
     let extent = scene
         .nodes
         .iter()
@@ -279,14 +299,13 @@ pub fn round_off(scene: &Scene, column: &str) -> f64 {
         });
         m.max(l.force.norm() * most)
     });
-    ROUND_OFF
-        * match unit(scene, column) {
-            "m" => extent,
-            "m/s" => extent / scene.duration(),
-            "rad" => 1.0,
-            "N" => load,
-            _ => 0.0,
-        }
+    match unit(scene, column) {
+        "m" => extent,
+        "m/s" => extent / scene.duration(),
+        "rad" => 1.0,
+        "N" => load,
+        _ => 0.0,
+    }
 }
 
 /// Largest |e_balance| divided by the largest kinetic + elastic energy.

@@ -176,8 +176,9 @@ fn accuracy(s: &Summary, inputs: &Inputs) -> String {
          against `analytic` is the model-form gap, no engine's error. Per contract column, over the \
          rows where that solution is valid: the largest absolute error divided by the peak of its \
          column (*max*), the RMS error over the same peak (*rms*) and the error at the last row over \
-         the peak (*end*); tables show the worst column with a peak (a column whose exact solution is \
-         zero over those rows is compared in its unit, in the case's section). *vs closed form* is the \
+         the peak (*end*); a displacement whose exact solution is zero over those rows (a held DOF, \
+         a node friction holds) is divided by the scene's extent instead, so creep and drift are \
+         judged; any other column that is zero there is compared in its unit, in the case's section. *vs closed form* is the \
          worst *max* against `analytic`, model form included. *Energy balance*: the largest |kinetic + elastic \
          + dissipated − external work − initial| over the largest kinetic + elastic energy. Tolerances \
          are declared per case and engine in `cases/<id>.toml` and apply to the worst *max* against the \

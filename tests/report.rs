@@ -720,3 +720,41 @@ fn the_first_screen_answers_the_three_questions_as_the_csvs_do() {
         crosscheck::comparison::summary::SCHEMA_VERSION
     );
 }
+
+/// The friction section's same-answer table: the 3D slide launched at 0°, 30° and 45° share
+/// one exact stop, so they form one table whose every engine row gives that engine's end on
+/// each case as the summary has it, and whose `reference` row spreads by its integrator's
+/// tolerance only (1e-12 of the 0.41 m stop, with room: measured 1e-14).
+#[test]
+fn the_friction_sections_same_answer_table_reads_the_summary() {
+    let (out, summary, _) = run_into_temporary_directory();
+    let accuracy = std::fs::read_to_string(out.path().join("accuracy.md")).unwrap();
+    let start = accuracy.find("The same exact answer, ").expect("the table");
+    let ids = [
+        "friction_isotropy_30",
+        "friction_isotropy_45",
+        "friction_slide_stop_3d",
+    ];
+    assert!(accuracy[start..].starts_with(&format!("The same exact answer, {}", ids.join(", "))));
+    let rows: Vec<&str> = accuracy[start..]
+        .lines()
+        .skip_while(|l| !l.starts_with("| engine |"))
+        .skip(2)
+        .take_while(|l| l.starts_with("| `"))
+        .collect();
+    assert!(rows.len() >= 3, "{rows:?}");
+    for row in rows {
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        let engine = cells[1].trim_matches('`');
+        for (k, id) in ids.iter().enumerate() {
+            let c = summary.cases.iter().find(|c| c.id == *id).unwrap();
+            let r = c.runs.iter().find(|r| r.engine == engine).unwrap();
+            let end = r.friction.as_ref().unwrap().engine.end;
+            assert_eq!(cells[2 + k], format!("{end:.9}"), "{engine} on {id}");
+        }
+        if engine == "reference" {
+            let spread: f64 = cells[5].parse().unwrap();
+            assert!(spread < 1e-12 * 0.41, "reference spreads {spread:e}");
+        }
+    }
+}

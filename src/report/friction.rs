@@ -42,7 +42,83 @@ pub fn section(w: &mut String, s: &Summary) {
         let _ = writeln!(w, "{}", row(&c.id, &r.engine, &f.engine, &f.exact));
     }
     events(w, &cases);
+    same_answer(w, &cases);
     energy(w, &cases);
+}
+
+/// Cases of one dimension whose exact solutions end at the same place (the same slide launched
+/// in other directions in the face's plane): each engine's end on each, their spread and its
+/// largest stray. An isotropic Coulomb law gives one end and no stray.
+fn same_answer(w: &mut String, cases: &[&CaseSummary]) {
+    let exact_end = |c: &CaseSummary| {
+        c.runs
+            .iter()
+            .find_map(|r| r.friction.as_ref())
+            .map(|f| f.exact.end)
+    };
+    let mut groups: Vec<Vec<&CaseSummary>> = Vec::new();
+    for c in cases.iter().copied() {
+        let Some(end) = exact_end(c).filter(|e| *e != 0.0) else {
+            continue;
+        };
+        let same = |g: &Vec<&CaseSummary>| {
+            g[0].dimension == c.dimension
+                && exact_end(g[0]).is_some_and(|e| (e - end).abs() <= 1e-9 * end.abs())
+        };
+        match groups.iter_mut().find(|g| same(g)) {
+            Some(g) => g.push(c),
+            None => groups.push(vec![c]),
+        }
+    }
+    for g in groups.iter().filter(|g| g.len() > 1) {
+        let ids: Vec<&str> = g.iter().map(|c| c.id.as_str()).collect();
+        let _ = writeln!(
+            w,
+            "\nThe same exact answer, {} (ends at {}): each engine's end on each, their spread, \
+             and its largest stray. An isotropic Coulomb law gives one end and no stray.\n",
+            ids.join(", "),
+            sci_or_dash(exact_end(g[0]))
+        );
+        let _ = writeln!(w, "| engine | {} | spread | strays |", ids.join(" | "));
+        let _ = writeln!(w, "|---|{}---:|---:|", "---:|".repeat(ids.len()));
+        let engines: Vec<&str> = judged(g)
+            .iter()
+            .map(|(_, r, _)| r.engine.as_str())
+            .collect();
+        let mut seen = Vec::new();
+        for engine in engines {
+            if seen.contains(&engine) {
+                continue;
+            }
+            seen.push(engine);
+            let motions: Vec<Option<&Motion>> = g
+                .iter()
+                .map(|c| {
+                    let r = c.runs.iter().find(|r| r.engine == engine)?;
+                    r.friction.as_ref().map(|f| &f.engine)
+                })
+                .collect();
+            let ends: Vec<f64> = motions.iter().flatten().map(|m| m.end).collect();
+            let spread = ends.iter().fold(f64::MIN, |m, x| m.max(*x))
+                - ends.iter().fold(f64::MAX, |m, x| m.min(*x));
+            let stray = motions
+                .iter()
+                .flatten()
+                .map(|m| m.stray)
+                .fold(0.0, f64::max);
+            let cells: Vec<String> = motions
+                .iter()
+                .map(|m| m.map_or("–".into(), |m| format!("{:.9}", m.end)))
+                .collect();
+            let _ = writeln!(
+                w,
+                "| `{engine}` | {} | {} | {} |",
+                cells.join(" | "),
+                sci(spread),
+                sci(stray)
+            );
+        }
+    }
 }
 
 /// The exact events of each case, as `reference` locates them (by bisection, to its

@@ -95,6 +95,10 @@ pub struct ColumnError {
     pub end: f64,
     /// Whether the errors are relative to the peak (false: absolute, the peak being 0).
     pub relative: bool,
+    /// Whether `peak` is the scene's extent, a displacement's exact solution being zero over
+    /// its window (a held DOF, a node friction holds).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub over_extent: bool,
     /// The column's unit (m, m/s, rad, N), what an absolute error is in.
     #[serde(default)]
     pub unit: String,
@@ -224,6 +228,7 @@ pub fn compare(scene: &Scene, reference: &History, candidate: &History) -> Compa
                 rms: rms / scale,
                 end: errors.last().copied().unwrap_or(0.0) / scale,
                 relative,
+                over_extent: relative && !own,
                 unit: unit(scene, name).to_string(),
             })
         })
@@ -308,17 +313,39 @@ pub fn scene_scale(scene: &Scene, column: &str) -> f64 {
     }
 }
 
-/// Largest |e_balance| divided by the largest kinetic + elastic energy.
+/// Largest |e_balance| divided by [`energy_scale`] (in joules where that is 0).
 pub fn energy_balance(h: &History) -> Option<f64> {
     let balance = h.column(contract::E_BALANCE)?;
+    let scale = energy_scale(h)?;
+    let worst = balance.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    Some(if scale > 0.0 { worst / scale } else { worst })
+}
+
+/// The energy an energy balance is read against: the largest of the kinetic + elastic energy,
+/// the external work and the energy dissipated (viscous, frictional), over the rows. A node
+/// that friction holds has almost no kinetic or elastic energy while its load works on its
+/// sinking into the face; the balance is read against that work, not against the ~1e-40 J of
+/// its resting motion.
+pub fn energy_scale(h: &History) -> Option<f64> {
     let kinetic = h.column(contract::E_KINETIC)?;
     let elastic = h.column(contract::E_ELASTIC)?;
-    let scale = kinetic
+    let largest = |name: &str| {
+        h.column(name)
+            .map_or(0.0, |c| c.iter().fold(0.0_f64, |m, x| m.max(x.abs())))
+    };
+    let mechanical = kinetic
         .iter()
         .zip(&elastic)
         .fold(0.0f64, |m, (k, e)| m.max(k + e));
-    let worst = balance.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    Some(if scale > 0.0 { worst / scale } else { worst })
+    Some(
+        [
+            contract::W_EXTERNAL,
+            contract::E_VISCOUS,
+            contract::E_FRICTIONAL,
+        ]
+        .iter()
+        .fold(mechanical, |m, c| m.max(largest(c))),
+    )
 }
 
 /// Contact validity of an analytic rigid-contact history (None without a contact column).

@@ -462,11 +462,14 @@ pub fn errors_figure_path(out: &Path, case: &str) -> PathBuf {
 /// exact solution of its own model ([`comparison::baseline`]) over time, over the column's
 /// peak, on a log scale (the rows the comparison measures: valid rows, a contact force from the
 /// first increment on); a last panel the energy balance error of each engine that keeps one,
-/// over its largest kinetic + elastic energy.
+/// over the largest energy it exchanges (`comparison::energy_scale`).
 pub fn render_errors(scene: &Scene, histories: &[(&str, History)]) -> Option<String> {
     let find = |name: &str| histories.iter().find(|(e, _)| *e == name).map(|(_, h)| h);
     let mut panels: Vec<(String, Vec<LabelledSeries>)> = Vec::new();
     for column in contract::columns(scene.family) {
+        // A displacement whose exact solution is zero is read over the scene's extent, as the
+        // comparison reads it; another column without a peak is not drawn.
+        let over_extent = std::cell::Cell::new(false);
         let series: Vec<_> = drawing_order(histories)
             .into_iter()
             .filter_map(|engine| {
@@ -475,7 +478,14 @@ pub fn render_errors(scene: &Scene, histories: &[(&str, History)]) -> Option<Str
                 let (run, exact) = (find(engine)?, find(against)?);
                 let (t, y, x) = (run.column("t")?, run.column(column)?, exact.column(column)?);
                 let n = comparison::valid_rows(exact).min(y.len()).min(x.len());
-                let peak = comparison::peak(&x[..n]);
+                let peak = match comparison::peak(&x[..n]) {
+                    p if p > comparison::round_off(scene, column) => p,
+                    _ if comparison::unit(scene, column) == "m" => {
+                        over_extent.set(true);
+                        comparison::scene_scale(scene, column)
+                    }
+                    _ => return None,
+                };
                 if peak == 0.0 {
                     return None;
                 }
@@ -487,8 +497,17 @@ pub fn render_errors(scene: &Scene, histories: &[(&str, History)]) -> Option<Str
                 Some((format!("{engine} vs {against}"), colour, points))
             })
             .collect();
-        if !series.is_empty() {
-            panels.push((format!("|error| / peak of {column}"), series));
+        // A held DOF every engine holds exactly has nothing to draw.
+        let all_exact = series
+            .iter()
+            .all(|(_, _, points): &LabelledSeries| points.iter().all(|p| p.1 <= LOG_FLOOR));
+        if !series.is_empty() && !(over_extent.get() && all_exact) {
+            let of = if over_extent.get() {
+                format!("|error| in {column} / extent")
+            } else {
+                format!("|error| / peak of {column}")
+            };
+            panels.push((of, series));
         }
     }
     let balance: Vec<_> = drawing_order(histories)
@@ -497,11 +516,7 @@ pub fn render_errors(scene: &Scene, histories: &[(&str, History)]) -> Option<Str
             let colour = palette::engine(engine);
             let h = find(engine)?;
             let (t, b) = (h.column("t")?, h.column(contract::E_BALANCE)?);
-            let (k, e) = (
-                h.column(contract::E_KINETIC)?,
-                h.column(contract::E_ELASTIC)?,
-            );
-            let scale = k.iter().zip(&e).fold(0.0f64, |m, (k, e)| m.max(k + e));
+            let scale = comparison::energy_scale(h)?;
             (scale > 0.0).then(|| {
                 let points = t
                     .into_iter()
@@ -514,7 +529,7 @@ pub fn render_errors(scene: &Scene, histories: &[(&str, History)]) -> Option<Str
         })
         .collect();
     if !balance.is_empty() {
-        panels.push(("|energy balance| / peak energy".into(), balance));
+        panels.push(("|energy balance| / largest energy".into(), balance));
     }
     if panels.is_empty() {
         return None;

@@ -180,7 +180,8 @@ fn accuracy(s: &Summary, inputs: &Inputs) -> String {
          a node friction holds) is divided by the scene's extent instead, so creep and drift are \
          judged; any other column that is zero there is compared in its unit, in the case's section. *vs closed form* is the \
          worst *max* against `analytic`, model form included. *Energy balance*: the largest |kinetic + elastic \
-         + dissipated − external work − initial| over the largest kinetic + elastic energy. Tolerances \
+         + dissipated − external work − initial| over the largest of the kinetic + elastic energy, \
+         the external work and the energy dissipated. Tolerances \
          are declared per case and engine in `cases/<id>.toml` and apply to the worst *max* against the \
          engine's own model.\n"
     );
@@ -370,7 +371,11 @@ fn engine_notes(c: &CaseSummary, r: &EngineSummary) -> String {
         return out;
     }
     if let Some(e) = r.against_analytic.as_ref().and_then(|a| a.energy_balance) {
-        let _ = write!(out, " Energy balance off by {} of the peak energy", sci(e));
+        let _ = write!(
+            out,
+            " Energy balance off by {} of the largest energy (mechanical, work or dissipated)",
+            sci(e)
+        );
         let undamped = c.family == "springs" && c.id.contains("grounded");
         out.push_str(if undamped {
             " (rapier integrates joint springs implicitly: numerical damping on top of the dashpot's)."
@@ -495,9 +500,19 @@ fn case_section(w: &mut String, c: &CaseSummary) {
             ),
             _ => "has no declared tolerance".into(),
         };
+        let over_extent = r
+            .against_baseline
+            .as_ref()
+            .and_then(|a| a.columns.iter().find(|x| x.column == col))
+            .is_some_and(|x| x.over_extent);
+        let of = if over_extent {
+            "of the scene's extent"
+        } else {
+            "of the peak"
+        };
         let _ = writeln!(
             w,
-            "- `{}`: worst error {} of the peak against `{}` (`{col}`); {verdict}.{}",
+            "- `{}`: worst error {} {of} against `{}` (`{col}`); {verdict}.{}",
             r.engine,
             sci(max),
             r.baseline.as_deref().unwrap_or("–"),
@@ -558,7 +573,12 @@ fn case_section(w: &mut String, c: &CaseSummary) {
         if let Some(a) = &r.against_baseline {
             for col in &a.columns {
                 // A column without a peak: its errors in its unit.
-                let (peak, unit) = if col.relative {
+                let (peak, unit) = if col.over_extent {
+                    (
+                        format!("0 (over the extent {})", sci(col.peak)),
+                        String::new(),
+                    )
+                } else if col.relative {
                     (sci(col.peak), String::new())
                 } else {
                     (

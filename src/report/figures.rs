@@ -501,7 +501,8 @@ pub fn render_errors(scene: &Scene, histories: &[(&str, History)]) -> Option<Str
         let all_exact = series
             .iter()
             .all(|(_, _, points): &LabelledSeries| points.iter().all(|p| p.1 <= LOG_FLOOR));
-        if !series.is_empty() && !(over_extent.get() && all_exact) {
+        let nothing_to_draw = series.is_empty() || (over_extent.get() && all_exact);
+        if !nothing_to_draw {
             let of = if over_extent.get() {
                 format!("|error| in {column} / extent")
             } else {

@@ -313,7 +313,25 @@ const CORPUS: &[(&str, usize, &str, &str)] = &[
         "contact_node_on_body",
         115,
         "contacts[0].node",
-        "the contact node must be an independent node, not part of a body",
+        "a node of a body touches through a ball: give `node_radius` (or use an independent node)",
+    ),
+    (
+        "contact_radius_on_particle",
+        89,
+        "contacts[0].node_radius",
+        "an independent node touches with itself (a particle has no turning); a ball belongs to a body's node",
+    ),
+    (
+        "contact_radius_on_solid",
+        91,
+        "contacts[0].node_radius",
+        "a node's ball touches a plane face only (give `face_point` and `face_normal`)",
+    ),
+    (
+        "contact_radius_off_face",
+        90,
+        "contacts[0].node",
+        "the ball (radius 0.4) of node `C` is 9.999999999999998e-2 from the face at t = 0; a closed contact must start on it",
     ),
     (
         "contact_normal_zero",

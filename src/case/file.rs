@@ -210,6 +210,10 @@ pub struct ContactPairTable {
     pub id: String,
     /// The slave node.
     pub node: String,
+    /// A ball (a disc in 2D) of this radius centred on the node and rigid with the node's
+    /// body, which touches the face instead of the node itself (a body's rolling shape; the
+    /// node then belongs to a body and the surface is a plane). Default: the node touches.
+    pub node_radius: Option<f64>,
     /// The body whose surface it touches.
     pub body: String,
     /// `plane` (default), `ball`, `cuboid`, `capsule` or `convex`.

@@ -316,6 +316,11 @@ pub struct ContactPair {
     pub name: String,
     /// The slave node.
     pub node: NodeId,
+    /// The radius of the ball (a disc in 2D) centred on the node, rigid with the node's body,
+    /// that touches the surface: the pair's contact point is the node less this along the
+    /// surface's normal, and its gap the node's distance less this. 0: the node itself
+    /// touches (a particle). Positive only for a node of a body against a plane.
+    pub node_radius: f64,
     /// The master body.
     pub body: BodyId,
     /// What the node touches.
@@ -340,6 +345,18 @@ impl ContactPair {
     /// A point of the surface at t = 0 (the plane's point, the solid's centre).
     pub fn anchor(&self) -> Vector3<f64> {
         self.surface.anchor()
+    }
+
+    /// The gap from the pair's node at `p` (in the surface's t = 0 placement) to the surface,
+    /// its ball's radius taken off, and the unit outward normal (closed form).
+    pub fn gap_at(&self, p: &Vector3<f64>) -> (f64, Vector3<f64>) {
+        let (d, n) = surface_distance(&self.surface, p);
+        (d - self.node_radius, n)
+    }
+
+    /// Whether the pair's node carries a ball (a body's rolling shape).
+    pub fn rolls(&self) -> bool {
+        self.node_radius > 0.0
     }
 }
 

@@ -32,13 +32,8 @@ fn contact_pair(
     let field = format!("contacts[{i}]");
     let node = b.node(&format!("{field}.node"), &c.node)?;
     let body = b.body(&format!("{field}.body"), &c.body)?;
-    if nodes[node].attachment != Attachment::Free {
-        return err(
-            format!("{field}.node"),
-            "the contact node must be an independent node, not part of a body",
-        );
-    }
     let surface = b.surface(&field, c)?;
+    let node_radius = node_radius(b, &field, c, nodes[node].attachment, body, &surface)?;
     let initially = match c.initially.as_deref() {
         None | Some("closed") => ContactState::Closed,
         Some("open") => ContactState::Open,
@@ -51,7 +46,14 @@ fn contact_pair(
     };
     let restitution = restitution(&field, c)?;
     let friction = friction(&field, c)?;
-    starts_as_said(&field, c, &nodes[node].position, &surface, initially)?;
+    starts_as_said(
+        &field,
+        c,
+        &nodes[node].position,
+        node_radius,
+        &surface,
+        initially,
+    )?;
     identifier(&format!("{field}.id"), &c.id)?;
     if earlier.iter().any(|p: &ContactPair| p.name == c.id) {
         return err(
@@ -62,12 +64,52 @@ fn contact_pair(
     Ok(ContactPair {
         name: c.id.clone(),
         node,
+        node_radius,
         body,
         surface,
         initially,
         restitution,
         friction,
     })
+}
+
+/// The radius of the ball a pair's node carries: 0 for an independent node (a particle
+/// touches with the node itself); positive for a node of another body than the face's, against
+/// a plane (a body's rolling shape).
+fn node_radius(
+    b: &Builder,
+    field: &str,
+    c: &ContactPairTable,
+    attachment: Attachment,
+    face_body: BodyId,
+    surface: &Surface,
+) -> Result<f64, SceneError> {
+    let at = format!("{field}.node_radius");
+    let Some(radius) = c.node_radius else {
+        if attachment != Attachment::Free {
+            return err(
+                format!("{field}.node"),
+                "a node of a body touches through a ball: give `node_radius` (or use an independent node)",
+            );
+        }
+        return Ok(0.0);
+    };
+    let radius = b.positive(&at, radius, "a node's radius")?;
+    match attachment {
+        Attachment::Free => err(
+            at,
+            "an independent node touches with itself (a particle has no turning); a ball belongs to a body's node",
+        ),
+        Attachment::Reference(owner) | Attachment::OnBody(owner) if owner == face_body => err(
+            format!("{field}.node"),
+            "the node is on the face's own body",
+        ),
+        _ if !matches!(surface, Surface::Plane { .. }) => err(
+            at,
+            "a node's ball touches a plane face only (give `face_point` and `face_normal`)",
+        ),
+        _ => Ok(radius),
+    }
 }
 
 /// A pair's Coulomb friction: `friction = μ` (static and kinetic alike), or `static_friction`
@@ -156,10 +198,16 @@ fn starts_as_said(
     field: &str,
     c: &ContactPairTable,
     position: &Vector3<f64>,
+    node_radius: f64,
     surface: &Surface,
     initially: ContactState,
 ) -> Result<(), SceneError> {
-    let (gap, _) = surface_distance(surface, position);
+    let gap = surface_distance(surface, position).0 - node_radius;
+    let what = if node_radius > 0.0 {
+        format!("the ball (radius {node_radius}) of node `{}`", c.node)
+    } else {
+        format!("node `{}`", c.node)
+    };
     let scale = 1.0
         + position.norm().max(match surface {
             Surface::Plane { point, .. } => point.norm(),
@@ -171,8 +219,7 @@ fn starts_as_said(
             return err(
                 format!("{field}.node"),
                 format!(
-                    "node `{}` is {gap:e} from the {} at t = 0; a closed contact must start on it (or say `initially = \"open\"`)",
-                    c.node,
+                    "{what} is {gap:e} from the {} at t = 0; a closed contact must start on it (or say `initially = \"open\"`)",
                     surface_name(surface)
                 ),
             );
@@ -181,8 +228,7 @@ fn starts_as_said(
             return err(
                 format!("{field}.node"),
                 format!(
-                    "node `{}` is {} the {} at t = 0 (gap {gap:e}); an open contact must start clear of it (or say `initially = \"closed\"` for a node on it)",
-                    c.node,
+                    "{what} is {} the {} at t = 0 (gap {gap:e}); an open contact must start clear of it (or say `initially = \"closed\"` for a node on it)",
                     if on_it { "on" } else { "inside" },
                     surface_name(surface)
                 ),

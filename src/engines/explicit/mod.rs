@@ -57,6 +57,19 @@ impl ExplicitEngine {
     }
 }
 
+/// Every contact pair's node touches with itself: a node that carries a ball (a body's rolling
+/// shape) is refused.
+fn contacts_touch_with_their_nodes(engine: &str, scene: &Scene) -> Result<(), EngineError> {
+    match scene.contacts.iter().find(|c| c.rolls()) {
+        Some(pair) => Err(EngineError::Unsupported(format!(
+            "{engine}: contact `{}`: its node carries a ball (a body rolling on a face); the \
+             penalty contact acts on a particle's node only",
+            pair.name
+        ))),
+        None => Ok(()),
+    }
+}
+
 /// The small-rotation model fixes a contact reaction's moment arm at its t = 0 value, which
 /// is where the node touches only if it starts on the surface. A pair that starts open on a
 /// body free to turn would get the moment of a force applied where the node was at t = 0:
@@ -121,6 +134,7 @@ impl Engine for ExplicitEngine {
     }
     fn run(&self, scene: &Scene, settings: &RunSettings) -> Result<RunOutput, EngineError> {
         let start = Instant::now();
+        contacts_touch_with_their_nodes(self.name(), scene)?;
         if self.kinematics == Kinematics::Small {
             small_rotation_applies(scene)?;
         }
@@ -213,6 +227,7 @@ impl ExplicitEngine {
     /// The increment a run of this scene under these settings uses: the increment rule, never
     /// above the stable increment (except `Forced`), shortened to divide the output interval.
     pub fn increment(&self, scene: &Scene, settings: &RunSettings) -> Result<f64, EngineError> {
+        contacts_touch_with_their_nodes(self.name(), scene)?;
         let s = merged(scene, settings);
         let stable = self.stable_increment(scene, settings);
         let interval = scene.duration() / (scene.output_rows - 1) as f64;
@@ -225,6 +240,7 @@ impl ExplicitEngine {
         scene: &Scene,
         settings: &RunSettings,
     ) -> Option<linear::StableIncrement> {
+        contacts_touch_with_their_nodes(self.name(), scene).ok()?;
         let s = merged(scene, settings);
         match (scene.dimension, self.kinematics) {
             (Dimension::Two, Kinematics::Finite) => stable::<Planar, true>(scene, &s),

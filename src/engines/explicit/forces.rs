@@ -110,11 +110,15 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         self.push_along(cfg, k, n, f, out);
     }
 
-    /// Add a force `f` along `n` on pair `k`'s node, and its reaction on the body, to `out`.
+    /// Add a force `f` along `n` on pair `k`'s node (a ball's contact point), and its reaction
+    /// on the body, to `out`.
     #[inline(always)]
     fn push_along(&self, cfg: &Config<S>, k: usize, n: S::V, f: f64, out: &mut Forces<S>) {
         let c = &self.contacts[k];
-        out.add_particle(c.particle, n * f);
+        let Point::Particle(i) = c.slave else {
+            return self.push_at_touch(cfg, k, &n, n * f, out);
+        };
+        out.add_particle(i, n * f);
         out.b[c.body] -= n * f;
         out.m[c.body] -= S::moment(&self.contact_arm(cfg, k), &n) * f;
     }

@@ -14,9 +14,16 @@
 //! pass of central differences like the normal penalty. Its effect on the stable increment:
 //! the stick is a penalty of stiffness k in the face's tangent directions, which the
 //! linearisation includes ([`Model::stick_forces_about_start`]); on a node against a held
-//! face it adds modes at the normal penalty's frequency, so the limit does not move.
+//! face it adds modes at the normal penalty's frequency, so the limit does not move. On a
+//! ball rolling on a held face ([`super::rolling`]) the stick acts at the contact point, off
+//! the ball's centre, and moves the mass m·I/(I + m·r²) (a disc: m/3, a ball: 2m/7): its mode
+//! is √3 (√(7/2)) faster than the normal one, and sets the limit.
+//!
+//! A ball's contact point moves over both bodies as it rolls: its pair's stick point is
+//! carried along with it, and its spring stretched by the slip of the material points that
+//! touch ([`Model::material_arm`]).
 
-use super::model::{Forces, Model};
+use super::model::{Forces, Model, Point};
 use super::space::{Lin, Space};
 use super::state::{Config, Rates};
 
@@ -28,6 +35,9 @@ pub struct Sticks<S: Space> {
     points: Vec<Option<S::V>>,
     /// Per pair: whether the node slipped at the last increment (its resistance then μ_k).
     slipping: Vec<bool>,
+    /// Per rolling pair with friction: the ball's material point that touched at the last
+    /// increment ([`Model::touching_material`]); `None` for the other pairs.
+    material: Vec<Option<S::V>>,
     /// Energy dissipated by slip since the start.
     pub dissipated: f64,
     /// Increments at which some pair slipped.
@@ -50,9 +60,16 @@ impl<S: Space> Sticks<S> {
                     .map(|_| model.body_frame_arm(cfg, k))
             })
             .collect();
+        let material = (0..model.contacts.len())
+            .map(|k| {
+                let rolls = model.contacts[k].friction.is_some() && model.rolling_body(k).is_some();
+                rolls.then(|| model.touching_material(cfg, k))
+            })
+            .collect();
         Some(Sticks {
             points,
             slipping: vec![false; model.contacts.len()],
+            material,
             dissipated: 0.0,
             slips: 0,
             evaluations: 0,
@@ -66,8 +83,9 @@ impl<S: Space> Sticks<S> {
     /// - A node sliding relative to its surface starts on the slip cone: its stick point
     ///   μ_k·f_n/k behind it, so the first increment already resists with μ_k·f_n.
     /// - A node at rest relative to it starts stuck, its stick spring loaded with the
-    ///   tangential force that holds the node's other forces (exact against a held body);
-    ///   where that exceeds μ_s·f_n, on the cone in the direction that force drives it.
+    ///   tangential force that holds the node's other forces (exact against a held body; for
+    ///   a ball, the force on its body, its moment left out); where that exceeds μ_s·f_n, on
+    ///   the cone in the direction that force drives it.
     pub fn start<const FINITE: bool>(
         &mut self,
         model: &Model<S, FINITE>,
@@ -79,6 +97,9 @@ impl<S: Space> Sticks<S> {
             let (Some(point), Some(friction)) = (point.as_mut(), model.contacts[k].friction) else {
                 continue;
             };
+            if let Some(sigma) = self.material[k].as_mut() {
+                *sigma = model.touching_material(cfg, k);
+            }
             let arm = model.body_frame_arm(cfg, k);
             let normal = forces.contact[k];
             let slip = model.tangential_slip_rate(cfg, vel, k, &arm);
@@ -105,33 +126,49 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         self.contacts.iter().any(|c| c.friction.is_some())
     }
 
-    /// Pair `k`'s node relative to its body's reference node, in the body's frame.
+    /// Pair `k`'s node (a ball's contact point) relative to its body's reference node, in the
+    /// body's frame.
     pub(super) fn body_frame_arm(&self, cfg: &Config<S>, k: usize) -> S::V {
-        self.local(cfg, k, &S::V::zero())
+        let node = self.local(cfg, k, &S::V::zero());
+        let c = &self.contacts[k];
+        match c.slave {
+            Point::Particle(_) => node,
+            _ => node - c.normal * c.radius,
+        }
     }
 
-    /// Pair `k`'s node's velocity relative to the body point it touches, in the body's frame
-    /// and in the surface's tangent plane at `arm`.
+    /// Pair `k`'s node's (a ball's touching material point's) velocity relative to the body
+    /// point it touches, in the body's frame and in the surface's tangent plane at `arm`.
     fn tangential_slip_rate(&self, cfg: &Config<S>, vel: &Rates<S>, k: usize, arm: &S::V) -> S::V {
         let c = &self.contacts[k];
-        let (i, b) = (c.particle, c.body);
-        let world = vel.p.get(i) - vel.b[b] - S::cross(&vel.w[b], &self.contact_arm(cfg, k));
+        let b = c.body;
+        let world = match c.slave {
+            Point::Particle(i) => {
+                vel.p.get(i) - vel.b[b] - S::cross(&vel.w[b], &self.contact_arm(cfg, k))
+            }
+            _ => self.touch_slip(cfg, vel, k, &self.world_normal(cfg, k)),
+        };
         let relative = self.to_body(cfg, b, &world);
         let n = self.body_frame_normal(k, arm);
         relative - n * n.dot(&relative)
     }
 
-    /// The tangential part of the force `forces` puts on pair `k`'s node, in the body's
-    /// frame at `arm`.
+    /// The tangential part of the force `forces` puts on pair `k`'s node (a ball's body), in
+    /// the body's frame at `arm`.
     fn tangential_load(&self, cfg: &Config<S>, forces: &Forces<S>, k: usize, arm: &S::V) -> S::V {
         let c = &self.contacts[k];
-        let load = self.to_body(cfg, c.body, &forces.p.get(c.particle));
+        let on_node = match c.slave {
+            Point::Particle(i) => forces.p.get(i),
+            Point::Body { body, .. } => forces.b[body],
+            Point::Ground(_) => S::V::zero(),
+        };
+        let load = self.to_body(cfg, c.body, &on_node);
         let n = self.body_frame_normal(k, arm);
         load - n * n.dot(&load)
     }
 
     /// A world direction in body `b`'s frame (small rotation: Rᵀ ≈ 1 − [θ]×).
-    fn to_body(&self, cfg: &Config<S>, b: usize, x: &S::V) -> S::V {
+    pub(super) fn to_body(&self, cfg: &Config<S>, b: usize, x: &S::V) -> S::V {
         if FINITE {
             S::unrotate(&cfg.br[b], x)
         } else {
@@ -164,59 +201,83 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 continue;
             };
             sticks.evaluations += 1;
-            let arm = self.body_frame_arm(cfg, k);
+            // A ball's stick stretches by the slip of the material points that touched.
+            let arm = match &sticks.material[k] {
+                Some(sigma) => self.material_arm(cfg, k, sigma),
+                None => self.body_frame_arm(cfg, k),
+            };
             let normal_force = out.contact[k];
             if normal_force <= 0.0 {
                 *point = arm;
                 sticks.slipping[k] = false;
-                continue;
-            }
-            let n = self.body_frame_normal(k, &arm);
-            let offset = arm - *point;
-            let tangential = offset - n * n.dot(&offset);
-            let stretch = tangential.dot(&tangential).sqrt();
-            let mu = if sticks.slipping[k] {
-                friction.kinetic_coefficient
             } else {
-                friction.static_coefficient
-            };
-            let mut elastic = tangential;
-            sticks.slipping[k] = k_t * stretch > mu * normal_force;
-            if sticks.slipping[k] {
-                let limit = friction.kinetic_coefficient * normal_force;
-                let kept = limit / k_t;
-                elastic = tangential * (kept / stretch);
-                *point = arm - elastic;
-                sticks.dissipated += limit * (stretch - kept);
-                slipped = true;
+                let n = self.body_frame_normal(k, &arm);
+                let offset = arm - *point;
+                let tangential = offset - n * n.dot(&offset);
+                let stretch = tangential.dot(&tangential).sqrt();
+                let mu = if sticks.slipping[k] {
+                    friction.kinetic_coefficient
+                } else {
+                    friction.static_coefficient
+                };
+                let mut elastic = tangential;
+                sticks.slipping[k] = k_t * stretch > mu * normal_force;
+                if sticks.slipping[k] {
+                    let limit = friction.kinetic_coefficient * normal_force;
+                    let kept = limit / k_t;
+                    elastic = tangential * (kept / stretch);
+                    *point = arm - elastic;
+                    sticks.dissipated += limit * (stretch - kept);
+                    slipped = true;
+                }
+                if ENERGY {
+                    out.elastic += 0.5 * k_t * elastic.dot(&elastic);
+                }
+                self.push_tangential(cfg, k, &(elastic * -k_t), out);
             }
-            if ENERGY {
-                out.elastic += 0.5 * k_t * elastic.dot(&elastic);
+            if let Some(sigma) = sticks.material[k].as_mut() {
+                // The stick point moves on with the contact point, the spring's stretch kept.
+                *point += self.body_frame_arm(cfg, k) - arm;
+                *sigma = self.touching_material(cfg, k);
             }
-            self.push_tangential(cfg, k, &(elastic * -k_t), out);
         }
         sticks.slips += u64::from(slipped);
     }
 
-    /// Add a tangential force `f` (the body's frame) on pair `k`'s node, and its reaction on
-    /// the body at the node, to `out`.
+    /// Add a tangential force `f` (the body's frame) on pair `k`'s node (a ball's contact
+    /// point), and its reaction on the body there, to `out`.
     fn push_tangential(&self, cfg: &Config<S>, k: usize, f: &S::V, out: &mut Forces<S>) {
         let c = &self.contacts[k];
         let f = self.to_world(cfg, c.body, f);
-        out.add_particle(c.particle, f);
+        let Point::Particle(i) = c.slave else {
+            return self.push_at_touch(cfg, k, &self.world_normal(cfg, k), f, out);
+        };
+        out.add_particle(i, f);
         out.b[c.body] -= f;
         out.m[c.body] -= S::moment(&self.contact_arm(cfg, k), &f);
     }
 
-    /// The stick springs of the pairs with friction about the nodes' places at t = 0, added
-    /// to `out`: the tangential stiffness a sticking pair adds, for the linearisation.
+    /// The stick springs of the pairs with friction about the nodes' places at t = 0 (a ball's
+    /// material point that touches then), added to `out`: the tangential stiffness a sticking
+    /// pair adds, for the linearisation.
     pub fn stick_forces_about_start(&self, cfg: &Config<S>, out: &mut Forces<S>) {
         for (k, c) in self.contacts.iter().enumerate() {
             if c.friction.is_none() {
                 continue;
             }
-            let start = self.body_frame_arm(&self.initial_config(), k);
-            let arm = self.body_frame_arm(cfg, k);
+            let initial = self.initial_config();
+            let (start, arm) = match self.rolling_body(k) {
+                // The ball's material point that touches at t = 0.
+                Some(_) => {
+                    let sigma = self.touching_material(&initial, k);
+                    let at = |cfg: &Config<S>| self.material_arm(cfg, k, &sigma);
+                    (at(&initial), at(cfg))
+                }
+                None => (
+                    self.body_frame_arm(&initial, k),
+                    self.body_frame_arm(cfg, k),
+                ),
+            };
             let n = self.body_frame_normal(k, &arm);
             let offset = arm - start;
             let tangential = offset - n * n.dot(&offset);

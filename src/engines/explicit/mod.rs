@@ -14,6 +14,7 @@ pub mod model;
 pub mod motion;
 pub mod on_request;
 pub mod ramps;
+pub mod rolling;
 pub mod rows;
 pub mod space;
 pub mod start;
@@ -57,16 +58,20 @@ impl ExplicitEngine {
     }
 }
 
-/// Every contact pair's node touches with itself: a node that carries a ball (a body's rolling
-/// shape) is refused.
-fn contacts_touch_with_their_nodes(engine: &str, scene: &Scene) -> Result<(), EngineError> {
+/// A contact pair whose node carries a ball (a body rolling on a face) touches where the ball
+/// meets the face, a point that moves over the body as it rolls. The small-rotation model
+/// fixes every moment arm at its t = 0 value, so it would apply the pair's forces where the
+/// ball touched at t = 0: refused (the finite-rotation engine takes the contact point where it
+/// is, [`rolling`]).
+fn rolling_applies(kinematics: Kinematics, scene: &Scene) -> Result<(), EngineError> {
     match scene.contacts.iter().find(|c| c.rolls()) {
-        Some(pair) => Err(EngineError::Unsupported(format!(
-            "{engine}: contact `{}`: its node carries a ball (a body rolling on a face); the \
-             penalty contact acts on a particle's node only",
+        Some(pair) if kinematics == Kinematics::Small => Err(EngineError::Unsupported(format!(
+            "explicit_small: contact `{}`: its node carries a ball (a body rolling on a face), \
+             whose contact point moves over the body as it rolls, and the small-rotation model \
+             fixes moment arms where they are at t = 0",
             pair.name
         ))),
-        None => Ok(()),
+        _ => Ok(()),
     }
 }
 
@@ -134,7 +139,7 @@ impl Engine for ExplicitEngine {
     }
     fn run(&self, scene: &Scene, settings: &RunSettings) -> Result<RunOutput, EngineError> {
         let start = Instant::now();
-        contacts_touch_with_their_nodes(self.name(), scene)?;
+        rolling_applies(self.kinematics, scene)?;
         if self.kinematics == Kinematics::Small {
             small_rotation_applies(scene)?;
         }
@@ -227,7 +232,7 @@ impl ExplicitEngine {
     /// The increment a run of this scene under these settings uses: the increment rule, never
     /// above the stable increment (except `Forced`), shortened to divide the output interval.
     pub fn increment(&self, scene: &Scene, settings: &RunSettings) -> Result<f64, EngineError> {
-        contacts_touch_with_their_nodes(self.name(), scene)?;
+        rolling_applies(self.kinematics, scene)?;
         let s = merged(scene, settings);
         let stable = self.stable_increment(scene, settings);
         let interval = scene.duration() / (scene.output_rows - 1) as f64;
@@ -240,7 +245,7 @@ impl ExplicitEngine {
         scene: &Scene,
         settings: &RunSettings,
     ) -> Option<linear::StableIncrement> {
-        contacts_touch_with_their_nodes(self.name(), scene).ok()?;
+        rolling_applies(self.kinematics, scene).ok()?;
         let s = merged(scene, settings);
         match (scene.dimension, self.kinematics) {
             (Dimension::Two, Kinematics::Finite) => stable::<Planar, true>(scene, &s),

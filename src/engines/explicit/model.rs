@@ -11,7 +11,7 @@ use super::space::{BodyInertia, Lin, Space};
 pub use super::state::{Config, ContactMode, Counters, Forces, Rates, Vectors, fill_zero};
 use crate::scene::{
     Amplitude, Attachment, Connection, ContactPair, ContactState, Dof, Element, Friction,
-    PointLoad, Scene, StepKind, Surface, surface_distance,
+    PointLoad, Scene, StepKind, Surface,
 };
 
 /// Where an element end or a load acts.
@@ -110,7 +110,12 @@ pub struct SolidPosition<S: Space> {
 
 #[derive(Debug, Clone)]
 pub(super) struct Contact<S: Space> {
-    pub(super) particle: usize,
+    /// The slave: a particle (it touches with its node), or a body's material point whose
+    /// ball of [`Contact::radius`] touches (a body rolling on a plane face).
+    pub(super) slave: Point<S>,
+    /// The radius of the slave's ball (0 for a particle): the pair touches at the node less
+    /// this along the outward normal.
+    pub(super) radius: f64,
     pub(super) body: usize,
     /// A solid's centre relative to the reference node (body frame) and its parry shape; `None`
     /// for a plane.
@@ -128,7 +133,8 @@ pub(super) struct Contact<S: Space> {
     pub(super) normal: S::V,
     /// The contact node's offset from the reference node at t = 0 (small-rotation arm).
     pub(super) arm0: S::V,
-    /// Gap at t = 0 (small rotation: the constant part of the linearised gap).
+    /// Gap at t = 0, the ball's radius taken off (small rotation: the constant part of the
+    /// linearised gap).
     pub(super) gap0: f64,
     /// Coulomb friction ([`super::friction`]); `None`: frictionless.
     pub(super) friction: Option<Friction>,
@@ -382,10 +388,14 @@ fn contact_damping(scene: &Scene, c: &ContactPair, penalty: f64) -> f64 {
     2.0 * zeta * (penalty * contact_mass(scene, c)).sqrt()
 }
 
-/// The mass a pair's normal force moves: the node's, or its reduced mass with the body's when
-/// the body is not held in every DOF of every dynamic step (the body's turning left out).
+/// The mass a pair's normal force moves: the node's (for a node of a body, the body's), or its
+/// reduced mass with the face's body when that body is not held in every DOF of every dynamic
+/// step (the bodies' turning left out).
 fn contact_mass(scene: &Scene, c: &ContactPair) -> f64 {
-    let node = scene.nodes[c.node].mass;
+    let node = match scene.nodes[c.node].attachment {
+        Attachment::Free => scene.nodes[c.node].mass,
+        Attachment::Reference(b) | Attachment::OnBody(b) => scene.bodies[b].mass,
+    };
     let body = &scene.bodies[c.body];
     let every = Dof::all(scene.dimension, true);
     let held = scene
@@ -536,9 +546,11 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             .contacts
             .iter()
             .map(|c| {
-                let Point::Particle(particle) = points[c.node] else {
-                    unreachable!("validated: contact nodes are free nodes with mass")
-                };
+                let slave = points[c.node];
+                debug_assert!(
+                    !matches!(slave, Point::Ground(_)),
+                    "validated: contact nodes have mass or belong to a body"
+                );
                 let origin = bodies[c.body].x0;
                 let arm0 = x0(c.node) - origin;
                 let (face, normal, solid) = match &c.surface {
@@ -549,9 +561,10 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                         Some((S::v(centre) - origin, S::solid(solid))),
                     ),
                 };
-                let (gap0, _) = surface_distance(&c.surface, &scene.nodes[c.node].position);
+                let (gap0, _) = c.gap_at(&scene.nodes[c.node].position);
                 Contact {
-                    particle,
+                    slave,
+                    radius: c.node_radius,
                     body: c.body,
                     solid,
                     damping: contact_damping(scene, c, penalty),
@@ -563,7 +576,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                     face,
                     normal,
                     arm0,
-                    gap0: normal.dot(&(arm0 - face)),
+                    gap0: normal.dot(&(arm0 - face)) - c.node_radius,
                     friction: c.friction,
                 }
             })
@@ -709,9 +722,10 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         }
         if FINITE {
             let n = S::rotate(&cfg.br[c.body], &c.normal);
-            (n.dot(&self.face_to_node(cfg, k)), n)
+            (n.dot(&self.face_to_node(cfg, k)) - c.radius, n)
         } else {
-            let (th, relative) = (&cfg.bth[c.body], cfg.u.get(c.particle) - cfg.bu[c.body]);
+            let relative = self.displacement(cfg, &c.slave) - cfg.bu[c.body];
+            let th = &cfg.bth[c.body];
             let d = c.gap0 + c.normal.dot(&relative) - c.normal.dot(&S::cross(th, &c.arm0));
             (d, c.normal)
         }
@@ -722,7 +736,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     #[inline]
     pub(super) fn local(&self, cfg: &Config<S>, k: usize, centre: &S::V) -> S::V {
         let c = &self.contacts[k];
-        let arm = c.arm0 + (cfg.u.get(c.particle) - cfg.bu[c.body]);
+        let arm = c.arm0 + (self.displacement(cfg, &c.slave) - cfg.bu[c.body]);
         if FINITE {
             S::unrotate(&cfg.br[c.body], &arm) - *centre
         } else {
@@ -740,12 +754,13 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         }
     }
 
-    /// From the body's reference node to a contact node (small rotation: at t = 0).
+    /// From the body's reference node to a contact node (small rotation: at t = 0); a ball
+    /// touches [`Contact::radius`] from it ([`Model::touch_arm`]).
     #[inline]
     pub(super) fn contact_arm(&self, cfg: &Config<S>, k: usize) -> S::V {
         let c = &self.contacts[k];
         if FINITE {
-            c.arm0 + (cfg.u.get(c.particle) - cfg.bu[c.body])
+            c.arm0 + (self.displacement(cfg, &c.slave) - cfg.bu[c.body])
         } else {
             c.arm0
         }
@@ -753,12 +768,12 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
 
     /// Rate of a contact's gap along the normal `n`: the node's velocity relative to the body
     /// point it passes, n·(ṗ − v − ω × (p − x)) (any surface: the normal's own turning moves
-    /// the gap only at second order).
+    /// the gap only at second order; a ball's spin moves its contact point across `n`).
     #[inline]
     pub(super) fn normal_rate(&self, cfg: &Config<S>, vel: &Rates<S>, k: usize, n: &S::V) -> f64 {
         let c = &self.contacts[k];
-        let (i, b) = (c.particle, c.body);
-        n.dot(&(vel.p.get(i) - vel.b[b] - S::cross(&vel.w[b], &self.contact_arm(cfg, k))))
+        let (p, b) = (self.velocity(cfg, vel, &c.slave), c.body);
+        n.dot(&(p - vel.b[b] - S::cross(&vel.w[b], &self.contact_arm(cfg, k))))
     }
 
     /// Whether the scene has contacts with solids (parry shapes).
@@ -822,7 +837,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     #[inline(always)]
     pub(super) fn face_to_node(&self, cfg: &Config<S>, k: usize) -> S::V {
         let c = &self.contacts[k];
-        let relative = cfg.u.get(c.particle) - cfg.bu[c.body];
+        let relative = self.displacement(cfg, &c.slave) - cfg.bu[c.body];
         (c.arm0 - c.face) + relative - S::turned(&cfg.br[c.body], &c.face)
     }
 }

@@ -263,11 +263,14 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         }
     }
 
-    /// Push a contact node into its face so that its gap becomes `-depth`.
+    /// Push a contact node (a ball's body) into its face so that its gap becomes `-depth`.
     pub fn set_penetration(&self, cfg: &mut Config<S>, k: usize, depth: f64) {
         let (d, n) = self.gap(cfg, k);
-        let i = self.contacts[k].particle;
-        cfg.u.sub(i, n * (d + depth));
+        match self.contacts[k].slave {
+            Point::Particle(i) => cfg.u.sub(i, n * (d + depth)),
+            Point::Body { body, .. } => cfg.bu[body] -= n * (d + depth),
+            Point::Ground(_) => {}
+        }
     }
 
     /// State reached from `(cfg, vel)` after `s` seconds with acceleration `acc` and jerk
@@ -313,23 +316,28 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             let (_, n) = self.gap(cfg, k);
             return self.normal_rate(cfg, vel, k, &n);
         }
-        let (i, b) = (c.particle, c.body);
+        let (node, b) = (self.velocity(cfg, vel, &c.slave), c.body);
         if FINITE {
             let r = &cfg.br[b];
             let n = S::rotate(r, &c.normal);
             let f = S::rotate(r, &c.face);
             let p_dot = vel.b[b] + S::cross(&vel.w[b], &f);
-            S::cross(&vel.w[b], &n).dot(&self.face_to_node(cfg, k)) + n.dot(&(vel.p.get(i) - p_dot))
+            S::cross(&vel.w[b], &n).dot(&self.face_to_node(cfg, k)) + n.dot(&(node - p_dot))
         } else {
-            c.normal.dot(&(vel.p.get(i) - vel.b[b])) - c.normal.dot(&S::cross(&vel.w[b], &c.arm0))
+            c.normal.dot(&(node - vel.b[b])) - c.normal.dot(&S::cross(&vel.w[b], &c.arm0))
         }
     }
 
-    /// Change the contact node's velocity along the face normal so the gap rate becomes `rate`.
+    /// Change the contact node's (a ball's body's) velocity along the face normal so the gap
+    /// rate becomes `rate`.
     pub fn set_gap_rate(&self, cfg: &Config<S>, vel: &mut Rates<S>, k: usize, rate: f64) {
         let current = self.gap_rate(cfg, vel, k);
         let (_, n) = self.gap(cfg, k);
-        vel.p.add(self.contacts[k].particle, n * (rate - current));
+        match self.contacts[k].slave {
+            Point::Particle(i) => vel.p.add(i, n * (rate - current)),
+            Point::Body { body, .. } => vel.b[body] += n * (rate - current),
+            Point::Ground(_) => {}
+        }
     }
 
     /// Second time derivative of a contact pair's gap, exact for the given velocities and
@@ -348,18 +356,19 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         longest: f64,
     ) -> f64 {
         let c = &self.contacts[k];
-        let (i, b) = (c.particle, c.body);
+        let b = c.body;
+        let (node_v, node_a) = (
+            self.velocity(cfg, vel, &c.slave),
+            self.node_acceleration(cfg, vel, acc, k),
+        );
         if let Some((_, shape)) = &c.solid {
             let depth = S::thinnest(shape);
             // The node's motion relative to the body point it touches: a body carrying the
             // pair fast through space does not shrink τ.
             let arm = self.contact_arm(cfg, k);
             let (w, alpha) = (vel.w[b], acc.w[b]);
-            let v = vel.p.get(i) - vel.b[b] - S::cross(&w, &arm);
-            let a = acc.p.get(i)
-                - acc.b[b]
-                - S::cross(&alpha, &arm)
-                - S::cross(&w, &S::cross(&w, &arm));
+            let v = node_v - vel.b[b] - S::cross(&w, &arm);
+            let a = node_a - acc.b[b] - S::cross(&alpha, &arm) - S::cross(&w, &S::cross(&w, &arm));
             let (speed, pace, spin) = (v.dot(&v).sqrt(), a.dot(&a).sqrt(), w.dot(&w).sqrt());
             let tau =
                 (1e-6 * (depth / speed).min((depth / pace).sqrt()).min(1.0 / spin)).min(longest);
@@ -380,10 +389,10 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             let p_dot = vel.b[b] + S::cross(&w, &f);
             let p_ddot = acc.b[b] + S::cross(&alpha, &f) + S::cross(&w, &S::cross(&w, &f));
             n_ddot.dot(&self.face_to_node(cfg, k))
-                + n_dot.dot(&(vel.p.get(i) - p_dot)) * 2.0
-                + n.dot(&(acc.p.get(i) - p_ddot))
+                + n_dot.dot(&(node_v - p_dot)) * 2.0
+                + n.dot(&(node_a - p_ddot))
         } else {
-            c.normal.dot(&(acc.p.get(i) - acc.b[b])) - c.normal.dot(&S::cross(&acc.w[b], &c.arm0))
+            c.normal.dot(&(node_a - acc.b[b])) - c.normal.dot(&S::cross(&acc.w[b], &c.arm0))
         }
     }
 }

@@ -269,7 +269,10 @@ fn summary_and_report_agree() {
         .iter()
         .filter(|e| e.starts_with("rapier"))
         .count();
-    assert_eq!(checks.len(), 47 * common::STEPPING.len() - 11 - rapier - 2 * 2);
+    assert_eq!(
+        checks.len(),
+        47 * common::STEPPING.len() - 11 - rapier - 2 * 2
+    );
     assert!(checks.iter().all(|c| c.tolerance.is_some()));
     assert!(report.contains(&format!(
         "**{} of {} cells meet their tolerance.**",

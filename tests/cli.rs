@@ -29,9 +29,9 @@ fn list_prints_one_line_per_case() {
     assert!(out.status.success(), "status {:?}\n{stderr}", out.status);
     let lines: Vec<&str> = stdout.lines().collect();
     // The 13 seed cases of `cases/`, the 22 of the stress family in `cases/stress/` (11
-    // `stress_*`, 11 `contact_*`) and the 10 of the friction family in `cases/friction/`,
+    // `stress_*`, 11 `contact_*`) and the 12 of the friction family in `cases/friction/`,
     // each of which says so.
-    assert_eq!(lines.len(), 45, "{stdout}");
+    assert_eq!(lines.len(), 47, "{stdout}");
     let rough: Vec<&&str> = lines
         .iter()
         .filter(|l| l.starts_with("friction_"))
@@ -86,7 +86,7 @@ fn cases_are_found_anywhere() {
     let out = anywhere(&["list"], None);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
-    assert_eq!(String::from_utf8_lossy(&out.stdout).lines().count(), 45);
+    assert_eq!(String::from_utf8_lossy(&out.stdout).lines().count(), 47);
     // They were written under the cache directory, not here.
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
     let out = anywhere(
@@ -125,7 +125,7 @@ fn cases_are_found_anywhere() {
         &["list", "--cases", shipped.to_str().unwrap()],
         Some(one.path().to_str().unwrap()),
     );
-    assert_eq!(String::from_utf8_lossy(&out.stdout).lines().count(), 45);
+    assert_eq!(String::from_utf8_lossy(&out.stdout).lines().count(), 47);
 
     let out = anywhere(&["list"], Some("no/such/dir"));
     let stderr = String::from_utf8_lossy(&out.stderr);

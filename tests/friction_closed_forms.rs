@@ -844,3 +844,128 @@ fn ramps_outside_the_form_are_refused_with_the_reason() {
         assert!(why.contains(reason), "{why}\n does not say: {reason}");
     }
 }
+
+/// A ball or disc launched at v0 without spin, slipping at μ g until its contact point stops
+/// slipping at t* = v0 / (μ g (1 + m R²/I)), then rolling at v0 − μ g t*: centre (x, v) and
+/// rotation about z (negative: rolling along +x turns it clockwise) at t, with the spin-up
+/// rate μ m g R / I written out by hand.
+fn slide_to_roll(v0: f64, mu: f64, radius: f64, inertia_over_mass: f64, t: f64) -> [f64; 3] {
+    let spin_up = mu * G * radius / inertia_over_mass;
+    let roll = v0 / (mu * G + spin_up * radius);
+    let slip = |t: f64| {
+        [
+            v0 * t - 0.5 * mu * G * t * t,
+            v0 - mu * G * t,
+            -0.5 * spin_up * t * t,
+        ]
+    };
+    if t < roll {
+        return slip(t);
+    }
+    let [x, v, phi] = slip(roll);
+    [x + v * (t - roll), v, phi - v / radius * (t - roll)]
+}
+
+/// The headers' figures: the disc (I = m R²/2) rolls from v0/(3 μ g) = 0.509684 s at 2 v0/3 = 2,
+/// turned by 1.019 rad, 2.58 rad at 0.9 s; the ball (I = 2 m R²/5) from 2 v0/(7 μ g) =
+/// 0.436872 s at 5 v0/7 = 2.142857, turned by 0.936 rad, 2.92 rad at 0.9 s (printed to the
+/// digits shown: within half a unit of the last).
+#[test]
+fn roll_figures_are_as_the_headers_say() {
+    let (v0, mu, r) = (3.0, 0.2, 0.5);
+    let disc_roll = v0 / (3.0 * mu * G);
+    assert!((disc_roll - 0.509684).abs() < 5e-7);
+    let [_, v, phi] = slide_to_roll(v0, mu, r, 0.125, disc_roll);
+    assert!(
+        (v - 2.0).abs() < 1e-12 && (phi + 1.019).abs() < 5e-4,
+        "{v} {phi}"
+    );
+    assert!((slide_to_roll(v0, mu, r, 0.125, 0.9)[2] + 2.58).abs() < 5e-3);
+    let ball_roll = 2.0 * v0 / (7.0 * mu * G);
+    assert!((ball_roll - 0.436872).abs() < 5e-7);
+    let [_, v, phi] = slide_to_roll(v0, mu, r, 0.1, ball_roll);
+    assert!(
+        (v - 2.142857).abs() < 5e-7 && (phi + 0.936).abs() < 5e-4,
+        "{v} {phi}"
+    );
+    assert!((slide_to_roll(v0, mu, r, 0.1, 0.9)[2] + 2.92).abs() < 5e-3);
+}
+
+/// The disc and the ball slide, then roll: `analytic` against the hand-written answer, its centre
+/// on the face (uy_node 0) and, in 3D, on its launch line with its spin about z only.
+#[test]
+fn a_disc_and_a_ball_launched_sliding_start_rolling() {
+    for (id, inertia, turn) in [
+        ("friction_roll_2d", 0.125, "rz_disc"),
+        ("friction_roll_3d", 0.1, "rz_ball"),
+    ] {
+        eprintln!("{id}");
+        let h = analytic(&friction_case(id));
+        let scales = [
+            ("rz", 1.0),
+            ("ux", 0.5),
+            ("uy_node", 0.5),
+            ("uz_node", 0.5),
+            ("rx_ball", 1.0),
+        ];
+        assert_matches(&h, &scales, |t| {
+            let [x, v, phi] = slide_to_roll(3.0, 0.2, 0.5, inertia, t);
+            let mut columns = vec![
+                ("rz", 0.0),
+                ("ux", 0.0),
+                ("ux_node", x),
+                ("contact_force", G),
+                ("vx_node", v),
+                ("uy_node", 0.0),
+                (turn, phi),
+            ];
+            if id.ends_with("3d") {
+                columns.extend([("uz_node", 0.0), ("rx_ball", 0.0)]);
+            }
+            columns
+        });
+    }
+}
+
+/// Outside the rolling form: a ball whose rotation is read about an axis neither along its spin
+/// nor across it is refused, with the reason.
+#[test]
+fn a_rolling_scene_outside_the_form_is_refused() {
+    let scene = edited(
+        "friction_roll_3d",
+        &[("axis = [1.0, 0.0, 0.0]", "axis = [0.6, 0.0, 0.8]")],
+    );
+    match AnalyticEngine.run(&scene, &RunSettings::default()) {
+        Err(EngineError::Unsupported(why)) => assert!(
+            why.contains("the ball's rotation read about its spin axis or across it"),
+            "{why}"
+        ),
+        other => panic!("expected a refusal, got {:?}", other.map(|o| o.info.steps)),
+    }
+}
+
+/// The events rule reads a roll by the speed the exact solution ends at: the exact disc
+/// settles at 2 m/s from the first row within REST × 3 = 0.03 of it, t ≥ (1 − 0.03)/(μ g) =
+/// 0.49439 s: 0.495 s; a history that slows at 1.5 m/s² instead (v = max(3 − 1.5 t, 2)) is
+/// within 0.03 from t ≥ 0.64667 s: 0.647 s. A node at rest reads as before (its final speed 0).
+#[test]
+fn the_friction_events_rule_reads_a_roll_by_its_final_speed() {
+    use crosscheck::comparison::friction::{REST, measure};
+    let scene = friction_case("friction_roll_2d");
+    let exact = analytic(&scene);
+    let mut slow = exact.clone();
+    let (t, v) = (column_index(&slow, "t"), column_index(&slow, "vx_node"));
+    for row in &mut slow.rows {
+        row[v] = (3.0 - 1.5 * row[t]).max(2.0);
+    }
+    assert_eq!(REST, 1e-2);
+    let f = measure(&scene, &exact, &slow).unwrap();
+    let (exact_settles, slow_settles) = (f.exact.rests.unwrap(), f.engine.rests.unwrap());
+    assert!((exact_settles - 0.495).abs() < 1e-12, "{exact_settles}");
+    assert!((slow_settles - 0.647).abs() < 1e-12, "{slow_settles}");
+    assert_eq!(f.exact.starts, Some(0.0));
+}
+
+fn column_index(h: &History, name: &str) -> usize {
+    h.columns.iter().position(|c| c == name).unwrap()
+}

@@ -132,11 +132,13 @@ fn sweep_orders_and_floors_are_in_the_summary_and_the_report() {
 
 /// Every history and budget the whole suite writes: a CSV per case and engine, and a budget
 /// CSV per case and studied stepping engine (all but the closed form and the reference, and
-/// rapier's older releases). Of the 45 cases, 10 of the stress family (contact that opens and
+/// rapier's older releases). Of the 47 cases, 10 of the stress family (contact that opens and
 /// closes from t = 0) have no closed form, so neither its CSV nor budgets (a budget splits the
 /// error against the closed form), and on one of them (two balls, one free to turn)
 /// `explicit_small` does not apply; rapier refuses the ramp case (μ_s > μ_k): each of its
-/// engines writes no CSV there, and the stepping ones no budget.
+/// engines writes no CSV there, and the stepping ones no budget; `explicit` and
+/// `explicit_small` refuse the two roll cases (a body's ball on a face): neither writes a CSV
+/// nor a budget there.
 #[test]
 fn every_history_and_budget_of_the_suite_is_written() {
     let (out, ..) = run_into_temporary_directory();
@@ -152,12 +154,13 @@ fn every_history_and_budget_of_the_suite_is_written() {
         .iter()
         .filter(|e| is_rapier(e.name()) && e.stepping().is_some())
         .count();
-    let (without_closed_form, small_refused) = (10, 1);
+    let (without_closed_form, small_refused, rolling_refused) = (10, 1, 2 * 2);
     assert_eq!(
         written,
-        45 * engines.len() - without_closed_form - small_refused - rapier
-            + (45 - without_closed_form) * stepping
+        47 * engines.len() - without_closed_form - small_refused - rapier - rolling_refused
+            + (47 - without_closed_form) * stepping
             - rapier_stepping
+            - rolling_refused
     );
 }
 
@@ -165,8 +168,8 @@ fn every_history_and_budget_of_the_suite_is_written() {
 fn summary_and_report_agree() {
     let (out, summary, report) = run_into_temporary_directory();
     // The 13 seed cases, the 22 of the stress family (11 of them contact that opens and
-    // closes) and the 10 of the friction family.
-    assert_eq!(summary.cases.len(), 45);
+    // closes) and the 12 of the friction family.
+    assert_eq!(summary.cases.len(), 47);
 
     for c in &summary.cases {
         let scene = case::load(&case::resolve(&c.id, &case::cases_dir()).unwrap()).unwrap();
@@ -254,18 +257,22 @@ fn summary_and_report_agree() {
             );
         }
     }
-    // Every judged cell has a tolerance: 45 cases × 6 judged engines (every engine but the two
+    // Every judged cell has a tolerance: 47 cases × 6 judged engines (every engine but the two
     // exact solutions), less the 11 cells with nothing to compare: `explicit_small` does not
     // apply to contact_balls_oblique, has no closed form on the other 9 cases whose contact
     // strikes (5 drops, the tetrahedron, the wedge, the rattle, the ball slide) and is compared
     // over no rows on contact_reopen (its closed form is valid at no row); and the rapier
-    // engines refuse friction_ramp_breakaway (μ_s > μ_k).
+    // engines refuse friction_ramp_breakaway (μ_s > μ_k), `explicit` and `explicit_small` the
+    // two roll cases.
     let checks = summary.tolerance_checks();
     let rapier = common::STEPPING
         .iter()
         .filter(|e| e.starts_with("rapier"))
         .count();
-    assert_eq!(checks.len(), 45 * common::STEPPING.len() - 11 - rapier);
+    assert_eq!(
+        checks.len(),
+        47 * common::STEPPING.len() - 11 - rapier - 2 * 2
+    );
     assert!(checks.iter().all(|c| c.tolerance.is_some()));
     assert!(report.contains(&format!(
         "**{} of {} cells meet their tolerance.**",
@@ -338,7 +345,7 @@ fn verdict_matrix_equals_the_summary_and_every_link_resolves() {
     }
     assert_eq!(
         cells,
-        45 * common::STEPPING.len(),
+        47 * common::STEPPING.len(),
         "every case × engine but the two exact solutions"
     );
     let mut links = 0;

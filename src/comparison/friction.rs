@@ -1,5 +1,6 @@
 //! The friction cases' events, read the same way from every history, the exact solution's
-//! included: when the node first moves and when it comes to rest for good, where it ends up,
+//! included: when the node first moves and when it settles for good (at rest, or a ball at the
+//! speed it rolls on at), where it ends up,
 //! and how far it moves where the exact solution does not (creep on a stick, drift off an
 //! isotropic slide's line).
 //!
@@ -24,7 +25,8 @@ pub const REST: f64 = 1e-2;
 pub struct Motion {
     /// The first row time at which the node moves (`None`: never).
     pub starts: Option<f64>,
-    /// The row time from which it stays at rest to the end (`None`: still moving at the end).
+    /// The row time from which it keeps the exact solution's final speed to the end: at rest
+    /// where that is 0, rolling on where a ball ends rolling (`None`: not settled at the end).
     pub rests: Option<f64>,
     /// Its displacement along the direction at the last row.
     pub end: f64,
@@ -76,7 +78,8 @@ pub fn measure(scene: &Scene, exact: &History, history: &History) -> Option<Fric
                 .is_some_and(|x| super::peak(&x) <= super::round_off(scene, c))
         })
         .collect();
-    let read = |h: &History| motion(h, speed, along, &still, rest);
+    let settled = settled_speed(&exact_speed);
+    let read = |h: &History| motion(h, speed, along, &still, rest, settled);
     Some(FrictionEvents {
         engine: read(history)?,
         exact: read(exact)?,
@@ -114,12 +117,31 @@ fn columns(scene: &Scene) -> Option<(&str, &str, Vec<&str>)> {
     Some((speed, along, in_plane.collect()))
 }
 
-/// A history's [`Motion`] by the rule of the module.
-pub fn motion(h: &History, speed: &str, along: &str, still: &[&str], rest: f64) -> Option<Motion> {
+/// The speed the exact solution settles at: its last row's where its last two rows agree (a
+/// ball that rolls on at a constant speed), else 0 (a node at rest, or one that keeps
+/// accelerating and never settles).
+fn settled_speed(exact_speed: &[f64]) -> f64 {
+    match exact_speed {
+        [.., before, last] if before == last => *last,
+        _ => 0.0,
+    }
+}
+
+/// A history's [`Motion`] by the rule of the module: it moves where its speed is above `rest`,
+/// and rests from the row after which it stays within `rest` of `settled`.
+pub fn motion(
+    h: &History,
+    speed: &str,
+    along: &str,
+    still: &[&str],
+    rest: f64,
+    settled: f64,
+) -> Option<Motion> {
     let (t, v, x) = (h.column("t")?, h.column(speed)?, h.column(along)?);
     let moving = |i: usize| v[i].abs() > rest;
     let starts = (0..v.len()).find(|&i| moving(i)).map(|i| t[i]);
-    let rests = match (0..v.len()).rposition(moving) {
+    let unsettled = |i: usize| (v[i] - settled).abs() > rest;
+    let rests = match (0..v.len()).rposition(unsettled) {
         None => Some(t[0]),
         Some(i) if i + 1 < v.len() => Some(t[i + 1]),
         Some(_) => None,

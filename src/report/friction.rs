@@ -25,7 +25,8 @@ pub fn section(w: &mut String, s: &Summary) {
          read by one rule: the node is at rest where its speed is at most {REST:e} of the exact \
          solution's peak speed, so each time is an output row's and the exact time read the \
          same way sits in the same row interval. *moves* is the first row it moves at, \
-         *rests* the row from which it stays at rest (– : never, or still moving at the end), \
+         *settles* the row from which it keeps the exact solution's final speed to the end: \
+         at rest, or for a ball the speed it rolls on at (– : not by the end), \
          *ends* its displacement along its velocity column's direction at the last row, and \
          *strays* the largest motion in the face's plane along a column whose exact solution \
          does not move (creep on a stick, drift off an isotropic slide's line). Penalty \
@@ -35,7 +36,7 @@ pub fn section(w: &mut String, s: &Summary) {
     );
     let _ = writeln!(
         w,
-        "| case | engine | moves (s) | exact | rests (s) | exact | ends | exact | strays |"
+        "| case | engine | moves (s) | exact | settles (s) | exact | ends | exact | strays |"
     );
     let _ = writeln!(w, "|---|---|---:|---:|---:|---:|---:|---:|---:|");
     for (c, r, f) in judged(&cases) {

@@ -282,7 +282,7 @@ fn held_still(scene: &Scene) -> Result<(), EngineError> {
 }
 
 /// Whether `node` is held at 0 in each of `dofs` in every step.
-fn still(scene: &Scene, node: NodeId, dofs: &[Dof]) -> bool {
+pub(super) fn still(scene: &Scene, node: NodeId, dofs: &[Dof]) -> bool {
     scene.steps.iter().all(|step| {
         dofs.iter().all(|dof| {
             step.conditions.iter().any(|c| {
@@ -353,7 +353,7 @@ fn spring(
 /// The line the named candidates (zero where absent) lie on: the first nonzero one's direction
 /// (any, where all are zero: x stays 0). A candidate off it is refused: the slip direction
 /// would turn.
-fn line(candidates: &[(&str, Vector3<f64>)]) -> Result<Vector3<f64>, EngineError> {
+pub(super) fn line(candidates: &[(&str, Vector3<f64>)]) -> Result<Vector3<f64>, EngineError> {
     let present: Vec<(&str, Vector3<f64>)> = candidates
         .iter()
         .filter(|(_, c)| c.norm() > 0.0)
@@ -370,6 +370,6 @@ fn line(candidates: &[(&str, Vector3<f64>)]) -> Result<Vector3<f64>, EngineError
     }
 }
 
-fn refuse<T>(what: impl Into<String>) -> Result<T, EngineError> {
+pub(super) fn refuse<T>(what: impl Into<String>) -> Result<T, EngineError> {
     unsupported(format!("the friction closed form needs {}", what.into()))
 }

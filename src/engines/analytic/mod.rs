@@ -14,6 +14,9 @@
 //! - [`friction`]: Coulomb friction: one particle on the plane face of a held body under
 //!   constant or tabular-amplitude loads and at most one spring, along one line, by its stick and
 //!   slip phases. Every scene with friction goes to it, and it refuses what it does not cover.
+//! - [`roll`]: a ball (a disc in 2D) launched on the plane face of a held body, sliding until it
+//!   rolls: the slip of its contact point as the friction form's line. Every scene whose contact
+//!   node carries a ball goes to it.
 //!
 //! A load that varies in time (an amplitude) is taken only by the friction form: a scene
 //! without friction that has one is refused.
@@ -22,6 +25,7 @@ pub mod friction;
 mod friction_phases;
 pub mod linear;
 pub mod rigid;
+pub mod roll;
 pub mod springs;
 
 use super::{Engine, EngineError, History, RunInfo, RunOutput, RunSettings};
@@ -42,7 +46,9 @@ impl Engine for AnalyticEngine {
 
     fn run(&self, scene: &Scene, _settings: &RunSettings) -> Result<RunOutput, EngineError> {
         let start = Instant::now();
-        let history = if scene.has_friction() {
+        let history = if scene.contacts.iter().any(|c| c.rolls()) {
+            roll::solve(scene)?
+        } else if scene.has_friction() {
             friction::solve(scene)?
         } else if scene.has_amplitudes() {
             return unsupported(

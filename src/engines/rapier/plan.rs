@@ -302,6 +302,9 @@ pub struct ContactSpec {
     pub body: usize,
     /// The surface in the face body's coordinates (its reference node at the origin).
     pub surface: Surface,
+    /// The radius of the scene's ball on the node (0: the node touches; the collider's
+    /// small ball then stands for the node).
+    pub node_radius: f64,
     /// Coefficient of restitution (rapier's `restitution` on both colliders, averaged).
     pub restitution: f64,
     /// Coefficient of friction: the pair's μ_k, 0 where frictionless (rapier's `friction` on

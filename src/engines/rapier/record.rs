@@ -200,7 +200,7 @@ impl Kinematics<'_> {
         let c = &self.plan.contacts[k];
         let face = &s[c.body];
         let local = face.rotation.inverse() * (self.position(s, c.node) - face.position);
-        crate::scene::surface_distance(&c.surface, &local).0
+        crate::scene::surface_distance(&c.surface, &local).0 - c.node_radius
     }
 }
 

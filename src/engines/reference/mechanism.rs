@@ -38,16 +38,22 @@
 //! λ being the contact forces (on the node λ n: compressive positive). A pair with friction adds
 //! its stuck node's tangential rows, or its sliding node's friction to its normal's column
 //! ([`friction`]).
+//!
+//! A body's node N carrying a ball of radius ρ touches a plane at P = p_N − ρ n; its gap is
+//! g − ρ, and its rows are those of the relative velocity of the slave body's material point at
+//! P ([`touch`]): v_s + ω_s × (P − x_s) takes ṗ's place, P − x the node's arm on the master.
 
 mod friction;
+mod touch;
 
 use crate::engines::EngineError;
 use crate::scene::{
-    Attachment, Connection, ContactState, Dimension, Dof, Element, Friction, NodeId, PointLoad,
-    Scene, Solid, Step, Surface, surface_distance,
+    Attachment, Connection, ContactPair, ContactState, Dimension, Dof, Element, Friction, NodeId,
+    PointLoad, Scene, Solid, Step, Surface, surface_distance,
 };
 pub use friction::Grip;
 use nalgebra::{DMatrix, DVector, Matrix3, Quaternion, UnitQuaternion, Vector3};
+use touch::Slave;
 
 /// Where a node lives in the coordinates.
 #[derive(Debug, Clone, Copy)]
@@ -71,11 +77,12 @@ struct Body {
 #[derive(Debug, Clone)]
 struct Contact {
     name: String,
-    particle: usize,
+    /// The node: a particle, or a body's node carrying a ball.
+    slave: Slave,
     body: usize,
     /// The surface in the body frame, its reference node at the origin.
     surface: Surface,
-    /// The gap a closed contact keeps: the initial one for a pair closed at t = 0 (zero to
+    /// The gap (the ball's radius taken off) a closed contact keeps: the initial one for a pair closed at t = 0 (zero to
     /// the validation's round-off), zero for one that closes later.
     level: f64,
     /// Coefficient of restitution.
@@ -138,6 +145,26 @@ fn refused<T>(what: impl Into<String>) -> Result<T, EngineError> {
     )))
 }
 
+/// What pair `c`'s node is: a free node (touching with itself), or a node of another body than
+/// the face's carrying a ball against a plane.
+fn slave(c: &ContactPair, place: Place) -> Result<Slave, EngineError> {
+    match place {
+        Place::Particle(i) if !c.rolls() => Ok(Slave::Particle(i)),
+        Place::Body(body, offset) if c.rolls() && body != c.body && c.plane().is_some() => {
+            Ok(Slave::Ball {
+                body,
+                offset,
+                radius: c.node_radius,
+            })
+        }
+        _ => refused(format!(
+            "contact `{}`: the reference slaves a free node without a ball, or a node of \
+             another body than the face's carrying a ball against a plane",
+            c.name
+        )),
+    }
+}
+
 fn skew(c: &Vector3<f64>) -> Matrix3<f64> {
     c.cross_matrix()
 }
@@ -192,12 +219,7 @@ impl Mechanism {
             .collect();
         let mut contacts = Vec::new();
         for c in &scene.contacts {
-            let Place::Particle(particle) = places[c.node] else {
-                return refused(format!(
-                    "contact `{}`: its node is part of a body (the reference slaves free nodes only)",
-                    c.name
-                ));
-            };
+            let slave = slave(c, places[c.node])?;
             let origin = scene.nodes[scene.bodies[c.body].reference].position;
             let surface = match &c.surface {
                 Surface::Plane { point, normal } => Surface::Plane {
@@ -219,11 +241,11 @@ impl Mechanism {
             }
             contacts.push(Contact {
                 name: c.name.clone(),
-                particle,
+                slave,
                 body: c.body,
                 surface,
                 level: if closed {
-                    surface_distance(&c.surface, &scene.nodes[c.node].position).0
+                    c.gap_at(&scene.nodes[c.node].position).0
                 } else {
                     0.0
                 },
@@ -615,8 +637,8 @@ impl Mechanism {
     pub fn distance(&self, at: &Placement, k: usize) -> f64 {
         let c = &self.contacts[k];
         let local =
-            at.orientations[c.body].inverse() * (at.particles[c.particle] - at.origins[c.body]);
-        surface_distance(&c.surface, &local).0
+            at.orientations[c.body].inverse() * (self.node_position(at, k) - at.origins[c.body]);
+        surface_distance(&c.surface, &local).0 - c.slave.radius()
     }
 
     /// Each contact's gap above the level it closes at (negative: penetrating), the velocity
@@ -624,9 +646,10 @@ impl Mechanism {
     /// order, then the tangential rows of the stuck ones ([`Grip::Stick`]; `grips` empty: none).
     ///
     /// With s = Rᵀ(p − x) the node in the body frame and φ(s) the signed distance to the
-    /// surface (closed-form geometry), ġ = n·(ṗ − v − ω × (p − x)) with n = R ∇φ, for any
-    /// surface; g̈ = G u̇ + Ġu adds to the plane's terms the surface's curvature, ṡᵀ H ṡ with H
-    /// the Hessian of φ.
+    /// surface (closed-form geometry, less a ball's radius ρ), ġ = n·V with n = R ∇φ and V the
+    /// relative velocity at the contact point ([`touch`]), for any surface; g̈ = G u̇ + Ġu adds
+    /// to the plane's terms the surface's curvature, ṡᵀ H ṡ with H the Hessian of φ (a ball
+    /// touches a plane only: H = 0).
     pub fn constraints(
         &self,
         at: &Placement,
@@ -644,29 +667,21 @@ impl Mechanism {
         let mut gaps = Vec::with_capacity(self.contacts.len());
         let mut g = DMatrix::zeros(rows, n);
         let mut gdot_u = DVector::zeros(rows);
-        let base = 3 * self.particles.len();
         let mut row = 0;
-        for (c, closed) in self.contacts.iter().zip(active) {
+        for (k, (c, closed)) in self.contacts.iter().zip(active).enumerate() {
             let rot = at.orientations[c.body];
-            let x = at.origins[c.body];
-            let p = at.particles[c.particle];
-            let local = rot.inverse() * (p - x);
-            let (phi, normal0) = surface_distance(&c.surface, &local);
-            gaps.push(phi - c.level);
+            let local = rot.inverse() * (self.node_position(at, k) - at.origins[c.body]);
+            let phi = surface_distance(&c.surface, &local).0;
+            gaps.push(phi - c.slave.radius() - c.level);
             if !closed {
                 continue;
             }
-            let normal = rot * normal0;
-            let k = base + 6 * c.body;
-            let pd = u.fixed_rows::<3>(3 * c.particle).into_owned();
-            let v = u.fixed_rows::<3>(k).into_owned();
-            let w = u.fixed_rows::<3>(k + 3).into_owned();
-            let arm = p - x;
-            add_row(&mut g, row, &normal, &arm, 3 * c.particle, k);
-            let relative = pd - v;
-            let sliding = rot.inverse() * (relative - w.cross(&arm));
-            gdot_u[row] = row_rate(&normal, &w, &relative, &arm)
-                + sliding.dot(&(curvature(&c.surface, &local) * sliding));
+            let touch = self.touch(at, u, k);
+            let normal = touch.normal();
+            touch.add_row(&mut g, row, &normal);
+            let sliding = rot.inverse() * touch.slip();
+            gdot_u[row] =
+                touch.rate(&normal) + sliding.dot(&(curvature(&c.surface, &local) * sliding));
             row += 1;
         }
         if rows > normals {
@@ -675,18 +690,10 @@ impl Mechanism {
         (gaps, g, gdot_u)
     }
 
-    /// Rate of contact `k`'s gap, n·(ṗ − v − ω × (p − x)).
+    /// Rate of contact `k`'s gap, n·V (V the relative velocity at the contact point).
     pub fn gap_rate(&self, at: &Placement, u: &DVector<f64>, k: usize) -> f64 {
-        let c = &self.contacts[k];
-        let rot = at.orientations[c.body];
-        let x = at.origins[c.body];
-        let p = at.particles[c.particle];
-        let (_, normal0) = surface_distance(&c.surface, &(rot.inverse() * (p - x)));
-        let base = 3 * self.particles.len() + 6 * c.body;
-        let pd = u.fixed_rows::<3>(3 * c.particle).into_owned();
-        let v = u.fixed_rows::<3>(base).into_owned();
-        let w = u.fixed_rows::<3>(base + 3).into_owned();
-        (rot * normal0).dot(&(pd - v - w.cross(&(p - x))))
+        let touch = self.touch(at, u, k);
+        touch.normal().dot(&touch.slip())
     }
 
     /// Accelerations of the free coordinates, contact forces and friction at a placement and

@@ -17,6 +17,12 @@
 //! as the measure `tolerance_halving_change` (summary.json), with `constraint_drift` (the
 //! largest departure of a closed contact's gap from zero, in length units).
 //!
+//! A pair's node is a free node, which touches with itself, or a node of a body carrying a ball
+//! (a disc in 2D) of the pair's `node_radius`, rigid with the body, which touches a plane face
+//! at the point a radius below the node along the face's normal: the gap is the node's
+//! distance to the plane less the radius, and the velocities that close it and that slip are
+//! those of the slave body's material point at the contact point relative to the master's.
+//!
 //! Contact is event-driven and exact through every switch: an open pair whose gap reaches zero
 //! while closing strikes (Newton's restitution law, the impulse through the mass matrix), a
 //! closed pair whose force reaches zero opens. Events are watched after every accepted
@@ -26,7 +32,8 @@
 //! column. Every row is valid.
 //!
 //! Coulomb friction (a pair's `friction`) is event-driven too ([`mechanism::Grip`]). A stuck
-//! node's tangential velocity relative to the body point it touches is a constraint, its
+//! pair's tangential velocity at its contact point relative to the body it touches is a
+//! constraint (for a ball, rolling), its
 //! multipliers λ_t the friction force; a sliding node is pushed by μ_k λ_n against that
 //! velocity, λ_n solved with the friction in the normal's column. A slip stops when its
 //! relative tangential velocity reaches zero; the node then sticks if the force that takes is
@@ -42,7 +49,8 @@
 //!
 //! Static steps set the prescribed DOFs and solve the equilibrium of the free ones by Newton's
 //! method (a finite-difference Jacobian; the converged point does not depend on it). Not
-//! solved (refused with a reason): a contact node that is a body point, a held DOF on a body
+//! solved (refused with a reason): a contact node of a body without a ball, or whose ball
+//! touches a solid (not a plane) or its own body, a held DOF on a body
 //! point other than the reference node, a static step with both free DOFs and contact, a free
 //! DOF without mass. A matrix that turns singular during the run (two contacts that fix the
 //! same motion, say) fails the run with its time.

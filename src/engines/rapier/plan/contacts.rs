@@ -1,5 +1,6 @@
 //! Contact: per contact pair, a collider on the face's body (a slab behind a plane face, or
-//! the solid shrunk by the node's ball) and a small ball on the node's body, centred on it.
+//! the solid shrunk by the node's ball) and a ball on the node's body, centred on it: the
+//! scene's ball where the node carries one (a body rolling on a face), else a small one.
 
 use super::{ColliderSpec, ContactSpec, Frame, NodeRef, Shape, unsupported, x_to};
 use crate::engines::EngineError;
@@ -37,8 +38,31 @@ pub(super) fn colliders(
         let origin = scene.nodes[scene.bodies[pair.body].reference].position;
         let size = size(scene, pair);
         let (collider, surface, radius) = match pair.surface.clone() {
+            Surface::Plane { point, normal } if pair.rolls() => {
+                let wide = reach(scene, pair, size);
+                let slab = slab(
+                    scene.dimension,
+                    face_body,
+                    point - origin,
+                    normal,
+                    size,
+                    wide,
+                    0.0,
+                );
+                (slab.0, slab.1, pair.node_radius)
+            }
             Surface::Plane { point, normal } => {
-                plane(scene.dimension, face_body, point - origin, normal, size)
+                let radius = 1e-3 * size;
+                let slab = slab(
+                    scene.dimension,
+                    face_body,
+                    point - origin,
+                    normal,
+                    size,
+                    size,
+                    radius,
+                );
+                (slab.0, slab.1, radius)
             }
             Surface::Solid { solid, centre } => {
                 solid_face(pair, face_body, solid, centre - origin, size)?
@@ -59,6 +83,7 @@ pub(super) fn colliders(
             node: pair.node,
             body: face_body,
             surface,
+            node_radius: pair.node_radius,
             restitution: pair.restitution,
             // μ_s = μ_k here (a larger static coefficient is refused above).
             friction: pair.friction.map_or(0.0, |f| f.kinetic_coefficient),
@@ -83,23 +108,55 @@ fn size(scene: &Scene, pair: &ContactPair) -> f64 {
     2.0 * spread.max(f64::MIN_POSITIVE.sqrt())
 }
 
-/// A plane face through `face_point` (body coordinates): a slab `size` thick behind it, moved
-/// back by the node's ball radius r = 1e-3 `size` so the two touch exactly at t = 0; the face
-/// in body coordinates, and r.
-fn plane(
+/// How far along a face a rolling pair's ball may travel from the face's anchor within the
+/// run: its spread `size`, plus what the initial speeds (a spin at the ball's rim included)
+/// and every load on the ball's body (at its largest amplitude) could carry it, as if
+/// nothing held it back. The slab under a rolling ball reaches that far, so the ball never
+/// rolls off its edge.
+fn reach(scene: &Scene, pair: &ContactPair, size: f64) -> f64 {
+    let (Attachment::Reference(body) | Attachment::OnBody(body)) =
+        scene.nodes[pair.node].attachment
+    else {
+        return size;
+    };
+    let on_body = |node: usize| matches!(scene.nodes[node].attachment, Attachment::Reference(b) | Attachment::OnBody(b) if b == body);
+    let speed: f64 = (scene.initial_velocities.iter())
+        .filter(|v| on_body(v.node))
+        .map(|v| v.velocity.norm() + v.angular.norm() * pair.node_radius)
+        .sum();
+    let force: f64 = (scene.loads.iter())
+        .filter(|l| on_body(l.node))
+        .map(|l| {
+            let scale = l.amplitude.as_ref().map_or(1.0, |a| {
+                a.points.iter().map(|p| p.1.abs()).fold(0.0, f64::max)
+            });
+            l.force.norm() * scale
+        })
+        .sum();
+    let t = scene.duration();
+    size + t * speed + 0.5 * t * t * force / scene.bodies[body].mass
+}
+
+/// A plane face through `face_point` (body coordinates): a slab `size` thick behind it and
+/// `2 wide` across, moved
+/// back by `setback` (the small ball that stands for a node, so the two touch exactly at
+/// t = 0; 0 under a scene's ball, which touches the face itself); and the face in body
+/// coordinates.
+fn slab(
     dim: Dimension,
     face_body: usize,
     face_point: Vector3<f64>,
     normal: Vector3<f64>,
     size: f64,
-) -> (ColliderSpec, Surface, f64) {
-    let radius = 1e-3 * size;
+    wide: f64,
+    setback: f64,
+) -> (ColliderSpec, Surface) {
     (
         ColliderSpec {
             body: face_body,
-            shape: Shape::Cuboid(Vector3::new(0.5 * size, size, size)),
+            shape: Shape::Cuboid(Vector3::new(0.5 * size, wide, wide)),
             frame: Frame {
-                origin: face_point - normal * (radius + 0.5 * size),
+                origin: face_point - normal * (setback + 0.5 * size),
                 rotation: x_to(&normal, dim),
             },
         },
@@ -107,7 +164,6 @@ fn plane(
             point: face_point,
             normal,
         },
-        radius,
     )
 }
 

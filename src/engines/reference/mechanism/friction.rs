@@ -1,12 +1,15 @@
 //! Coulomb friction of the closed pairs, each in its [`Grip`].
 //!
-//! A stuck node's velocity relative to the body point it touches has no tangential part: its
-//! tangential rows (one per unit tangent t, t·(ṗ − v − ω × (p − x))) join the constraints, and
-//! their multipliers λ_t are the tangential force on the node, held while |λ_t| ≤ μ_s λ_n.
+//! A stuck pair's velocity at its contact point relative to the body it touches, V
+//! ([`super::touch`]; a particle: ṗ − v − ω × (p − x)), has no tangential part: its tangential
+//! rows (one per unit tangent t, t·V) join the constraints, and their multipliers λ_t are the
+//! tangential force on the node (on a ball, at its contact point: it rolls), held while
+//! |λ_t| ≤ μ_s λ_n.
 //!
 //! A sliding node is pushed by μ_k λ_n against its slip, direction d, and the body by the
-//! reaction at the point the node touches; the friction depends on the normal multiplier, so the
-//! normal's column in the equations carries it: with D the row of d·(ṗ − v − ω × (p − x)),
+//! reaction at the contact point (a ball's friction acts at its contact point, so it also
+//! spins the ball); the friction depends on the normal multiplier, so the normal's column in
+//! the equations carries it: with D the row of d·V,
 //!
 //!   [[A, −(B − μ_k D T)ᵀ], [B, 0]] [ẇ; λ] = [b; −Ġu].
 //!
@@ -19,9 +22,10 @@
 //! forces keep to the sliding line) d = s exactly; where it turns, d differs from v_t/|v_t| by
 //! η/|v_t| times the turn over one step.
 
-use super::{Mechanism, Placement, add_row, row_rate};
-use crate::scene::{Dimension, Friction, surface_distance};
-use nalgebra::{DMatrix, DVector, UnitQuaternion, Vector3};
+use super::touch::Touch;
+use super::{Mechanism, Placement};
+use crate::scene::{Dimension, Friction};
+use nalgebra::{DMatrix, DVector, Vector3};
 
 /// A closed pair's tangential state.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -40,44 +44,6 @@ pub enum Grip {
 /// Below this fraction of the largest velocity coordinate a relative tangential velocity does
 /// not choose the slip direction (its own is round-off there).
 pub const DIRECTION_FLOOR: f64 = 1e-9;
-
-/// A closed pair's kinematics at a placement and velocity.
-struct Touch {
-    /// u's column of the node's ṗ.
-    particle: usize,
-    /// u's column of the body's v (ω follows).
-    body: usize,
-    rot: UnitQuaternion<f64>,
-    /// p − x.
-    arm: Vector3<f64>,
-    /// ṗ − v.
-    relative: Vector3<f64>,
-    /// ω.
-    w: Vector3<f64>,
-    /// The unit tangents (world): one in 2D (in the plane), two in 3D.
-    tangents: Vec<Vector3<f64>>,
-}
-
-impl Touch {
-    /// The tangential part of a vector.
-    fn tangential(&self, v: &Vector3<f64>) -> Vector3<f64> {
-        self.tangents
-            .iter()
-            .fold(Vector3::zeros(), |s, t| s + t * t.dot(v))
-    }
-
-    /// The node's velocity relative to the body point it touches, ṗ − v − ω × (p − x).
-    fn slip(&self) -> Vector3<f64> {
-        self.relative - self.w.cross(&self.arm)
-    }
-
-    /// The generalised row (on u) of direction `e`'s relative velocity.
-    fn row(&self, e: &Vector3<f64>, n: usize) -> DVector<f64> {
-        let mut g = DMatrix::zeros(1, n);
-        add_row(&mut g, 0, e, &self.arm, self.particle, self.body);
-        g.row(0).transpose()
-    }
-}
 
 /// A sliding pair's friction column: its normal multiplier's row in G, the slip direction d
 /// (world), d's generalised row D on u, μ_k, and d·v_t.
@@ -106,39 +72,8 @@ impl Mechanism {
         &self.contacts[k].name
     }
 
-    /// Pair `k`'s unit tangents at its node (world): the one in the plane in 2D, two in 3D,
-    /// fixed in the body frame (functions of the surface's normal there).
-    fn tangents(&self, at: &Placement, k: usize) -> Vec<Vector3<f64>> {
-        let c = &self.contacts[k];
-        let rot = at.orientations[c.body];
-        let local = rot.inverse() * (at.particles[c.particle] - at.origins[c.body]);
-        let (_, n0) = surface_distance(&c.surface, &local);
-        match self.dimension {
-            Dimension::Two => vec![rot * Vector3::new(-n0.y, n0.x, 0.0)],
-            Dimension::Three => {
-                let t1 = n0.cross(&Vector3::ith(n0.iamin(), 1.0)).normalize();
-                vec![rot * t1, rot * n0.cross(&t1)]
-            }
-        }
-    }
-
-    /// Pair `k`'s kinematics.
-    fn touch(&self, at: &Placement, u: &DVector<f64>, k: usize) -> Touch {
-        let c = &self.contacts[k];
-        let body = 3 * self.particles.len() + 6 * c.body;
-        let particle = 3 * c.particle;
-        Touch {
-            particle,
-            body,
-            rot: at.orientations[c.body],
-            arm: at.particles[c.particle] - at.origins[c.body],
-            relative: u.fixed_rows::<3>(particle) - u.fixed_rows::<3>(body),
-            w: u.fixed_rows::<3>(body + 3).into_owned(),
-            tangents: self.tangents(at, k),
-        }
-    }
-
-    /// Pair `k`'s tangential velocity relative to the body point its node touches (world).
+    /// Pair `k`'s tangential velocity at its contact point relative to the body it touches
+    /// (world).
     pub fn slip_velocity(&self, at: &Placement, u: &DVector<f64>, k: usize) -> Vector3<f64> {
         let touch = self.touch(at, u, k);
         touch.tangential(&touch.slip())
@@ -156,8 +91,7 @@ impl Mechanism {
         let touch = self.touch(at, u, k);
         let n = self.velocity_len();
         touch.tangents.iter().fold(Vector3::zeros(), |s, t| {
-            let along =
-                touch.row(t, n).dot(rate) + row_rate(t, &touch.w, &touch.relative, &touch.arm);
+            let along = touch.row(t, n).dot(rate) + touch.rate(t);
             s + t * along
         })
     }
@@ -205,8 +139,8 @@ impl Mechanism {
             }
             let touch = self.touch(at, u, k);
             for t in &touch.tangents {
-                add_row(g, row, t, &touch.arm, touch.particle, touch.body);
-                gdot_u[row] = row_rate(t, &touch.w, &touch.relative, &touch.arm);
+                touch.add_row(g, row, t);
+                gdot_u[row] = touch.rate(t);
                 row += 1;
             }
         }

@@ -55,19 +55,18 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         if !self.contacts.is_empty() && !matches!(mode, ContactMode::Off) {
             for (k, c) in self.contacts.iter().enumerate() {
                 counters.contact_evaluations += 1;
-                let (d, n) = self.gap(cfg, k);
-                let f = match mode {
-                    ContactMode::Unilateral => self.penalty * (-d).max(0.0),
-                    ContactMode::Bilateral => -self.penalty * (d - c.open_gap),
-                    ContactMode::Given(f) => f[k],
-                    ContactMode::Off => unreachable!(),
+                let Point::Particle(i) = c.slave else {
+                    elastic += self.touch_penalty::<ENERGY>(cfg, k, mode, out);
+                    continue;
                 };
+                let (d, n) = self.gap_at(cfg, k, cfg.u.get(i));
+                let f = self.penalty_force(k, mode, d);
                 if ENERGY && !matches!(mode, ContactMode::Given(_)) {
                     elastic += 0.5 * f * f / self.penalty;
                 }
                 out.contact[k] = f;
                 out.gap[k] = d;
-                self.push_along(cfg, k, n, f, out);
+                self.push_on_node(cfg, k, i, n, f, out);
             }
         }
         for l in &self.loads {
@@ -110,17 +109,49 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         self.push_along(cfg, k, n, f, out);
     }
 
+    /// The normal force of pair `k` at gap `d` under `mode`.
+    #[inline(always)]
+    pub(super) fn penalty_force(&self, k: usize, mode: ContactMode, d: f64) -> f64 {
+        match mode {
+            ContactMode::Unilateral => self.penalty * (-d).max(0.0),
+            ContactMode::Bilateral => -self.penalty * (d - self.contacts[k].open_gap),
+            ContactMode::Given(f) => f[k],
+            ContactMode::Off => unreachable!(),
+        }
+    }
+
     /// Add a force `f` along `n` on pair `k`'s node (a ball's contact point), and its reaction
     /// on the body, to `out`.
     #[inline(always)]
-    fn push_along(&self, cfg: &Config<S>, k: usize, n: S::V, f: f64, out: &mut Forces<S>) {
+    pub(super) fn push_along(
+        &self,
+        cfg: &Config<S>,
+        k: usize,
+        n: S::V,
+        f: f64,
+        out: &mut Forces<S>,
+    ) {
+        match self.contacts[k].slave {
+            Point::Particle(i) => self.push_on_node(cfg, k, i, n, f, out),
+            _ => self.push_at_touch(cfg, k, &n, n * f, out),
+        }
+    }
+
+    /// [`Model::push_along`] on pair `k`, whose node is particle `i`.
+    #[inline(always)]
+    fn push_on_node(
+        &self,
+        cfg: &Config<S>,
+        k: usize,
+        i: usize,
+        n: S::V,
+        f: f64,
+        out: &mut Forces<S>,
+    ) {
         let c = &self.contacts[k];
-        let Point::Particle(i) = c.slave else {
-            return self.push_at_touch(cfg, k, &n, n * f, out);
-        };
         out.add_particle(i, n * f);
         out.b[c.body] -= n * f;
-        out.m[c.body] -= S::moment(&self.contact_arm(cfg, k), &n) * f;
+        out.m[c.body] -= S::moment(&self.arm_at(cfg, k, cfg.u.get(i)), &n) * f;
     }
 
     /// One over the mass pair `k`'s normal force moves (the body's turning left out).

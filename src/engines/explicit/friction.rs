@@ -26,6 +26,7 @@
 use super::model::{Forces, Model, Point};
 use super::space::{Lin, Space};
 use super::state::{Config, Rates};
+use crate::scene::Friction;
 
 /// The stick points of a run's pairs and the energy their slip dissipated.
 #[derive(Debug, Clone)]
@@ -120,6 +121,16 @@ impl<S: Space> Sticks<S> {
     }
 }
 
+/// One pair's stick as [`Model::friction_forces`] updates it.
+struct Stick<'a, S: Space> {
+    /// Where the node sticks (the body's frame).
+    point: &'a mut S::V,
+    /// Whether it slipped at the last increment.
+    slipping: &'a mut bool,
+    /// The run's energy dissipated by slip.
+    dissipated: &'a mut f64,
+}
+
 impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// Whether any contact pair has friction.
     pub fn has_friction(&self) -> bool {
@@ -128,12 +139,11 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
 
     /// Pair `k`'s node (a ball's contact point) relative to its body's reference node, in the
     /// body's frame.
+    #[inline(always)]
     pub(super) fn body_frame_arm(&self, cfg: &Config<S>, k: usize) -> S::V {
-        let node = self.local(cfg, k, &S::V::zero());
-        let c = &self.contacts[k];
-        match c.slave {
-            Point::Particle(_) => node,
-            _ => node - c.normal * c.radius,
+        match self.contacts[k].slave {
+            Point::Particle(_) => self.local(cfg, k, &S::V::zero()),
+            _ => self.touch_in_body_frame(cfg, k),
         }
     }
 
@@ -201,60 +211,118 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 continue;
             };
             sticks.evaluations += 1;
-            // A ball's stick stretches by the slip of the material points that touched.
-            let arm = match &sticks.material[k] {
-                Some(sigma) => self.material_arm(cfg, k, sigma),
-                None => self.body_frame_arm(cfg, k),
+            let (slipping, dissipated) = (&mut sticks.slipping[k], &mut sticks.dissipated);
+            let mut stick = Stick {
+                point,
+                slipping,
+                dissipated,
             };
-            let normal_force = out.contact[k];
-            if normal_force <= 0.0 {
-                *point = arm;
-                sticks.slipping[k] = false;
-            } else {
-                let n = self.body_frame_normal(k, &arm);
-                let offset = arm - *point;
-                let tangential = offset - n * n.dot(&offset);
-                let stretch = tangential.dot(&tangential).sqrt();
-                let mu = if sticks.slipping[k] {
-                    friction.kinetic_coefficient
-                } else {
-                    friction.static_coefficient
-                };
-                let mut elastic = tangential;
-                sticks.slipping[k] = k_t * stretch > mu * normal_force;
-                if sticks.slipping[k] {
-                    let limit = friction.kinetic_coefficient * normal_force;
-                    let kept = limit / k_t;
-                    elastic = tangential * (kept / stretch);
-                    *point = arm - elastic;
-                    sticks.dissipated += limit * (stretch - kept);
-                    slipped = true;
-                }
+            let Point::Particle(i) = c.slave else {
+                let sigma = sticks.material[k]
+                    .as_mut()
+                    .expect("a rolling pair's material point");
+                let stick = &mut stick;
+                slipped |= self.rolling_friction::<ENERGY>(cfg, k, friction, stick, sigma, out);
+                continue;
+            };
+            let arm = self.local_at(cfg, k, cfg.u.get(i), &S::V::zero());
+            if let Some((elastic, slips)) = self.stick_or_slip(k, friction, &mut stick, arm, out) {
+                slipped |= slips;
                 if ENERGY {
                     out.elastic += 0.5 * k_t * elastic.dot(&elastic);
                 }
-                self.push_tangential(cfg, k, &(elastic * -k_t), out);
-            }
-            if let Some(sigma) = sticks.material[k].as_mut() {
-                // The stick point moves on with the contact point, the spring's stretch kept.
-                *point += self.body_frame_arm(cfg, k) - arm;
-                *sigma = self.touching_material(cfg, k);
+                self.push_on_particle(cfg, k, i, &(elastic * -k_t), out);
             }
         }
         sticks.slips += u64::from(slipped);
     }
 
+    /// Pair `k`'s stick with the node (contact point) at `arm` under the normal force the
+    /// force pass put in `out`: the stick spring's stretch and whether it slipped, the stick
+    /// point drawn after the node where it slips; `None` (the stick point on the node) where
+    /// the pair carries no normal force.
+    #[inline(always)]
+    fn stick_or_slip(
+        &self,
+        k: usize,
+        friction: Friction,
+        stick: &mut Stick<'_, S>,
+        arm: S::V,
+        out: &Forces<S>,
+    ) -> Option<(S::V, bool)> {
+        let k_t = self.penalty;
+        let (point, slipping) = (&mut *stick.point, &mut *stick.slipping);
+        let normal_force = out.contact[k];
+        if normal_force <= 0.0 {
+            *point = arm;
+            *slipping = false;
+            return None;
+        }
+        let n = self.body_frame_normal(k, &arm);
+        let offset = arm - *point;
+        let tangential = offset - n * n.dot(&offset);
+        let stretch = tangential.dot(&tangential).sqrt();
+        let mu = if *slipping {
+            friction.kinetic_coefficient
+        } else {
+            friction.static_coefficient
+        };
+        let mut elastic = tangential;
+        *slipping = k_t * stretch > mu * normal_force;
+        if *slipping {
+            let limit = friction.kinetic_coefficient * normal_force;
+            let kept = limit / k_t;
+            elastic = tangential * (kept / stretch);
+            *point = arm - elastic;
+            *stick.dissipated += limit * (stretch - kept);
+        }
+        Some((elastic, *slipping))
+    }
+
+    /// [`Model::friction_forces`] of rolling pair `k`: its spring stretched by the slip of the
+    /// ball's material point `sigma` that touched at the last increment, then the stick point
+    /// carried on with the contact point (the stretch kept) and `sigma` moved to the material
+    /// point that touches now. Returns whether it slipped.
+    #[inline(never)]
+    fn rolling_friction<const ENERGY: bool>(
+        &self,
+        cfg: &Config<S>,
+        k: usize,
+        friction: Friction,
+        stick: &mut Stick<'_, S>,
+        sigma: &mut S::V,
+        out: &mut Forces<S>,
+    ) -> bool {
+        let arm = self.material_arm(cfg, k, sigma);
+        let loaded = self.stick_or_slip(k, friction, stick, arm, out);
+        if let Some((elastic, _)) = loaded {
+            let k_t = self.penalty;
+            if ENERGY {
+                out.elastic += 0.5 * k_t * elastic.dot(&elastic);
+            }
+            self.push_tangential(cfg, k, &(elastic * -k_t), out);
+        }
+        *stick.point += self.body_frame_arm(cfg, k) - arm;
+        *sigma = self.touching_material(cfg, k);
+        loaded.is_some_and(|(_, slips)| slips)
+    }
+
     /// Add a tangential force `f` (the body's frame) on pair `k`'s node (a ball's contact
     /// point), and its reaction on the body there, to `out`.
     fn push_tangential(&self, cfg: &Config<S>, k: usize, f: &S::V, out: &mut Forces<S>) {
+        match self.contacts[k].slave {
+            Point::Particle(i) => self.push_on_particle(cfg, k, i, f, out),
+            _ => self.push_tangential_at_touch(cfg, k, f, out),
+        }
+    }
+
+    /// [`Model::push_tangential`] on pair `k`, whose node is particle `i`.
+    fn push_on_particle(&self, cfg: &Config<S>, k: usize, i: usize, f: &S::V, out: &mut Forces<S>) {
         let c = &self.contacts[k];
         let f = self.to_world(cfg, c.body, f);
-        let Point::Particle(i) = c.slave else {
-            return self.push_at_touch(cfg, k, &self.world_normal(cfg, k), f, out);
-        };
         out.add_particle(i, f);
         out.b[c.body] -= f;
-        out.m[c.body] -= S::moment(&self.contact_arm(cfg, k), &f);
+        out.m[c.body] -= S::moment(&self.arm_at(cfg, k, cfg.u.get(i)), &f);
     }
 
     /// The stick springs of the pairs with friction about the nodes' places at t = 0 (a ball's

@@ -133,8 +133,7 @@ pub(super) struct Contact<S: Space> {
     pub(super) normal: S::V,
     /// The contact node's offset from the reference node at t = 0 (small-rotation arm).
     pub(super) arm0: S::V,
-    /// Gap at t = 0, the ball's radius taken off (small rotation: the constant part of the
-    /// linearised gap).
+    /// The node's gap at t = 0 (small rotation: the constant part of the linearised gap).
     pub(super) gap0: f64,
     /// Coulomb friction ([`super::friction`]); `None`: frictionless.
     pub(super) friction: Option<Friction>,
@@ -576,7 +575,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                     face,
                     normal,
                     arm0,
-                    gap0: normal.dot(&(arm0 - face)) - c.node_radius,
+                    gap0: normal.dot(&(arm0 - face)),
                     friction: c.friction,
                 }
             })
@@ -715,17 +714,26 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// Signed gap of a contact pair (negative: penetration) and the current outward normal.
     #[inline(always)]
     pub fn gap(&self, cfg: &Config<S>, k: usize) -> (f64, S::V) {
+        match self.contacts[k].slave {
+            Point::Particle(i) => self.gap_at(cfg, k, cfg.u.get(i)),
+            _ => self.touch_gap(cfg, k),
+        }
+    }
+
+    /// The signed distance of pair `k`'s node, displaced by `u`, from its surface, and the
+    /// current outward normal: the gap of a node that touches with itself.
+    #[inline(always)]
+    pub(super) fn gap_at(&self, cfg: &Config<S>, k: usize, u: S::V) -> (f64, S::V) {
         let c = &self.contacts[k];
         if let Some((centre, shape)) = &c.solid {
-            let (d, n) = S::solid_gap(shape, &self.local(cfg, k, centre));
+            let (d, n) = S::solid_gap(shape, &self.local_at(cfg, k, u, centre));
             return (d, self.to_world(cfg, c.body, &n));
         }
         if FINITE {
             let n = S::rotate(&cfg.br[c.body], &c.normal);
-            (n.dot(&self.face_to_node(cfg, k)) - c.radius, n)
+            (n.dot(&self.face_to_node_at(cfg, k, u)), n)
         } else {
-            let relative = self.displacement(cfg, &c.slave) - cfg.bu[c.body];
-            let th = &cfg.bth[c.body];
+            let (th, relative) = (&cfg.bth[c.body], u - cfg.bu[c.body]);
             let d = c.gap0 + c.normal.dot(&relative) - c.normal.dot(&S::cross(th, &c.arm0));
             (d, c.normal)
         }
@@ -733,10 +741,17 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
 
     /// A contact node's position relative to its solid's centre, in the body frame (small
     /// rotation: Rᵀ ≈ 1 − [θ]×).
-    #[inline]
+    #[inline(always)]
     pub(super) fn local(&self, cfg: &Config<S>, k: usize, centre: &S::V) -> S::V {
+        let u = self.node_displacement(cfg, &self.contacts[k].slave);
+        self.local_at(cfg, k, u, centre)
+    }
+
+    /// [`Model::local`] with the node displaced by `u`.
+    #[inline(always)]
+    pub(super) fn local_at(&self, cfg: &Config<S>, k: usize, u: S::V, centre: &S::V) -> S::V {
         let c = &self.contacts[k];
-        let arm = c.arm0 + (self.displacement(cfg, &c.slave) - cfg.bu[c.body]);
+        let arm = c.arm0 + (u - cfg.bu[c.body]);
         if FINITE {
             S::unrotate(&cfg.br[c.body], &arm) - *centre
         } else {
@@ -756,11 +771,22 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
 
     /// From the body's reference node to a contact node (small rotation: at t = 0); a ball
     /// touches [`Contact::radius`] from it ([`Model::touch_arm`]).
-    #[inline]
+    #[inline(always)]
     pub(super) fn contact_arm(&self, cfg: &Config<S>, k: usize) -> S::V {
         let c = &self.contacts[k];
         if FINITE {
-            c.arm0 + (self.displacement(cfg, &c.slave) - cfg.bu[c.body])
+            self.arm_at(cfg, k, self.node_displacement(cfg, &c.slave))
+        } else {
+            c.arm0
+        }
+    }
+
+    /// [`Model::contact_arm`] with the node displaced by `u`.
+    #[inline(always)]
+    pub(super) fn arm_at(&self, cfg: &Config<S>, k: usize, u: S::V) -> S::V {
+        let c = &self.contacts[k];
+        if FINITE {
+            c.arm0 + (u - cfg.bu[c.body])
         } else {
             c.arm0
         }
@@ -772,7 +798,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     #[inline]
     pub(super) fn normal_rate(&self, cfg: &Config<S>, vel: &Rates<S>, k: usize, n: &S::V) -> f64 {
         let c = &self.contacts[k];
-        let (p, b) = (self.velocity(cfg, vel, &c.slave), c.body);
+        let (p, b) = (self.node_velocity(cfg, vel, &c.slave), c.body);
         n.dot(&(p - vel.b[b] - S::cross(&vel.w[b], &self.contact_arm(cfg, k))))
     }
 
@@ -836,8 +862,15 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// penalty stiffness does not multiply the cancellation of body-sized positions.
     #[inline(always)]
     pub(super) fn face_to_node(&self, cfg: &Config<S>, k: usize) -> S::V {
+        let u = self.node_displacement(cfg, &self.contacts[k].slave);
+        self.face_to_node_at(cfg, k, u)
+    }
+
+    /// [`Model::face_to_node`] with the node displaced by `u`.
+    #[inline(always)]
+    pub(super) fn face_to_node_at(&self, cfg: &Config<S>, k: usize, u: S::V) -> S::V {
         let c = &self.contacts[k];
-        let relative = self.displacement(cfg, &c.slave) - cfg.bu[c.body];
+        let relative = u - cfg.bu[c.body];
         (c.arm0 - c.face) + relative - S::turned(&cfg.br[c.body], &c.face)
     }
 }

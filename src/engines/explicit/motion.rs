@@ -316,7 +316,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             let (_, n) = self.gap(cfg, k);
             return self.normal_rate(cfg, vel, k, &n);
         }
-        let (node, b) = (self.velocity(cfg, vel, &c.slave), c.body);
+        let (node, b) = (self.node_velocity(cfg, vel, &c.slave), c.body);
         if FINITE {
             let r = &cfg.br[b];
             let n = S::rotate(r, &c.normal);
@@ -358,7 +358,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         let c = &self.contacts[k];
         let b = c.body;
         let (node_v, node_a) = (
-            self.velocity(cfg, vel, &c.slave),
+            self.node_velocity(cfg, vel, &c.slave),
             self.node_acceleration(cfg, vel, acc, k),
         );
         if let Some((_, shape)) = &c.solid {

@@ -18,7 +18,7 @@
 //! the contact point ([`super::friction`]). Where the slave is a particle, c is the node and the
 //! two views coincide.
 
-use super::model::{Forces, Model, Point};
+use super::model::{ContactMode, Forces, Model, Point};
 use super::space::{Lin, Space};
 use super::state::{Config, Rates};
 
@@ -31,6 +31,37 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             Point::Body { body, rho } => Some((body, rho)),
             _ => None,
         }
+    }
+
+    /// A contact node's displacement ([`Model::displacement`]), the particle's read in line and
+    /// a body's point out of line: the particles' contact loop stays small.
+    #[inline(always)]
+    pub(super) fn node_displacement(&self, cfg: &Config<S>, slave: &Point<S>) -> S::V {
+        match slave {
+            Point::Particle(i) => cfg.u.get(*i),
+            _ => self.displacement_out_of_line(cfg, slave),
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn displacement_out_of_line(&self, cfg: &Config<S>, p: &Point<S>) -> S::V {
+        self.displacement(cfg, p)
+    }
+
+    /// A contact node's velocity ([`Model::velocity`]), as [`Model::node_displacement`].
+    #[inline(always)]
+    pub(super) fn node_velocity(&self, cfg: &Config<S>, vel: &Rates<S>, slave: &Point<S>) -> S::V {
+        match slave {
+            Point::Particle(i) => vel.p.get(*i),
+            _ => self.velocity_out_of_line(cfg, vel, slave),
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn velocity_out_of_line(&self, cfg: &Config<S>, vel: &Rates<S>, p: &Point<S>) -> S::V {
+        self.velocity(cfg, vel, p)
     }
 
     /// Pair `k`'s outward normal in the world.
@@ -49,7 +80,9 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
 
     /// Add a force `f` (world) at rolling pair `k`'s contact point on the ball's body (with
     /// its moment about the reference node), and its reaction on the face's body, to `out`;
-    /// `n` is the world normal.
+    /// `n` is the world normal. Kept out of line: the particles' contact loop stays small.
+    #[cold]
+    #[inline(never)]
     pub(super) fn push_at_touch(
         &self,
         cfg: &Config<S>,
@@ -65,6 +98,63 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         out.m[slave] += S::moment(&arm, &f);
         out.b[c.body] -= f;
         out.m[c.body] -= S::moment(&self.touch_arm(cfg, k, n), &f);
+    }
+
+    /// Rolling pair `k`'s gap: the node's less the ball's radius; and the outward normal.
+    #[cold]
+    #[inline(never)]
+    pub(super) fn touch_gap(&self, cfg: &Config<S>, k: usize) -> (f64, S::V) {
+        let c = &self.contacts[k];
+        let (d, n) = self.gap_at(cfg, k, self.displacement(cfg, &c.slave));
+        (d - c.radius, n)
+    }
+
+    /// The force pass's normal penalty on rolling pair `k` under `mode` (as for a particle's
+    /// pair, at the contact point): the force and gap into `out`, and the penalty's elastic
+    /// energy when `ENERGY` (0 otherwise, and under given forces).
+    #[cold]
+    #[inline(never)]
+    pub(super) fn touch_penalty<const ENERGY: bool>(
+        &self,
+        cfg: &Config<S>,
+        k: usize,
+        mode: ContactMode,
+        out: &mut Forces<S>,
+    ) -> f64 {
+        let (d, n) = self.touch_gap(cfg, k);
+        let f = self.penalty_force(k, mode, d);
+        out.contact[k] = f;
+        out.gap[k] = d;
+        self.push_at_touch(cfg, k, &n, n * f, out);
+        if ENERGY && !matches!(mode, ContactMode::Given(_)) {
+            0.5 * f * f / self.penalty
+        } else {
+            0.0
+        }
+    }
+
+    /// Rolling pair `k`'s contact point relative to the face body's reference node, in that
+    /// body's frame.
+    #[cold]
+    #[inline(never)]
+    pub(super) fn touch_in_body_frame(&self, cfg: &Config<S>, k: usize) -> S::V {
+        let c = &self.contacts[k];
+        self.local(cfg, k, &S::V::zero()) - c.normal * c.radius
+    }
+
+    /// Add a tangential force `f` (the face body's frame) at rolling pair `k`'s contact point,
+    /// and its reaction, to `out` ([`Model::push_at_touch`]).
+    #[cold]
+    #[inline(never)]
+    pub(super) fn push_tangential_at_touch(
+        &self,
+        cfg: &Config<S>,
+        k: usize,
+        f: &S::V,
+        out: &mut Forces<S>,
+    ) {
+        let f = self.to_world(cfg, self.contacts[k].body, f);
+        self.push_at_touch(cfg, k, &self.world_normal(cfg, k), f, out);
     }
 
     /// Where the ball's material point that touches at `cfg` is, relative to the node, in the

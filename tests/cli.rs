@@ -36,7 +36,7 @@ fn list_prints_one_line_per_case() {
         .iter()
         .filter(|l| l.starts_with("friction_"))
         .collect();
-    assert_eq!(rough.len(), 10, "{stdout}");
+    assert_eq!(rough.len(), 12, "{stdout}");
     assert!(rough.iter().all(|l| l.contains("friction(1)")), "{stdout}");
     assert_eq!(
         lines.iter().filter(|l| l.starts_with("contact_")).count(),

@@ -18,6 +18,8 @@
 //!   order 1 against decelerations of order 5 m/s² (measured: ≤ 6e-14 s);
 //! - the dissipated energy is within [`ENERGY`] = 1e-10 of the exact one, relative: it is
 //!   integrated with the state at the same tolerance (measured: ≤ 6e-14).
+mod common;
+
 use crosscheck::case;
 use crosscheck::engines::reference::ReferenceEngine;
 use crosscheck::engines::{Engine, RunOutput, RunSettings};
@@ -42,50 +44,6 @@ fn run(case: &str) -> RunOutput {
     ReferenceEngine
         .run(&scene, &RunSettings::default())
         .unwrap_or_else(|e| panic!("{case}: {e}"))
-}
-
-/// Each named column of `out` against `exact(t)` (one value per name) at every row: within
-/// [`HISTORY`] of the exact peak, or within [`ZERO`] where the exact column is zero.
-fn assert_history(out: &RunOutput, names: &[&str], exact: impl Fn(f64) -> Vec<f64>) {
-    let h = &out.history;
-    let t = h.column("t").unwrap();
-    let expected: Vec<Vec<f64>> = t.iter().map(|t| exact(*t)).collect();
-    for (i, name) in names.iter().enumerate() {
-        let got = h.column(name).unwrap_or_else(|| panic!("no column {name}"));
-        let peak = expected.iter().fold(0.0_f64, |m, e| m.max(e[i].abs()));
-        let error = got
-            .iter()
-            .zip(&expected)
-            .fold(0.0_f64, |m, (g, e)| m.max((g - e[i]).abs()));
-        if peak == 0.0 {
-            println!("{name}: exact 0, largest |value| {error:.2e}");
-            assert!(error <= ZERO, "{name}: {error:e} where it is exactly 0");
-        } else {
-            println!("{name}: error {:.2e} of the peak {peak:.6}", error / peak);
-            assert!(
-                error <= HISTORY * peak,
-                "{name}: {:e} of the peak",
-                error / peak
-            );
-        }
-    }
-}
-
-/// A measure against its exact value, within `tolerance` (absolute).
-fn assert_measure(out: &RunOutput, name: &str, exact: f64, tolerance: f64) {
-    let got = *out
-        .info
-        .measures
-        .get(name)
-        .unwrap_or_else(|| panic!("no measure {name}"));
-    println!(
-        "{name}: {got:.15} against {exact:.15} ({:.1e})",
-        got - exact
-    );
-    assert!(
-        (got - exact).abs() <= tolerance,
-        "{name}: {got} against {exact}"
-    );
 }
 
 /// The counts of the friction's events.
@@ -113,12 +71,12 @@ fn a_node_launched_along_a_face_stops_at_v0_over_mu_g_2d() {
     let out = run("friction_slide_stop_2d");
     let (v0, mu) = (2.0, 0.5);
     let columns = ["rz", "ux", "ux_node", "contact_force", "vx_node"];
-    assert_history(&out, &columns, |t| {
+    common::assert_history(&out, &columns, (HISTORY, ZERO), |t| {
         let (s, v, _) = slide_stop(v0, mu, t);
         vec![0.0, 0.0, s, G, v]
     });
-    assert_measure(&out, "stick_1_time", slide_stop(v0, mu, 0.0).2, EVENT);
-    assert_measure(&out, "frictional_dissipation", 0.5 * v0 * v0, ENERGY * 2.0);
+    common::assert_measure(&out, "stick_1_time", slide_stop(v0, mu, 0.0).2, EVENT);
+    common::assert_measure(&out, "frictional_dissipation", 0.5 * v0 * v0, ENERGY * 2.0);
     assert_counts(&out, 1.0, 0.0, 0.0);
 }
 
@@ -136,12 +94,12 @@ fn assert_slide_stop_3d(case: &str, angle: f64) {
         "vs_node",
         "us_side",
     ];
-    assert_history(&out, &columns, |t| {
+    common::assert_history(&out, &columns, (HISTORY, ZERO), |t| {
         let (s, v, _) = slide_stop(v0, mu, t);
         vec![0.0, 0.0, s * angle.cos(), G, s, v, 0.0]
     });
-    assert_measure(&out, "stick_1_time", slide_stop(v0, mu, 0.0).2, EVENT);
-    assert_measure(&out, "frictional_dissipation", 0.5 * v0 * v0, ENERGY * 2.0);
+    common::assert_measure(&out, "stick_1_time", slide_stop(v0, mu, 0.0).2, EVENT);
+    common::assert_measure(&out, "frictional_dissipation", 0.5 * v0 * v0, ENERGY * 2.0);
     assert_counts(&out, 1.0, 0.0, 0.0);
 }
 
@@ -166,11 +124,11 @@ fn a_node_on_a_face_at_20_degrees_with_mu_05_stays() {
     let out = run("friction_incline_stick");
     let theta = 20.0_f64.to_radians();
     let columns = ["rz", "ux", "ux_node", "contact_force", "us_node", "vs_node"];
-    assert_history(&out, &columns, |_| {
+    common::assert_history(&out, &columns, (HISTORY, ZERO), |_| {
         vec![0.0, 0.0, 0.0, G * theta.cos(), 0.0, 0.0]
     });
-    assert_measure(&out, "stick_1_time", 0.0, 0.0);
-    assert_measure(&out, "frictional_dissipation", 0.0, 0.0);
+    common::assert_measure(&out, "stick_1_time", 0.0, 0.0);
+    common::assert_measure(&out, "frictional_dissipation", 0.0, 0.0);
     assert_counts(&out, 1.0, 0.0, 0.0);
 }
 
@@ -182,14 +140,14 @@ fn a_node_on_a_face_at_35_degrees_with_mu_03_slides_at_g_sin_minus_mu_cos() {
     let (theta, mu) = (35.0_f64.to_radians(), 0.3);
     let a = G * (theta.sin() - mu * theta.cos());
     let columns = ["rz", "ux", "ux_node", "contact_force", "us_node", "vs_node"];
-    assert_history(&out, &columns, |t| {
+    common::assert_history(&out, &columns, (HISTORY, ZERO), |t| {
         let s = 0.5 * a * t * t;
         vec![0.0, 0.0, -s * theta.cos(), G * theta.cos(), s, a * t]
     });
-    assert_measure(&out, "slip_1_time", 0.0, 0.0);
+    common::assert_measure(&out, "slip_1_time", 0.0, 0.0);
     let normal = G * theta.cos();
     let dissipated = mu * normal * 0.5 * a * 0.5 * 0.5;
-    assert_measure(
+    common::assert_measure(
         &out,
         "frictional_dissipation",
         dissipated,
@@ -262,20 +220,20 @@ fn the_coulomb_damped_oscillator_turns_and_stops_where_the_closed_form_says() {
     }
     let out = run("friction_spring_stickslip");
     let columns = ["rz", "ux", "ux_node", "contact_force", "vx_node"];
-    assert_history(&out, &columns, |t| {
+    common::assert_history(&out, &columns, (HISTORY, ZERO), |t| {
         let (x, v) = exact.at(t);
         vec![0.0, 0.0, x, G, v]
     });
     for (i, (t, _)) in turns[..turns.len() - 1].iter().enumerate() {
-        assert_measure(&out, &format!("reversal_{}_time", i + 1), *t, EVENT);
+        common::assert_measure(&out, &format!("reversal_{}_time", i + 1), *t, EVENT);
     }
     let (stop, rest) = *turns.last().unwrap();
-    assert_measure(&out, "stick_1_time", stop, EVENT);
+    common::assert_measure(&out, "stick_1_time", stop, EVENT);
     let final_x = *out.history.column("ux_node").unwrap().last().unwrap();
     println!("rests at x = {final_x:.15} (exact {rest:.15}) from t = {stop:.15} s");
     assert!((final_x - rest).abs() <= HISTORY * turns[0].1);
     let dissipated = 0.5 * V0 * V0 - 0.5 * SPRING * rest * rest;
-    assert_measure(
+    common::assert_measure(
         &out,
         "frictional_dissipation",
         dissipated,
@@ -322,7 +280,7 @@ fn a_slip_that_turns_stops_where_the_closed_form_says() {
     let stop = v0 * k / (k * k - f * f);
     let x = 2.0 * v0 * v0 * r / (f * (4.0 * r * r - 1.0));
     let z = v0 * v0 / (4.0 * f * (r * r - 1.0));
-    assert_measure(&out, "stick_1_time", stop, EVENT);
+    common::assert_measure(&out, "stick_1_time", stop, EVENT);
     let h = &out.history;
     let last = |name: &str| *h.column(name).unwrap().last().unwrap();
     println!(
@@ -342,7 +300,7 @@ fn a_slip_that_turns_stops_where_the_closed_form_says() {
     );
     assert!(last("vs_node").abs() <= ZERO);
     let dissipated = 0.5 * v0 * v0 + f * z;
-    assert_measure(
+    common::assert_measure(
         &out,
         "frictional_dissipation",
         dissipated,
@@ -418,8 +376,8 @@ fn a_stick_breaks_when_its_friction_reaches_mu_s_n() {
     }
     let meet = lo;
     println!("breaks away at {breakaway:.15} s, slides until {meet:.15} s");
-    assert_measure(&out, "stick_1_time", 0.0, 0.0);
-    assert_measure(&out, "slip_1_time", breakaway, EVENT);
+    common::assert_measure(&out, "stick_1_time", 0.0, 0.0);
+    common::assert_measure(&out, "slip_1_time", breakaway, EVENT);
     // At `meet` the pair sticks if, moving together, the node needs at most μ_s m g.
     let sticks = k * block(meet).0.abs() / (big + mass) <= mu_s * G;
     let second = if sticks {
@@ -427,7 +385,7 @@ fn a_stick_breaks_when_its_friction_reaches_mu_s_n() {
     } else {
         "reversal_1_time"
     };
-    assert_measure(&out, second, meet, EVENT);
+    common::assert_measure(&out, second, meet, EVENT);
     let h = &out.history;
     let t = h.column("t").unwrap();
     let before: Vec<usize> = (0..t.len()).filter(|i| t[*i] < meet).collect();
@@ -493,14 +451,14 @@ fn a_pull_ramping_at_10_n_per_s_breaks_the_node_away_at_mu_s_n() {
     assert!((v1 - 2.297590).abs() < 5e-7, "v(1) = {v1}");
     let out = run("friction_ramp_breakaway");
     let columns = ["rz", "ux", "ux_node", "contact_force", "vx_node"];
-    assert_history(&out, &columns, |t| {
+    common::assert_history(&out, &columns, (HISTORY, ZERO), |t| {
         let (x, v) = exact(t);
         vec![0.0, 0.0, x, n, v]
     });
-    assert_measure(&out, "stick_1_time", 0.0, 0.0);
-    assert_measure(&out, "slip_1_time", t_b, EVENT);
+    common::assert_measure(&out, "stick_1_time", 0.0, 0.0);
+    common::assert_measure(&out, "slip_1_time", t_b, EVENT);
     let dissipated = mu_k * n * x1;
-    assert_measure(
+    common::assert_measure(
         &out,
         "frictional_dissipation",
         dissipated,
@@ -595,7 +553,8 @@ fn a_spring_under_a_load_ramped_then_held_follows_the_driven_oscillator() {
         }
     };
     let out = ramped_spring("[[0.0, 0.0], [0.5, 1.0]]", 2.0);
-    assert_history(&out, &["u_end", "u_mid", "v_end", "v_mid"], |t| {
+    let columns = ["u_end", "u_mid", "v_end", "v_mid"];
+    common::assert_history(&out, &columns, (HISTORY, ZERO), |t| {
         let (x, v) = exact(t);
         vec![x, 0.0, v, 0.0]
     });

@@ -25,6 +25,8 @@
 //!   against a slip deceleration of order 6 m/s²;
 //! - the dissipated energy is within [`ENERGY`] = 1e-9 J of the exact one (1.3–1.5 J): it is
 //!   integrated with the state at the same tolerance.
+mod common;
+
 use crosscheck::case;
 use crosscheck::engines::reference::ReferenceEngine;
 use crosscheck::engines::{Engine, RunOutput, RunSettings};
@@ -92,50 +94,6 @@ impl Roll {
     }
 }
 
-/// Each named column of `out` against `exact(t)` (one value per name) at every row: within
-/// [`HISTORY`] of the exact peak, or within [`ZERO`] where the exact column is zero.
-fn assert_history(out: &RunOutput, names: &[&str], exact: impl Fn(f64) -> Vec<f64>) {
-    let h = &out.history;
-    let t = h.column("t").unwrap();
-    let expected: Vec<Vec<f64>> = t.iter().map(|t| exact(*t)).collect();
-    for (i, name) in names.iter().enumerate() {
-        let got = h.column(name).unwrap_or_else(|| panic!("no column {name}"));
-        let peak = expected.iter().fold(0.0_f64, |m, e| m.max(e[i].abs()));
-        let error = got
-            .iter()
-            .zip(&expected)
-            .fold(0.0_f64, |m, (g, e)| m.max((g - e[i]).abs()));
-        if peak == 0.0 {
-            println!("{name}: exact 0, largest |value| {error:.2e}");
-            assert!(error <= ZERO, "{name}: {error:e} where it is exactly 0");
-        } else {
-            println!("{name}: error {:.2e} of the peak {peak:.6}", error / peak);
-            assert!(
-                error <= HISTORY * peak,
-                "{name}: {:e} of the peak",
-                error / peak
-            );
-        }
-    }
-}
-
-/// A measure against its exact value, within `tolerance` (absolute).
-fn assert_measure(out: &RunOutput, name: &str, exact: f64, tolerance: f64) {
-    let got = *out
-        .info
-        .measures
-        .get(name)
-        .unwrap_or_else(|| panic!("no measure {name}"));
-    println!(
-        "{name}: {got:.15} against {exact:.15} ({:.1e})",
-        got - exact
-    );
-    assert!(
-        (got - exact).abs() <= tolerance,
-        "{name}: {got} against {exact}"
-    );
-}
-
 /// One stick (the roll's start) and no other event.
 fn assert_one_stick(out: &RunOutput) {
     let m = &out.info.measures;
@@ -174,12 +132,12 @@ fn a_disc_launched_sliding_starts_rolling_at_v0_over_3_mu_g() {
         "uy_node",
         "rz_disc",
     ];
-    assert_history(&out, &columns, |t| {
+    common::assert_history(&out, &columns, (HISTORY, ZERO), |t| {
         let (x, v, theta) = disc.at(t);
         vec![0.0, 0.0, x, disc.m * G, v, 0.0, theta]
     });
-    assert_measure(&out, "stick_1_time", disc.start(), EVENT);
-    assert_measure(&out, "frictional_dissipation", disc.dissipated(), ENERGY);
+    common::assert_measure(&out, "stick_1_time", disc.start(), EVENT);
+    common::assert_measure(&out, "frictional_dissipation", disc.dissipated(), ENERGY);
     assert_one_stick(&out);
 }
 
@@ -207,11 +165,11 @@ fn a_ball_launched_sliding_starts_rolling_at_2_v0_over_7_mu_g() {
         "rz_ball",
         "rx_ball",
     ];
-    assert_history(&out, &columns, |t| {
+    common::assert_history(&out, &columns, (HISTORY, ZERO), |t| {
         let (x, v, theta) = ball.at(t);
         vec![0.0, 0.0, x, ball.m * G, v, 0.0, 0.0, theta, 0.0]
     });
-    assert_measure(&out, "stick_1_time", ball.start(), EVENT);
-    assert_measure(&out, "frictional_dissipation", ball.dissipated(), ENERGY);
+    common::assert_measure(&out, "stick_1_time", ball.start(), EVENT);
+    common::assert_measure(&out, "frictional_dissipation", ball.dissipated(), ENERGY);
     assert_one_stick(&out);
 }

@@ -18,7 +18,9 @@ fn rust_files(dir: &Path) -> Vec<PathBuf> {
     out
 }
 
-/// Every line of every file under `dir` that contains `needle`, as `path:line: text`.
+/// Every line of every file under `dir` that contains `needle`, as `path:line: text`; a file's
+/// unit tests (from a top-level `#[cfg(test)]` to its end) are not part of the library the flow
+/// describes, and may build their fixture from a case file.
 fn mentions(dir: &str, needle: &str) -> Vec<String> {
     rust_files(Path::new(dir))
         .iter()
@@ -26,6 +28,7 @@ fn mentions(dir: &str, needle: &str) -> Vec<String> {
             fs::read_to_string(p)
                 .unwrap()
                 .lines()
+                .take_while(|l| *l != "#[cfg(test)]")
                 .enumerate()
                 .filter(|(_, l)| l.contains(needle))
                 .map(|(i, l)| format!("{}:{}: {}", p.display(), i + 1, l.trim()))

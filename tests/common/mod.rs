@@ -290,3 +290,52 @@ pub fn number_after(text: &str, marker: &str, end: char) -> f64 {
         .and_then(|x| x.parse().ok())
         .unwrap_or_else(|| panic!("no number after `{marker}` in: {text}"))
 }
+
+/// Each named column of `out` against `exact(t)` (one value per name) at every row: within
+/// `history` of the exact peak, or within `zero` where the exact column is zero.
+pub fn assert_history(
+    out: &RunOutput,
+    names: &[&str],
+    (history, zero): (f64, f64),
+    exact: impl Fn(f64) -> Vec<f64>,
+) {
+    let h = &out.history;
+    let t = h.column("t").unwrap();
+    let expected: Vec<Vec<f64>> = t.iter().map(|t| exact(*t)).collect();
+    for (i, name) in names.iter().enumerate() {
+        let got = h.column(name).unwrap_or_else(|| panic!("no column {name}"));
+        let peak = expected.iter().fold(0.0_f64, |m, e| m.max(e[i].abs()));
+        let error = got
+            .iter()
+            .zip(&expected)
+            .fold(0.0_f64, |m, (g, e)| m.max((g - e[i]).abs()));
+        if peak == 0.0 {
+            println!("{name}: exact 0, largest |value| {error:.2e}");
+            assert!(error <= zero, "{name}: {error:e} where it is exactly 0");
+        } else {
+            println!("{name}: error {:.2e} of the peak {peak:.6}", error / peak);
+            assert!(
+                error <= history * peak,
+                "{name}: {:e} of the peak",
+                error / peak
+            );
+        }
+    }
+}
+
+/// A measure against its exact value, within `tolerance` (absolute).
+pub fn assert_measure(out: &RunOutput, name: &str, exact: f64, tolerance: f64) {
+    let got = *out
+        .info
+        .measures
+        .get(name)
+        .unwrap_or_else(|| panic!("no measure {name}"));
+    println!(
+        "{name}: {got:.15} against {exact:.15} ({:.1e})",
+        got - exact
+    );
+    assert!(
+        (got - exact).abs() <= tolerance,
+        "{name}: {got} against {exact}"
+    );
+}

@@ -34,8 +34,7 @@
 //! gap 0, and `valid` 1.
 
 use super::friction_phases::{Line, Segment, state_at};
-use super::unsupported;
-use crate::contract::VALID_COLUMN;
+use super::{columns_history, unsupported};
 use crate::engines::{EngineError, History};
 use crate::scene::{
     Amplitude, Attachment, Connection, ContactState, Dof, GEOMETRY_TOLERANCE, NodeId, PointLoad,
@@ -47,28 +46,14 @@ use nalgebra::Vector3;
 pub fn solve(scene: &Scene) -> Result<History, EngineError> {
     let setup = Setup::of(scene)?;
     let phases = setup.line.phases(scene.duration())?;
-    let times = scene.output_times();
-    let rows = times
-        .iter()
-        .map(|&t| {
-            let (x, v) = state_at(&phases, t);
-            std::iter::once(t)
-                // + 0.0 writes a signed zero (a direction's negative part times x = 0) as 0.
-                .chain(
-                    scene
-                        .columns
-                        .iter()
-                        .map(|c| setup.probe(&c.probe, t, x, v) + 0.0),
-                )
-                .chain(std::iter::once(1.0))
-                .collect()
-        })
-        .collect();
-    let columns = std::iter::once("t".to_string())
-        .chain(scene.columns.iter().map(|c| c.name.clone()))
-        .chain(std::iter::once(VALID_COLUMN.to_string()))
-        .collect();
-    Ok(History { columns, rows })
+    let history = columns_history(scene, &scene.output_times(), |_, t| {
+        let (x, v) = state_at(&phases, t);
+        // + 0.0 writes a signed zero (a direction's negative part times x = 0) as 0.
+        (scene.columns.iter())
+            .map(|c| setup.probe(&c.probe, t, x, v) + 0.0)
+            .collect()
+    });
+    Ok(history)
 }
 
 /// The scene reduced to its line: the particle, the face's normal n, the loads on the particle,

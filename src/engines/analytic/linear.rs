@@ -70,8 +70,7 @@
 //! rotation = axis·(R q), zero = 0. Contact (pairs or contact-force columns), a free DOF without
 //! mass in a dynamic step and a singular mass matrix are not supported.
 
-use super::{exponential_states, unsupported};
-use crate::contract::VALID_COLUMN;
+use super::{columns_history, exponential_states, unsupported};
 use crate::engines::{EngineError, History};
 use crate::scene::{
     Attachment, BodyId, Connection, Dimension, Dof, Element, NodeId, Probe, Scene, Step, StepKind,
@@ -581,28 +580,18 @@ impl<'a> Motion<'a> {
                 Probe::Zero { .. } | Probe::ContactForce { .. } | Probe::Gap { .. } => None,
             })
             .collect();
-        let rows = self
-            .times
-            .iter()
-            .zip(self.states)
-            .map(|(&t, state)| {
-                let (q, qd) = state.expect("every output time lies in a dynamic step");
-                std::iter::once(t)
-                    .chain(maps.iter().map(|m| match m {
-                        Some((j, d, velocity)) => {
-                            let u = j * if *velocity { &qd } else { &q };
-                            d.dot(&Vector3::new(u[0], u[1], u[2]))
-                        }
-                        None => 0.0,
-                    }))
-                    .chain(std::iter::once(1.0))
-                    .collect()
-            })
-            .collect();
-        let columns = std::iter::once("t".to_string())
-            .chain(scene.columns.iter().map(|c| c.name.clone()))
-            .chain(std::iter::once(VALID_COLUMN.to_string()))
-            .collect();
-        History { columns, rows }
+        columns_history(scene, &self.times, |i, _| {
+            let (q, qd) =
+                (self.states[i].as_ref()).expect("every output time lies in a dynamic step");
+            (maps.iter())
+                .map(|m| match m {
+                    Some((j, d, velocity)) => {
+                        let u = j * if *velocity { qd } else { q };
+                        d.dot(&Vector3::new(u[0], u[1], u[2]))
+                    }
+                    None => 0.0,
+                })
+                .collect()
+        })
     }
 }

@@ -136,6 +136,28 @@ pub(crate) fn history(scene: &Scene, times: &[f64], rows: Vec<Vec<f64>>) -> Hist
     }
 }
 
+/// A history of the scene's own columns at the times `times`: `values(i, t)` gives the columns'
+/// values at the i-th time, in the scene's order; every row is valid.
+pub(crate) fn columns_history(
+    scene: &Scene,
+    times: &[f64],
+    mut values: impl FnMut(usize, f64) -> Vec<f64>,
+) -> History {
+    let rows = (times.iter().enumerate())
+        .map(|(i, &t)| {
+            std::iter::once(t)
+                .chain(values(i, t))
+                .chain(std::iter::once(1.0))
+                .collect()
+        })
+        .collect();
+    let columns = std::iter::once("t".to_string())
+        .chain(scene.columns.iter().map(|c| c.name.clone()))
+        .chain(std::iter::once(VALID_COLUMN.to_string()))
+        .collect();
+    History { columns, rows }
+}
+
 fn unsupported<T>(what: impl Into<String>) -> Result<T, EngineError> {
     Err(EngineError::Unsupported(format!(
         "analytic: {}",

@@ -34,9 +34,9 @@
 //! velocity from u e and v e, the ball's rotation about an axis parallel to a from φ (0 about an
 //! axis across it), every other node and body 0, the contact force N, the gap 0, `valid` 1.
 
+use super::columns_history;
 use super::friction::{line, refuse, still};
 use super::friction_phases::{Line, Segment, state_at};
-use crate::contract::VALID_COLUMN;
 use crate::engines::{EngineError, History};
 use crate::scene::{
     Attachment, BodyId, ContactState, Dimension, Dof, GEOMETRY_TOLERANCE, NodeId, Probe, Scene,
@@ -48,27 +48,15 @@ use nalgebra::Vector3;
 pub fn solve(scene: &Scene) -> Result<History, EngineError> {
     let rolling = Rolling::of(scene)?;
     let phases = rolling.slip_line().phases(scene.duration())?;
-    let rows = (scene.output_times().iter())
-        .map(|&t| {
-            let (x, s) = state_at(&phases, t);
-            let motion = rolling.motion(t, x, s);
-            std::iter::once(t)
-                // + 0.0 writes a signed zero as 0.
-                .chain(
-                    scene
-                        .columns
-                        .iter()
-                        .map(|c| rolling.probe(&c.probe, &motion) + 0.0),
-                )
-                .chain(std::iter::once(1.0))
-                .collect()
-        })
-        .collect();
-    let columns = std::iter::once("t".to_string())
-        .chain(scene.columns.iter().map(|c| c.name.clone()))
-        .chain(std::iter::once(VALID_COLUMN.to_string()))
-        .collect();
-    Ok(History { columns, rows })
+    let history = columns_history(scene, &scene.output_times(), |_, t| {
+        let (x, s) = state_at(&phases, t);
+        let motion = rolling.motion(t, x, s);
+        // + 0.0 writes a signed zero as 0.
+        (scene.columns.iter())
+            .map(|c| rolling.probe(&c.probe, &motion) + 0.0)
+            .collect()
+    });
+    Ok(history)
 }
 
 /// The scene reduced to the ball's motion along e and its spin about a.

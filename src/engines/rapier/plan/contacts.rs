@@ -38,30 +38,17 @@ pub(super) fn colliders(
         let origin = scene.nodes[scene.bodies[pair.body].reference].position;
         let size = size(scene, pair);
         let (collider, surface, radius) = match pair.surface.clone() {
-            Surface::Plane { point, normal } if pair.rolls() => {
-                let wide = reach(scene, pair, size);
-                let slab = slab(
-                    scene.dimension,
-                    face_body,
-                    point - origin,
-                    normal,
-                    size,
-                    wide,
-                    0.0,
-                );
-                (slab.0, slab.1, pair.node_radius)
-            }
             Surface::Plane { point, normal } => {
-                let radius = 1e-3 * size;
-                let slab = slab(
-                    scene.dimension,
-                    face_body,
-                    point - origin,
-                    normal,
-                    size,
-                    size,
-                    radius,
-                );
+                // A rolling ball is the scene's, touching the face, on a slab as wide as it
+                // could travel; a particle is the centre of a ball of 1e-3 of the scene's size,
+                // on a slab of that size set back by the ball's radius.
+                let (wide, radius, setback) = if pair.rolls() {
+                    (reach(scene, pair, size), pair.node_radius, 0.0)
+                } else {
+                    (size, 1e-3 * size, 1e-3 * size)
+                };
+                let (dimension, offset) = (scene.dimension, point - origin);
+                let slab = slab(dimension, face_body, offset, normal, size, wide, setback);
                 (slab.0, slab.1, radius)
             }
             Surface::Solid { solid, centre } => {

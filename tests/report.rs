@@ -136,9 +136,9 @@ fn sweep_orders_and_floors_are_in_the_summary_and_the_report() {
 /// closes from t = 0) have no closed form, so neither its CSV nor budgets (a budget splits the
 /// error against the closed form), and on one of them (two balls, one free to turn)
 /// `explicit_small` does not apply; rapier refuses the ramp case (μ_s > μ_k): each of its
-/// engines writes no CSV there, and the stepping ones no budget; `explicit` and
-/// `explicit_small` refuse the two roll cases (a body's ball on a face): neither writes a CSV
-/// nor a budget there.
+/// engines writes no CSV there, and the stepping ones no budget; `explicit_small`
+/// refuses the two roll cases (a body's ball on a face, whose contact point moves over the
+/// body): it writes neither a CSV nor a budget there.
 #[test]
 fn every_history_and_budget_of_the_suite_is_written() {
     let (out, ..) = run_into_temporary_directory();
@@ -154,7 +154,7 @@ fn every_history_and_budget_of_the_suite_is_written() {
         .iter()
         .filter(|e| is_rapier(e.name()) && e.stepping().is_some())
         .count();
-    let (without_closed_form, small_refused, rolling_refused) = (10, 1, 2 * 2);
+    let (without_closed_form, small_refused, rolling_refused) = (10, 1, 2);
     assert_eq!(
         written,
         47 * engines.len() - without_closed_form - small_refused - rapier - rolling_refused
@@ -262,17 +262,13 @@ fn summary_and_report_agree() {
     // apply to contact_balls_oblique, has no closed form on the other 9 cases whose contact
     // strikes (5 drops, the tetrahedron, the wedge, the rattle, the ball slide) and is compared
     // over no rows on contact_reopen (its closed form is valid at no row); and the rapier
-    // engines refuse friction_ramp_breakaway (μ_s > μ_k), `explicit` and `explicit_small` the
-    // two roll cases.
+    // engines refuse friction_ramp_breakaway (μ_s > μ_k), `explicit_small` the two roll cases.
     let checks = summary.tolerance_checks();
     let rapier = common::STEPPING
         .iter()
         .filter(|e| e.starts_with("rapier"))
         .count();
-    assert_eq!(
-        checks.len(),
-        47 * common::STEPPING.len() - 11 - rapier - 2 * 2
-    );
+    assert_eq!(checks.len(), 47 * common::STEPPING.len() - 11 - rapier - 2);
     assert!(checks.iter().all(|c| c.tolerance.is_some()));
     assert!(report.contains(&format!(
         "**{} of {} cells meet their tolerance.**",

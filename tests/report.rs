@@ -436,7 +436,7 @@ fn equivalent_cases_are_found_and_agree() {
 /// The stability map is in REPORT.md, one table row per engine whose counts are those of its
 /// CSV, each engine is also run at its own step, and the explicit engine's edge is at the
 /// stable increment on every case without contact that opens and closes: unstable at every
-/// ratio above 1, never below. It maps the 42 cases with a stable increment (not the free
+/// ratio above 1, never below. It maps the 44 cases with a stable increment (not the free
 /// spins).
 #[test]
 fn the_stability_map_is_in_the_report_and_matches_its_csvs() {
@@ -460,7 +460,7 @@ fn the_stability_map_is_in_the_report_and_matches_its_csvs() {
         let (grid, own) = (of("grid"), of("own step"));
         assert_eq!(
             grid.len(),
-            42 * crosscheck::comparison::stability::RATIOS.len()
+            44 * crosscheck::comparison::stability::RATIOS.len()
         );
         // Its own step wherever its job ran (not where it does not apply).
         let mut applies: Vec<&str> = grid

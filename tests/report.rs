@@ -689,6 +689,20 @@ fn the_first_screen_answers_the_three_questions_as_the_csvs_do() {
             .count();
         let row = row_of(e, "**Stable?**");
         assert_eq!(row[3], format!("{bounded} of {}", own.len()), "{e}");
+        // A pair whose map runs stopped with an error has no critical increment: it is named
+        // under the table with the lowest ratio at which one did.
+        let mut failed: Vec<(&str, f64)> = mine
+            .iter()
+            .filter(|r| r[6] == "failed")
+            .map(|r| (r[0].as_str(), r[3].parse::<f64>().unwrap()))
+            .collect();
+        failed.sort_by(|a, b| a.0.cmp(b.0).then(a.1.total_cmp(&b.1)));
+        failed.dedup_by(|a, b| a.0 == b.0);
+        for (case, ratio) in failed {
+            let line =
+                format!("- `{e}` on {case}: a map run stopped with an error from {ratio:.2}×");
+            assert!(first.iter().any(|l| l.starts_with(&line)), "{line}");
+        }
         let lowest = mine
             .iter()
             .filter(|r| r[14] == "bisected" || r[14] == "below")

@@ -187,6 +187,22 @@ pub struct EngineSummary {
     /// The largest increment that stays bounded, from the stability map, bisected.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub critical_increment: Option<CriticalIncrement>,
+    /// Where the stability map's runs stopped with an error: such a pair has no critical
+    /// increment.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stability_failure: Option<StabilityFailure>,
+}
+
+/// The stability map's runs of a pair that stopped with an error (not as unstable).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StabilityFailure {
+    /// The lowest ratio to the explicit engine's stable increment at which a run failed.
+    pub lowest_ratio: f64,
+    /// That run's error, in the engine's words.
+    pub error: Option<String>,
+    /// Whether the map's run at the increment the engine's job ran at stayed bounded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bounded_at_own_step: Option<bool>,
 }
 
 /// The largest increment at which a run stays bounded ([`super::stability::Critical`]).
@@ -473,6 +489,31 @@ impl Summary {
         }
     }
 
+    /// Put on each pair whose map runs stopped with an error the lowest ratio at which one did,
+    /// and whether its run at its own step stayed bounded.
+    pub fn attach_stability_failures(&mut self, map: &super::stability::Map) {
+        use super::stability::Search;
+        use super::verdict::growth::Outcome;
+        for p in map.points.iter().filter(|p| p.outcome == Outcome::Failed) {
+            let own = map
+                .points
+                .iter()
+                .find(|o| o.case == p.case && o.engine == p.engine && o.search == Search::OwnStep);
+            let Some(run) = self.run_mut(&p.case, &p.engine) else {
+                continue;
+            };
+            let failure = run.stability_failure.get_or_insert(StabilityFailure {
+                lowest_ratio: p.ratio,
+                error: p.message.clone(),
+                bounded_at_own_step: own.map(|o| o.outcome.bounded()),
+            });
+            if p.ratio < failure.lowest_ratio {
+                failure.lowest_ratio = p.ratio;
+                failure.error = p.message.clone();
+            }
+        }
+    }
+
     /// A case's cross-check of `candidate` against `reference`, if both ran.
     pub fn cross<'a>(
         case: &'a CaseSummary,
@@ -591,6 +632,7 @@ fn engine_summary(
             attribution: None,
             cost_to_accuracy: Vec::new(),
             critical_increment: None,
+            stability_failure: None,
         },
         Ok(s) => {
             let against = (job.engine != CLOSED_FORM)
@@ -625,6 +667,7 @@ fn engine_summary(
                 attribution: None,
                 cost_to_accuracy: Vec::new(),
                 critical_increment: None,
+                stability_failure: None,
             }
         }
     }

@@ -327,19 +327,25 @@ fn stable(w: &mut String, s: &Summary, engines: &[&str]) {
         w,
         "| engine | cases mapped | bounded at its own step | lowest critical ratio | lowest on | bounded to its ceiling |\n|---|---:|---:|---:|---|---:|"
     );
+    let mut failures = Vec::new();
     for e in engines {
         let mine: Vec<(&str, &crate::comparison::summary::CriticalIncrement)> = s
             .cases
             .iter()
             .filter_map(|c| Some((c.id.as_str(), c.run(e)?.critical_increment.as_ref()?)))
             .collect();
-        if mine.is_empty() {
+        let failed: Vec<(&str, &crate::comparison::summary::StabilityFailure)> = s
+            .cases
+            .iter()
+            .filter_map(|c| Some((c.id.as_str(), c.run(e)?.stability_failure.as_ref()?)))
+            .collect();
+        if mine.is_empty() && failed.is_empty() {
             continue;
         }
-        let own: Vec<bool> = mine
-            .iter()
-            .filter_map(|(_, k)| k.bounded_at_own_step)
+        let own: Vec<bool> = (mine.iter().filter_map(|(_, k)| k.bounded_at_own_step))
+            .chain(failed.iter().filter_map(|(_, f)| f.bounded_at_own_step))
             .collect();
+        failures.extend(failed.iter().map(|(case, f)| (e, *case, *f)));
         let bisected = mine
             .iter()
             .filter(|(_, k)| k.bound != Bound::AtLeast)
@@ -354,11 +360,23 @@ fn stable(w: &mut String, s: &Summary, engines: &[&str]) {
         let _ = writeln!(
             w,
             "| `{e}` | {} | {} of {} | {low} | {on} | {ceiling} of {} |",
-            mine.len(),
+            mine.len() + failed.len(),
             own.iter().filter(|b| **b).count(),
             own.len(),
             mine.len()
         );
     }
     let _ = writeln!(w);
+    for (e, case, f) in &failures {
+        let _ = writeln!(
+            w,
+            "- `{e}` on {case}: a map run stopped with an error from {:.2}× (no critical \
+             increment; stability.csv has the runs): {}",
+            f.lowest_ratio,
+            f.error.as_deref().unwrap_or("no reason given")
+        );
+    }
+    if !failures.is_empty() {
+        let _ = writeln!(w);
+    }
 }

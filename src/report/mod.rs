@@ -147,6 +147,7 @@ pub fn write(
     summary.invariances = study.invariances.to_vec();
     summary.attach_sweeps(study.sweeps);
     summary.attach_critical(study.stability);
+    summary.attach_stability_failures(study.stability);
     let mut timings: Timings = read_json(&timings_path(previous)).unwrap_or_default();
     let old = read_json::<Summary>(&summary_path(previous));
     if let Some(old) = &old {

@@ -4,10 +4,11 @@
 //! The centred treatment uses `v(n) = v(n−½) + (h/2)·a(n)`, which keeps the scheme second
 //! order: solved directly where every dashpot joins particles and no body has velocity terms
 //! ([`ParticleDashpots`]), otherwise by fixed-point iteration from the predictor
-//! `v(n−½) + (h/2)·a(n−1)`, and, where that iteration cannot contract and the map is affine
-//! (dashpots along directions frozen for the increment, no centripetal term), by a direct
-//! solve in the free DOFs. The lagged treatment uses `v(n−½)` (first order, the classic
-//! explicit form).
+//! `v(n−½) + (h/2)·a(n−1)`, and, where that iteration cannot contract because of stiff
+//! dashpots, by a direct solve in the free DOFs: the dashpots along directions frozen for the
+//! increment make the map affine, and where bodies have velocity terms (centripetal,
+//! gyroscopic) these are iterated around the solve, which reads them at the last solution.
+//! The lagged treatment uses `v(n−½)` (first order, the classic explicit form).
 
 use super::centred::ParticleDashpots;
 use super::integrate::DENSE_LIMIT;
@@ -44,11 +45,13 @@ pub(super) enum VelocityRule<S: Space> {
     /// Centred, every dashpot between particles or a particle and the ground, no body with
     /// velocity terms: solved directly.
     Direct(ParticleDashpots<S>),
-    /// Centred, by fixed-point iteration; `affine` where the map is affine in v (then, once
-    /// the iteration fails to contract, `solved` switches the step to the direct solve in the
-    /// free `dofs`).
+    /// Centred, by fixed-point iteration; `affine` where the map is affine in v (the iteration
+    /// then stops as soon as it diverges). Where `solvable` (dashpots, few enough free DOFs),
+    /// once the iteration fails to contract, `solved` switches the step to the direct solve
+    /// in the free `dofs` ([`centred_solve`]).
     Iterated {
         affine: bool,
+        solvable: bool,
         solved: bool,
         dofs: Vec<Target<S>>,
     },
@@ -126,8 +129,10 @@ impl<S: Space> VelocityRule<S> {
             return VelocityRule::Direct(dashpots);
         }
         let dofs = model.free_dofs(held);
+        let solvable = model.has_dashpots() && dofs.len() <= DENSE_LIMIT;
         VelocityRule::Iterated {
-            affine: model.has_dashpots() && !velocity_terms && dofs.len() <= DENSE_LIMIT,
+            affine: solvable && !velocity_terms,
+            solvable,
             solved: false,
             dofs,
         }
@@ -165,6 +170,7 @@ impl<S: Space> VelocityRule<S> {
             VelocityRule::Direct(dashpots) => Ok(dashpots.solve(at, acc, &mut work.v_n, counters)),
             VelocityRule::Iterated {
                 affine,
+                solvable,
                 solved,
                 dofs,
             } => {
@@ -180,19 +186,43 @@ impl<S: Space> VelocityRule<S> {
                         });
                     }
                     // Stiff dashpots (h·|M⁻¹C|/2 ≥ 1): the iteration cannot contract, but
-                    // where the map is affine it is solved directly from now on.
-                    if !*affine {
-                        return Err(EngineError::Failed(format!(
-                            "centred velocity iteration did not converge: the dashpots are too stiff for increment {h:e}; use damping = \"lagged\" or a smaller increment"
-                        )));
+                    // with few enough free DOFs it is solved directly from now on.
+                    if !*solvable {
+                        return Err(not_converged(model.has_dashpots(), dofs.len(), h));
                     }
                     *solved = true;
                 }
-                centred_affine(at, dofs, work, acc, counters)?;
+                centred_solve(at, !*affine, dofs, work, acc, counters)?;
                 Ok(work.total.dissipation)
             }
         }
     }
+}
+
+/// Why the centred velocity iteration's failure ends the run: stiff dashpots in a scene with
+/// more free DOFs than a direct solve takes, or, without dashpots, velocity terms too fast for
+/// the increment.
+fn not_converged(dashpots: bool, dofs: usize, h: f64) -> EngineError {
+    EngineError::Failed(if dashpots {
+        format!(
+            "centred velocity iteration did not converge: the dashpots are too stiff for increment {h:e} and the scene's {dofs} free DOFs are more than a direct solve takes ({DENSE_LIMIT}); use damping = \"lagged\" or a smaller increment"
+        )
+    } else {
+        format!(
+            "centred velocity iteration did not converge: the bodies' centripetal and gyroscopic terms change too fast for increment {h:e}; use a smaller increment"
+        )
+    })
+}
+
+/// Whether an iteration that moved its iterate by `change` (after `previous`) has met its
+/// tolerance on velocities of largest component `size`. The iteration contracts by ρ per pass
+/// (ρ estimated as change / previous change), so the iterate just made is within
+/// ρ/(1−ρ) · change of the fixed point; with ρ < ½ that test reads
+/// change² ≤ tol·size·(previous − change).
+fn converged(change: f64, previous: f64, size: f64) -> bool {
+    let tolerance = VELOCITY_TOLERANCE * size;
+    let contracting = 2.0 * change < previous;
+    change <= tolerance || (contracting && change * change <= tolerance * (previous - change))
 }
 
 /// The fixed-point iteration v ← v(n−½) + (h/2)·a(v) from the predictor
@@ -230,15 +260,11 @@ fn iterate<S: Space, const FINITE: bool>(
         work.v_n.set_plus(v_half, 0.5 * h, acc);
         let (change, size) = work.v_n.max_difference(&work.guess);
         std::mem::swap(&mut work.v_n, &mut work.guess);
-        // The iteration contracts by ρ per pass (ρ ≈ (h/2)·|∂a/∂v|, estimated as change /
-        // previous change), so the iterate just made is within ρ/(1−ρ) · change of the fixed
-        // point. With ρ < ½ that test reads change² ≤ tol·size·(previous − change).
-        let tolerance = VELOCITY_TOLERANCE * size;
-        let contracting = 2.0 * change < previous_change;
-        let bound_met = change * change <= tolerance * (previous_change - change);
+        // ρ ≈ (h/2)·|∂a/∂v| ([`converged`]).
+        let met = converged(change, previous_change, size);
         let diverging = pass >= 3 && change > previous_change;
         previous_change = change;
-        if change <= tolerance || (contracting && bound_met) {
+        if met {
             std::mem::swap(&mut work.v_n, &mut work.guess);
             return true;
         }
@@ -250,34 +276,74 @@ fn iterate<S: Space, const FINITE: bool>(
     false
 }
 
-/// The centred velocity v(n) = v(n−½) + (h/2)·a(v(n)) solved directly, for a map that is affine
-/// in v (dashpots along the directions in `work`, frozen for the increment; no centripetal or
-/// gyroscopic term): with g(v) = v(n−½) + (h/2)·a(v) = b + J·v in the free DOFs, (I − J)·v = b,
-/// J from g at the unit rates. Leaves `work` (v(n), the forces and their dissipation) and `acc`
-/// at the solution.
-fn centred_affine<S: Space, const FINITE: bool>(
+/// The centred velocity solved directly in the free `dofs` ([`centred_affine`]). With
+/// `velocity_terms` the map is affine only once those terms are frozen: the solve reads them
+/// at the last solution (first at the predictor v(n−½) + (h/2)·a(n−1)) and is repeated until
+/// v(n) settles ([`converged`]); it contracts by about h·|ω|, the bodies' turning per
+/// increment. Leaves `work` and `acc` at the solution.
+fn centred_solve<S: Space, const FINITE: bool>(
     at: &AtIncrement<S, FINITE>,
+    velocity_terms: bool,
     dofs: &[Target<S>],
     work: &mut Velocities<S>,
     acc: &mut Rates<S>,
     counters: &mut Counters,
 ) -> Result<(), EngineError> {
+    let Velocities {
+        v_n,
+        guess,
+        total,
+        directions,
+    } = work;
+    if !velocity_terms {
+        return centred_affine(at, dofs, directions, None, total, v_n, acc, counters);
+    }
+    guess.set_plus(at.v_half, 0.5 * at.h, at.acc_prev);
+    let mut previous_change = 0.0;
+    for _ in 0..MAX_DAMPING_ITERATIONS {
+        centred_affine(at, dofs, directions, Some(guess), total, v_n, acc, counters)?;
+        let (change, size) = v_n.max_difference(guess);
+        if converged(change, previous_change, size) {
+            return Ok(());
+        }
+        previous_change = change;
+        guess.clone_from(v_n);
+    }
+    Err(not_converged(false, dofs.len(), at.h))
+}
+
+/// The centred velocity v(n) = v(n−½) + (h/2)·a(v(n)) solved directly, for a map that is affine
+/// in v: dashpots along `directions`, frozen for the increment, and the bodies' centripetal and
+/// gyroscopic terms read at `terms` (`None`: the scene has none). With
+/// g(v) = v(n−½) + (h/2)·a(v) = b + J·v in the free DOFs, (I − J)·v = b, J from g at the unit
+/// rates. Leaves v(n) in `v_n`, the forces and their dissipation in `total` and the
+/// accelerations in `acc`, at the solution.
+#[allow(clippy::too_many_arguments)]
+fn centred_affine<S: Space, const FINITE: bool>(
+    at: &AtIncrement<S, FINITE>,
+    dofs: &[Target<S>],
+    directions: &[S::V],
+    terms: Option<&Rates<S>>,
+    total: &mut Forces<S>,
+    v_n: &mut Rates<S>,
+    acc: &mut Rates<S>,
+    counters: &mut Counters,
+) -> Result<(), EngineError> {
     let (model, cfg, forces) = (at.model, at.cfg, at.forces);
     let (v_half, h, held) = (at.v_half, at.h, at.held);
-    let directions = &work.directions;
     let mut map = |v: &Rates<S>, total: &mut Forces<S>, acc: &mut Rates<S>, out: &mut Rates<S>| {
         total.copy_from(forces);
         model.damping_along(cfg, directions, v, total, counters);
-        model.accelerations(cfg, total, v, held, acc, counters);
+        model.accelerations(cfg, total, terms.unwrap_or(v), held, acc, counters);
         out.set_plus(v_half, 0.5 * h, acc);
     };
     let n = dofs.len();
     let mut image = model.zero_rates();
-    map(&model.zero_rates(), &mut work.total, acc, &mut image);
+    map(&model.zero_rates(), total, acc, &mut image);
     let b = DVector::from_iterator(n, dofs.iter().map(|d| model.rate_along(&image, d)));
     let mut system = DMatrix::identity(n, n);
     for (j, dj) in dofs.iter().enumerate() {
-        map(&model.unit_rate(dj), &mut work.total, acc, &mut image);
+        map(&model.unit_rate(dj), total, acc, &mut image);
         for (i, di) in dofs.iter().enumerate() {
             system[(i, j)] -= model.rate_along(&image, di) - b[i];
         }
@@ -291,6 +357,6 @@ fn centred_affine<S: Space, const FINITE: bool>(
     for (d, xi) in dofs.iter().zip(x.iter()) {
         v = v.plus(*xi, &model.unit_rate(d));
     }
-    map(&v, &mut work.total, acc, &mut work.v_n);
+    map(&v, total, acc, v_n);
     Ok(())
 }

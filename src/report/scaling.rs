@@ -59,7 +59,7 @@ pub fn csv(study: &Study) -> String {
 /// exponents.
 pub fn table(study: &Study) -> String {
     let mut s = format!(
-        "{:<12} {:>9} {:>7} {:>14} {:>8} {:>8} {:>7} {:>12} {:>7} {:>7} {:>10} {:>10}\n",
+        "{:<12} {:>9} {:>7} {:>14} {:>10} {:>10} {:>10} {:>12} {:>7} {:>7} {:>10} {:>10}\n",
         "engine",
         "n",
         "steps",
@@ -73,16 +73,24 @@ pub fn table(study: &Study) -> String {
         "error",
         "predicted"
     );
+    // A difference of two timed runs that noise left unresolved (NaN) says so.
+    let shown = |x: f64, decimals: usize| {
+        if x.is_finite() {
+            format!("{x:.decimals$}")
+        } else {
+            "unresolved".to_string()
+        }
+    };
     for p in &study.points {
         s += &format!(
-            "{:<12} {:>9} {:>7} {:>14.0} {:>8.2} {:>8.2} {:>7.2} {:>9.1} MB {:>7.0} {:>7.0} {:>10.3e} {:>10.3e}\n",
+            "{:<12} {:>9} {:>7} {:>14} {:>10} {:>10} {:>10} {:>9.1} MB {:>7.0} {:>7.0} {:>10.3e} {:>10.3e}\n",
             p.engine,
             p.n,
             p.steps,
-            p.ns_per_step,
-            p.ns_per_dof_step,
-            p.limit_ns_per_dof_step,
-            p.ns_per_dof_step / p.limit_ns_per_dof_step,
+            shown(p.ns_per_step, 0),
+            shown(p.ns_per_dof_step, 2),
+            shown(p.limit_ns_per_dof_step, 2),
+            shown(p.ns_per_dof_step / p.limit_ns_per_dof_step, 2),
             p.peak_rss_bytes as f64 / 1e6,
             p.peak_rss_bytes as f64 / p.n as f64,
             p.scene_rss_bytes as f64 / p.n as f64,
@@ -276,6 +284,29 @@ mod tests {
         let e = exponents(&study);
         assert_eq!(e.len(), 1);
         assert!((e[0].1 - 1.5).abs() < 1e-12, "{e:?}");
+    }
+
+    #[test]
+    fn an_unresolved_point_is_said_and_left_out_of_the_fit() {
+        let mut points: Vec<Point> = [1000, 10_000, 100_000]
+            .into_iter()
+            .map(|n| point("explicit", n, 2.0 * n as f64))
+            .collect();
+        points.push(point("explicit", 1_000_000, f64::NAN));
+        let study = Study {
+            points,
+            skipped: Vec::new(),
+        };
+        let text = table(&study);
+        let last = text.lines().nth(4).unwrap();
+        assert!(
+            last.contains("1000000") && last.contains("unresolved"),
+            "{text}"
+        );
+        // ns = 2 N over the resolved points: exponent 1.
+        let e = exponents(&study);
+        assert!((e[0].1 - 1.0).abs() < 1e-12, "{e:?}");
+        assert!(csv(&study).lines().nth(4).unwrap().contains(",,"));
     }
 
     #[test]

@@ -7,6 +7,9 @@
 //! central differences integrate exactly: the histories meet the closed forms to round-off
 //! until the node stops. Penalty friction then holds it on an elastic stick: the node rings
 //! about its stop point with amplitude μ·m·g/k and speed μ·g·√(m/k), and never slips again.
+mod common;
+
+use common::{col as column, largest_error};
 use crosscheck::case;
 use crosscheck::engines::{History, RunOutput, RunSettings};
 use crosscheck::scene::{IncrementRule, Scene};
@@ -26,25 +29,6 @@ fn run(scene: &Scene) -> RunOutput {
         .unwrap()
         .run(scene, &RunSettings::default())
         .unwrap_or_else(|e| panic!("{}: {e}", scene.id))
-}
-
-fn column(h: &History, name: &str) -> Vec<f64> {
-    h.column(name).unwrap_or_else(|| panic!("no column {name}"))
-}
-
-/// Largest |a − b| over the rows whose time satisfies `when`.
-fn largest_error(
-    h: &History,
-    name: &str,
-    exact: impl Fn(f64) -> f64,
-    when: impl Fn(f64) -> bool,
-) -> f64 {
-    let (t, x) = (column(h, "t"), column(h, name));
-    t.iter()
-        .zip(&x)
-        .filter(|(t, _)| when(**t))
-        .map(|(t, x)| (x - exact(*t)).abs())
-        .fold(0.0, f64::max)
 }
 
 /// A node launched at v0 = 2 along the face with μ = 0.5 stops at t* = v0/(μg) after

@@ -32,6 +32,9 @@
 //! μ·g·(1 + 1/κ)·h²/2 = s0·(ω_t·h)²/2, shifts where it rings about. Central differences ring
 //! at an amplitude (1 + (ω_t·h)²/8) of the exact one's at most. Each bound above thus holds to
 //! a factor 1 + (ω_t·h)² (ω_t·h = 0.055 disc, 0.059 ball: 1.003 and 1.0035).
+mod common;
+
+use common::{col as column, largest_error};
 use crosscheck::case;
 use crosscheck::contract::{E_BALANCE, E_FRICTIONAL};
 use crosscheck::engines::explicit::ExplicitEngine;
@@ -133,27 +136,8 @@ fn run(roll: &Roll) -> (History, f64) {
     (out.history, out.info.increment)
 }
 
-fn column(h: &History, name: &str) -> Vec<f64> {
-    h.column(name).unwrap_or_else(|| panic!("no column {name}"))
-}
-
 /// A closed form of time.
 type Exact<'a> = &'a dyn Fn(f64) -> f64;
-
-/// Largest |a − exact| over the rows whose time satisfies `when`.
-fn largest_error(
-    h: &History,
-    name: &str,
-    exact: impl Fn(f64) -> f64,
-    when: impl Fn(f64) -> bool,
-) -> f64 {
-    let (t, x) = (column(h, "t"), column(h, name));
-    t.iter()
-        .zip(&x)
-        .filter(|(t, _)| when(**t))
-        .map(|(t, x)| (x - exact(*t)).abs())
-        .fold(0.0, f64::max)
-}
 
 /// The contact point's slip speed v − ω·R at each row, ω from the central difference of the
 /// turn over the neighbouring rows (exact for the quadratic turn of the slip phase); the ends

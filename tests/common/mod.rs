@@ -118,6 +118,21 @@ pub fn col(h: &History, name: &str) -> Vec<f64> {
     h.column(name).unwrap_or_else(|| panic!("no column {name}"))
 }
 
+/// Largest |x − exact(t)| of column `name` over the rows whose time t satisfies `when`.
+pub fn largest_error(
+    h: &History,
+    name: &str,
+    exact: impl Fn(f64) -> f64,
+    when: impl Fn(f64) -> bool,
+) -> f64 {
+    let (t, x) = (col(h, "t"), col(h, name));
+    t.iter()
+        .zip(&x)
+        .filter(|(t, _)| when(**t))
+        .map(|(t, x)| (x - exact(*t)).abs())
+        .fold(0.0, f64::max)
+}
+
 /// Largest absolute value.
 pub fn peak(x: &[f64]) -> f64 {
     x.iter().fold(0.0, |m, v| m.max(v.abs()))

@@ -60,19 +60,6 @@ fn run_into_temporary_directory() -> &'static (tempfile::TempDir, Summary, Strin
     })
 }
 
-/// Built with rapier's older releases (`rapier-versions`), the report sets every case's runs
-/// through each release side by side.
-#[cfg(feature = "rapier-versions")]
-#[test]
-fn the_releases_are_side_by_side_in_the_report() {
-    let (out, _, _) = run_into_temporary_directory();
-    let report = std::fs::read_to_string(out.path().join("REPORT.md")).unwrap();
-    assert!(
-        report.lines().any(|l| l == "## Releases side by side"),
-        "REPORT.md has no versions section"
-    );
-}
-
 /// The sweep's orders and floors are on each run entry of summary.json and in REPORT.md's
 /// overview, the same numbers; each swept case has its CSV and its work–precision figure.
 #[test]

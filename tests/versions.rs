@@ -410,3 +410,75 @@ fn rapier_0_34_leaves_out_the_gyroscopic_torque_unless_asked() {
         }
     }
 }
+
+/// The versions section of the report, from a run of the command line on one case per cause
+/// the section names for rapier 0.34 (each cause is measured on the engines themselves above
+/// and in tests/rapier.rs): a soft contact that takes part of the bounce (contact_drop_e09),
+/// the reported contact impulse (rigid2d_pin_lumped, friction_incline_slip) and the
+/// gyroscopic torque left out (stress_spin_intermediate). Every release has a cell on each
+/// case; each 0.34 cell differs from the current release's verdict and is put down to its
+/// cause; the drop has its rebound row.
+#[test]
+fn the_releases_are_side_by_side_in_the_report() {
+    let causes = [
+        ("contact_drop_e09", "model: rapier's soft contact"),
+        (
+            "rigid2d_pin_lumped",
+            "reading: rapier 0.34's reported contact impulse",
+        ),
+        (
+            "friction_incline_slip",
+            "reading: rapier 0.34's reported contact impulse",
+        ),
+        (
+            "stress_spin_intermediate",
+            "setting: rapier 0.34's gyroscopic forces, off by default",
+        ),
+    ];
+    let out = tempfile::tempdir().unwrap();
+    let status = std::process::Command::new(env!("CARGO_BIN_EXE_crosscheck"))
+        .args(["run", "--quiet", "--out"])
+        .arg(out.path())
+        .args(causes.iter().map(|(case, _)| case))
+        .stdout(std::process::Stdio::null())
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let report = std::fs::read_to_string(out.path().join("REPORT.md")).unwrap();
+    let section: Vec<&str> = report
+        .lines()
+        .skip_while(|l| *l != "## Releases side by side")
+        .take_while(|l| !l.starts_with("## ") || *l == "## Releases side by side")
+        .collect();
+    assert!(!section.is_empty(), "REPORT.md has no versions section");
+    // Each release judged on every case: the counts' denominators.
+    let counts = section
+        .iter()
+        .find(|l| l.starts_with("- **`rapier_f64`: "))
+        .expect("the matched configuration's counts");
+    for release in ["0.34", "0.35", "0.36"] {
+        let of = format!(" of {}", causes.len());
+        let part = counts
+            .split(", ")
+            .find(|p| p.contains(release))
+            .unwrap_or_else(|| panic!("{release} in {counts}"));
+        assert!(
+            part.trim_end_matches("** cells within the current release's tolerance.")
+                .ends_with(&of),
+            "{counts}"
+        );
+    }
+    for (case, cause) in causes {
+        let row = section
+            .iter()
+            .find(|l| l.starts_with(&format!("| {case} | `rapier_f64@0.34` |")))
+            .unwrap_or_else(|| panic!("{case}: no 0.34 row in the versions section"));
+        assert!(row.contains(&format!("**{cause}**")), "{case}: {row}");
+    }
+    assert!(
+        section
+            .iter()
+            .any(|l| l.starts_with("| contact_drop_e09 |") && l.matches('|').count() > 8),
+        "the drop's rebound row"
+    );
+}

@@ -3,7 +3,7 @@
 //! exponent and the memory-bandwidth limit).
 
 use crate::report::format::{csv_finite as number, csv_table};
-use crate::run::scaling::{Study, fitted_exponent};
+use crate::run::scaling::{RETIMINGS, Study, fitted_exponent};
 #[cfg(feature = "figures")]
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -96,6 +96,11 @@ pub fn table(study: &Study) -> String {
             p.scene_rss_bytes as f64 / p.n as f64,
             p.error,
             p.predicted_error
+        );
+    }
+    if study.points.iter().any(|p| !p.ns_per_step.is_finite()) {
+        s += &format!(
+            "unresolved: after {RETIMINGS} retimings the longer of the two runs was still not slower than the shorter: noise from other work on the machine\n"
         );
     }
     for k in &study.skipped {

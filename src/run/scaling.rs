@@ -8,7 +8,8 @@
 //!   [`MIN_REPEATS`] times, more often where a point takes under [`POINT_SECONDS`], the
 //!   fastest repeat taken, since on a shared machine interference only ever adds time),
 //!   (t₂ − t₁)/S, so the setup (building the scene's model, the static step, the stable
-//!   increment) drops out;
+//!   increment) drops out; the two runs are taken in turn, and a pair whose longer run is not
+//!   slower ([`consistent`]) is timed again, and printed as unresolved if it stays so;
 //! - the peak resident memory of the longer run (the kernel's high-water mark, reset before
 //!   it);
 //! - the error of the probed displacements against the exact solution, with the error that
@@ -21,6 +22,7 @@ use crate::case::chain::Chain;
 use crate::engines::explicit::ExplicitEngine;
 use crate::engines::{Engine, RunSettings};
 use crate::run::matching;
+use crate::scene::Scene;
 use std::time::Instant;
 
 /// Wall-clock seconds the chain study may take in all: a point is run only while its time,
@@ -187,75 +189,123 @@ pub fn measure(engine: &dyn Engine, n: usize) -> Result<Point, String> {
 
 /// Measure one engine at one N, its runs repeated `repeats` times (the fastest counts).
 pub fn measure_with(engine: &dyn Engine, n: usize, repeats: u64) -> Result<Point, String> {
-    // Seconds of the fastest of the repeated runs of `steps` increments, its peak RSS and
-    // error.
-    let timed = |steps: u64| -> Result<(f64, (u64, u64), f64, Chain), String> {
+    // A chain of `steps` increments, its scene and the engine's settings for it, and the
+    // resident memory building the scene added.
+    let prepared = |steps: u64| {
         let chain = Chain::new(n, steps);
-        reset_peak_rss();
         let before = resident_bytes();
         let scene = chain.scene();
         let settings = matching::job_settings(engine, &scene, &RunSettings::default());
         let scene_bytes = resident_bytes().saturating_sub(before);
-        let mut seconds = f64::INFINITY;
-        let mut output = None;
-        for _ in 0..repeats {
-            let start = Instant::now();
-            let run = engine
-                .run(&scene, &settings)
-                .map_err(|e| format!("{} on chain N = {n}: {e}", engine.name()))?;
-            seconds = seconds.min(start.elapsed().as_secs_f64());
-            output = Some(run);
-            crate::interrupt::checkpoint("scaling").map_err(|_| "interrupted".to_string())?;
-        }
-        let output = output.expect("at least one repeat");
-        let rss = (peak_rss_bytes(), scene_bytes);
-        if output.info.steps != chain.steps {
-            return Err(format!(
-                "{} on chain N = {n}: took {} increments, expected {}",
-                engine.name(),
-                output.info.steps,
-                chain.steps
-            ));
-        }
-        let error = displacement_error(&chain, &output.history)?;
-        Ok((seconds, rss, error, chain))
+        (chain, scene, settings, scene_bytes)
     };
-    let (mut short, _, _, chain) = timed(steps_for(n))?;
-    let (mut long, rss, error, long_chain) = timed(2 * chain.steps)?;
-    for _ in 0..RETIMINGS {
-        if long > short {
-            break;
-        }
-        short = short.min(timed(chain.steps)?.0);
-        long = long.min(timed(2 * chain.steps)?.0);
+    // Seconds of one run, and its output.
+    let timed = |scene: &Scene, settings: &RunSettings| {
+        let start = Instant::now();
+        let output = engine
+            .run(scene, settings)
+            .map_err(|e| format!("{} on chain N = {n}: {e}", engine.name()))?;
+        let seconds = start.elapsed().as_secs_f64();
+        crate::interrupt::checkpoint("scaling").map_err(|_| "interrupted".to_string())?;
+        Ok::<_, String>((seconds, output))
+    };
+    // The longer run alone first, for its peak memory (and what its scene holds) and error.
+    let steps = Chain::new(n, steps_for(n)).steps;
+    reset_peak_rss();
+    let long = prepared(2 * steps);
+    let (first_long, output) = timed(&long.1, &long.2)?;
+    let rss = (peak_rss_bytes(), long.3);
+    if output.info.steps != long.0.steps {
+        return Err(format!(
+            "{} on chain N = {n}: took {} increments, expected {}",
+            engine.name(),
+            output.info.steps,
+            long.0.steps
+        ));
     }
-    let ns_per_step = resolved(short, long) * 1e9 / chain.steps as f64;
-    let limit = streaming_limit(n, chain.steps, repeats);
+    let error = displacement_error(&long.0, &output.history)?;
+    drop(output);
+    // Then the shorter and the longer in turn, so that a slow spell of the machine falls on
+    // both rather than on all the repeats of one.
+    let short = prepared(steps);
+    // The first longer run counts as the first repeat's.
+    let mut first_long = Some(first_long);
+    let mut in_turn = || -> Result<Times, String> {
+        let mut times = (f64::INFINITY, f64::INFINITY);
+        for _ in 0..repeats {
+            let short = timed(&short.1, &short.2)?.0;
+            let long = match first_long.take() {
+                Some(seconds) => seconds,
+                None => timed(&long.1, &long.2)?.0,
+            };
+            times = fastest(times, (short, long));
+        }
+        Ok(times)
+    };
+    let times = retimed(in_turn()?, consistent, in_turn)?;
+    let ns_per_step = resolved(times) * 1e9 / steps as f64;
+    let limit = streaming_limit(n, steps, repeats);
     crate::interrupt::checkpoint("scaling").map_err(|_| "interrupted".to_string())?;
     Ok(Point {
         engine: engine.name().to_string(),
         n,
-        steps: chain.steps,
+        steps,
         repeats,
         ns_per_step,
         ns_per_dof_step: ns_per_step / n as f64,
         peak_rss_bytes: rss.0,
         scene_rss_bytes: rss.1,
         error,
-        predicted_error: long_chain.predicted_error(long_chain.increment),
+        predicted_error: long.0.predicted_error(long.0.increment),
         limit_ns_per_dof_step: limit,
     })
 }
 
-/// How often a point whose longer run was timed no slower than its shorter one (noise from
-/// other work on the machine) has both timed again, the fastest of all repeats counting.
+/// How often a point whose longer run was timed no slower than its shorter one
+/// ([`consistent`]) has both timed again, the fastest of all repeats counting.
 pub const RETIMINGS: usize = 3;
 
-/// The seconds one increment adds, `long − short` for runs of twice as many increments and as
-/// many: NaN where the longer run is not slower, which a difference of the two cannot resolve
-/// (reported as such, never as 0).
-pub fn resolved(short: f64, long: f64) -> f64 {
-    if long > short { long - short } else { f64::NAN }
+/// The fastest timings of runs of S and 2S increments of the same scene, seconds.
+pub type Times = (f64, f64);
+
+/// Whether `(short, long)` can be read as a setup plus S increments, then S more: the longer
+/// run slower. (A setup is never negative, so the longer run should also take at most twice
+/// the shorter; where the setup is a small part of a run, as the streaming loop's is, the
+/// timer's noise alone breaks that half the time, so it is not asked.)
+pub fn consistent((short, long): Times) -> bool {
+    long > short
+}
+
+/// The seconds the S increments of the longer run add, `long − short`: NaN where the pair is
+/// not [`consistent`], which a difference of the two cannot resolve (reported as such, never
+/// as a number).
+pub fn resolved(times: Times) -> f64 {
+    if consistent(times) {
+        times.1 - times.0
+    } else {
+        f64::NAN
+    }
+}
+
+/// The faster of two timings of each run.
+fn fastest(a: Times, b: Times) -> Times {
+    (a.0.min(b.0), a.1.min(b.1))
+}
+
+/// `times`, taken `again` up to [`RETIMINGS`] times while `accept` refuses them, the fastest of
+/// every timing of each run counting.
+fn retimed(
+    mut times: Times,
+    accept: impl Fn(Times) -> bool,
+    mut again: impl FnMut() -> Result<Times, String>,
+) -> Result<Times, String> {
+    for _ in 0..RETIMINGS {
+        if accept(times) {
+            break;
+        }
+        times = fastest(times, again()?);
+    }
+    Ok(times)
 }
 
 /// Largest error of the displacement columns against the exact solution, over the amplitude.
@@ -279,11 +329,20 @@ fn displacement_error(chain: &Chain, history: &crate::contract::History) -> Resu
 }
 
 /// The streaming loop's marginal ns per DOF and increment at N: central differences of the
-/// chain over plain arrays (x, v, 1/m, k), `steps` and `2·steps` increments timed (the
-/// fastest of `repeats` each, timed again as a point is, [`RETIMINGS`]), the difference
-/// taken, so it reads and writes what one increment of the chain must and nothing more; NaN
-/// where unresolved ([`resolved`]).
+/// chain over plain arrays (x, v, 1/m, k), `steps` and `2·steps` increments timed
+/// ([`streaming_times`], timed again as a point is, [`RETIMINGS`]), the difference taken, so it
+/// reads and writes what one increment of the chain must and nothing more; NaN where
+/// unresolved ([`resolved`]).
 pub fn streaming_limit(n: usize, steps: u64, repeats: u64) -> f64 {
+    let first = streaming_times(n, steps, repeats);
+    let again = || Ok(streaming_times(n, steps, repeats));
+    let times = retimed(first, consistent, again).expect("the loop cannot fail");
+    resolved(times) * 1e9 / (steps as f64 * n as f64)
+}
+
+/// The streaming loop's runs of `steps` and `2·steps` increments over N DOFs, in turn, the
+/// fastest of `repeats` each, seconds.
+fn streaming_times(n: usize, steps: u64, repeats: u64) -> Times {
     let run = |steps: u64| {
         let h = 1e-3;
         let mut x: Vec<f64> = (0..n).map(|i| (i as f64 * 0.1).sin() * 1e-3).collect();
@@ -311,19 +370,10 @@ pub fn streaming_limit(n: usize, steps: u64, repeats: u64) -> f64 {
         std::hint::black_box((&x, &v));
         seconds
     };
-    let best = |steps: u64| {
-        (0..repeats)
-            .map(|_| run(steps))
-            .fold(f64::INFINITY, f64::min)
-    };
-    let (mut short, mut long) = (best(steps), best(2 * steps));
-    for _ in 0..RETIMINGS {
-        if long > short {
-            break;
-        }
-        (short, long) = (short.min(best(steps)), long.min(best(2 * steps)));
-    }
-    resolved(short, long) * 1e9 / (steps as f64 * n as f64)
+    // In turn, as a point's runs are.
+    (0..repeats).fold((f64::INFINITY, f64::INFINITY), |times, _| {
+        fastest(times, (run(steps), run(2 * steps)))
+    })
 }
 
 /// Reset the process's peak resident set size (Linux: `/proc/self/clear_refs`, value 5);
@@ -390,9 +440,30 @@ mod tests {
 
     #[test]
     fn a_longer_run_no_slower_than_the_shorter_is_unresolved_not_free() {
-        assert_eq!(resolved(1.0, 1.5), 0.5);
-        assert!(resolved(1.0, 1.0).is_nan());
-        assert!(resolved(1.0, 0.9).is_nan());
+        assert_eq!(resolved((1.0, 1.5)), 0.5);
+        assert!(resolved((1.0, 1.0)).is_nan());
+        assert!(resolved((1.0, 0.9)).is_nan());
+    }
+
+    #[test]
+    fn a_refused_pair_is_timed_again_and_the_fastest_counts() {
+        // The first shorter run slowed by noise (2.1 s for a true 1.0 s): timed again, once.
+        let mut calls = 0;
+        let times = retimed((2.1, 2.0), consistent, || {
+            calls += 1;
+            Ok((1.0, 2.2))
+        })
+        .unwrap();
+        assert_eq!((times, calls), ((1.0, 2.0), 1));
+        // Never accepted: RETIMINGS attempts, then left to `resolved` to refuse.
+        let mut calls = 0;
+        let times = retimed((1.0, 0.9), consistent, || {
+            calls += 1;
+            Ok((1.0, 0.95))
+        })
+        .unwrap();
+        assert_eq!((times, calls), ((1.0, 0.9), RETIMINGS));
+        assert!(resolved(times).is_nan());
     }
 
     #[test]

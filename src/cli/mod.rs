@@ -74,7 +74,7 @@ enum Command {
         /// Which study.
         #[arg(long, value_enum, default_value = "all")]
         study: ScalingStudy,
-        /// Largest chain (masses; at most 10^6, which holds about 0.8 GB).
+        /// Largest chain (masses; at most 10^6, whose two runs hold about 1.0 GB at once).
         #[arg(long, value_name = "N", default_value_t = 1_000_000, value_parser = clap::value_parser!(u64).range(10..=1_000_000))]
         max_n: u64,
         /// Output directory.

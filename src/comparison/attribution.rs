@@ -157,16 +157,18 @@ fn run_control(cell: &Cell, planned: &Planned, combined: bool) -> ControlRun {
     }
 }
 
-/// Run every control of `work` (cell index, control) in parallel, ticking `bar`.
+/// Run every control of `work` (cell index, control) in parallel, longest first, ticking `bar`.
 fn run_all(
     cells: &[Cell],
     work: &[(usize, Planned)],
     combined: bool,
     bar: &crate::run::progress::Progress,
 ) -> Vec<(usize, ControlRun)> {
-    use rayon::prelude::*;
-    work.par_iter()
-        .map(|(i, planned)| {
+    // Longest first, so that a long control does not start last and run alone.
+    crate::run::schedule::longest_first(
+        work,
+        |(_, planned)| planned.estimated_cost(),
+        |(i, planned)| {
             let run = run_control(&cells[*i], planned, combined);
             bar.set_message(format!(
                 "control {}/{}",
@@ -174,8 +176,8 @@ fn run_all(
             ));
             bar.inc(1);
             (*i, run)
-        })
-        .collect()
+        },
+    )
 }
 
 /// Attribute every cell of `outcome` that needs a cause (in outcome order), running the

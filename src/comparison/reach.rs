@@ -19,7 +19,6 @@ use super::work_precision::{CaseSweep, EngineFit};
 use crate::run::sweep::{self, ErrorOf, Grid, PathKind, Status, SweepPath};
 use crate::run::{Engine, Plan};
 use crate::scene::Scene;
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// A run toward an accuracy may take this many times the sweep's budget of increments for one
@@ -232,17 +231,19 @@ pub fn measure(
         .collect();
     let bar = crate::run::progress_bar(work.len(), progress);
     bar.set_message("time to accuracy");
-    let done: Vec<(usize, Check, SweepPath)> = work
-        .par_iter()
-        .map(|task| {
+    // Longest first: the first run's CPU time as extrapolated (later runs are finer still).
+    let done = crate::run::schedule::longest_first(
+        &work,
+        |task| task.predicted.1 * task.scene.duration(),
+        |task| {
             let error = |e: &str, h: &crate::contract::History, steps: u64| {
                 error_of(task.scene, e, h, steps)
             };
             let (check, path) = reach(task, grid, &error);
             bar.inc(1);
             (task.sweep, check, path)
-        })
-        .collect();
+        },
+    );
     bar.finish_and_clear();
     for (i, check, path) in done {
         sweeps[i].paths.push(path);

@@ -62,6 +62,13 @@ impl Planned<'_> {
         }
     }
 
+    /// Its relative cost, for scheduling only ([`super::estimated_cost`]).
+    pub fn estimated_cost(&self) -> f64 {
+        let engine = self.control.engine.as_deref().unwrap_or(self.engine);
+        let scene = self.control.scene.as_ref().unwrap_or(self.scene);
+        super::estimated_cost(scene, engine, &self.settings)
+    }
+
     /// Run it: its history (checked against the output contract), or why there is none.
     pub fn run(&self) -> Result<History, String> {
         let engine = self.control.engine.as_deref().unwrap_or(self.engine);

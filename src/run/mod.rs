@@ -25,6 +25,8 @@
 //!   comparison's attribution of causes);
 //! - [`floor`]: the arithmetic floor of one increment, the simplest seed scene's recurrence
 //!   written out by hand (for the benchmarks);
+//! - [`schedule`]: tasks of unequal length on a few threads, longest first, their results in
+//!   order (the jobs, and the studies' reruns);
 //! - this module: the jobs, run in parallel, their results in plan order.
 
 pub mod budget;
@@ -42,6 +44,7 @@ pub mod progress;
 pub mod refinement;
 pub mod registry;
 pub mod scaling;
+pub mod schedule;
 pub mod stability;
 pub mod sweep;
 
@@ -55,8 +58,6 @@ use crate::engines::{EngineError, RunInfo, RunOutput};
 use crate::scene::{IncrementRule, Scene};
 pub use progress::Progress;
 use std::panic::{self, AssertUnwindSafe};
-use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering as AtomicOrdering};
 use std::time::Instant;
 
 /// What to run: every case with every engine, under one set of setting overrides.
@@ -261,49 +262,27 @@ pub fn execute(plan: &Plan, progress: bool) -> Outcome {
         .flat_map(|c| plan.engines.iter().map(move |e| (c, e.as_ref())))
         .collect();
     let bar = progress_bar(jobs.len(), progress);
-    // Longest first, each thread taking the next job as it frees up (list scheduling), so that
-    // a long job does not start last and run alone while the other threads idle.
-    let mut order: Vec<usize> = (0..jobs.len()).collect();
-    let cost: Vec<f64> = jobs
-        .iter()
-        .map(|&(scene, engine)| estimated_cost(scene, engine, &plan.settings))
-        .collect();
-    order.sort_by(|&a, &b| cost[b].total_cmp(&cost[a]).then(a.cmp(&b)));
-    let next = AtomicUsize::new(0);
-    let slots: Vec<Mutex<Option<JobResult>>> = jobs.iter().map(|_| Mutex::new(None)).collect();
-    rayon::scope(|s| {
-        for _ in 0..rayon::current_num_threads() {
-            s.spawn(|_| {
-                loop {
-                    let k = next.fetch_add(1, AtomicOrdering::Relaxed);
-                    let Some(&j) = order.get(k) else { break };
-                    let (scene, engine) = jobs[j];
-                    let result = run_job(scene, engine, &plan.settings);
-                    bar.set_message(format!("{}/{}", scene.id, engine.name()));
-                    bar.inc(1);
-                    *slots[j].lock().unwrap_or_else(|e| e.into_inner()) = Some(result);
-                }
-            });
-        }
-    });
+    // Longest first, so that a long job does not start last and run alone.
+    let results = schedule::longest_first(
+        &jobs,
+        |&(scene, engine)| estimated_cost(scene, engine, &plan.settings),
+        |&(scene, engine)| {
+            let result = run_job(scene, engine, &plan.settings);
+            bar.set_message(format!("{}/{}", scene.id, engine.name()));
+            bar.inc(1);
+            result
+        },
+    );
     bar.finish_and_clear();
-    let results = slots
-        .into_iter()
-        .map(|m| {
-            m.into_inner()
-                .unwrap_or_else(|e| e.into_inner())
-                .expect("every job ran")
-        })
-        .collect();
     Outcome { jobs: results }
 }
 
-/// A job's relative cost for scheduling only: the increments it will take (from its increment
+/// A job's relative cost for scheduling only ([`schedule::longest_first`]): the increments it will take (from its increment
 /// rule; the output rows where the engine chooses), weighted by 40 for an engine stepped at the
 /// explicit engine's increment (rapier: a few substeps of a constraint solver per increment,
 /// 26–62× the explicit step measured). A job whose settings cannot be worked out here (they
 /// panic) goes first, at infinite cost: its own run reports the failure.
-fn estimated_cost(scene: &Scene, engine: &dyn Engine, settings: &RunSettings) -> f64 {
+pub fn estimated_cost(scene: &Scene, engine: &dyn Engine, settings: &RunSettings) -> f64 {
     let job = match panic::catch_unwind(AssertUnwindSafe(|| {
         matching::job_settings(engine, scene, settings)
     })) {

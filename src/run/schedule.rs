@@ -74,28 +74,38 @@ mod tests {
         assert_eq!(results, vec![0, 10, 20, 30, 40]);
     }
 
-    /// On two threads the two longest tasks start first (each thread then sleeps at least
-    /// 20 ms before it takes another), and the results are in the tasks' order.
+    /// On two threads the two longest tasks run at the same time (each waits, up to a
+    /// minute, until the other has started: on one thread the first would wait in vain), and
+    /// the results are in the tasks' order.
     #[test]
-    fn two_threads_start_with_the_two_longest() {
-        let millis = [20u64, 30, 30, 40];
-        let started = Mutex::new(Vec::new());
+    fn two_threads_run_the_two_longest_together() {
+        let millis = [1.0, 3.0, 2.0, 4.0];
+        let started = AtomicUsize::new(0);
+        let together = Mutex::new(Vec::new());
         let results = pool(2).install(|| {
             longest_first(
                 &[0usize, 1, 2, 3],
-                |&i| millis[i] as f64,
+                |&i| millis[i],
                 |&i| {
-                    started.lock().unwrap().push(i);
-                    std::thread::sleep(std::time::Duration::from_millis(millis[i]));
-                    millis[i]
+                    if i == 3 || i == 1 {
+                        started.fetch_add(1, Ordering::SeqCst);
+                        let begun = std::time::Instant::now();
+                        while started.load(Ordering::SeqCst) < 2
+                            && begun.elapsed() < std::time::Duration::from_secs(60)
+                        {
+                            std::thread::yield_now();
+                        }
+                        let both = started.load(Ordering::SeqCst) >= 2;
+                        together.lock().unwrap().push((i, both));
+                    }
+                    10 * i
                 },
             )
         });
-        let started = started.into_inner().unwrap();
-        let mut first_two = started[..2].to_vec();
-        first_two.sort();
-        assert_eq!(first_two, vec![1, 3], "started: {started:?}");
-        assert_eq!(results, vec![20, 30, 30, 40]);
+        let mut together = together.into_inner().unwrap();
+        together.sort();
+        assert_eq!(together, vec![(1, true), (3, true)]);
+        assert_eq!(results, vec![0, 10, 20, 30]);
     }
 
     #[test]

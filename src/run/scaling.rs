@@ -16,7 +16,9 @@
 //!   central differences must give ([`Chain::predicted_error`]) beside it;
 //! - the memory-bandwidth limit: a plain streaming loop over arrays of N values that reads
 //!   and writes the bytes per DOF one increment must (position, velocity, inverse mass and
-//!   spring stiffness read; position and velocity written: 48 bytes), timed the same way.
+//!   spring stiffness read; position and velocity written: 48 bytes), timed the same way and
+//!   in turn with the engine's runs ([`in_turn`]), so a slow spell of the machine falls on
+//!   both.
 
 use crate::case::chain::Chain;
 use crate::engines::explicit::ExplicitEngine;
@@ -225,26 +227,26 @@ pub fn measure_with(engine: &dyn Engine, n: usize, repeats: u64) -> Result<Point
     }
     let error = displacement_error(&long.0, &output.history)?;
     drop(output);
-    // Then the shorter and the longer in turn, so that a slow spell of the machine falls on
-    // both rather than on all the repeats of one.
+    // Then the shorter and the longer in turn, and the streaming loop's two runs after them
+    // in each repeat, so that a slow spell of the machine falls on the engine and on the limit
+    // it is read against alike, rather than on all the repeats of one.
     let short = prepared(steps);
     // The first longer run counts as the first repeat's.
     let mut first_long = Some(first_long);
-    let mut in_turn = || -> Result<Times, String> {
-        let mut times = (f64::INFINITY, f64::INFINITY);
-        for _ in 0..repeats {
-            let short = timed(&short.1, &short.2)?.0;
-            let long = match first_long.take() {
-                Some(seconds) => seconds,
-                None => timed(&long.1, &long.2)?.0,
-            };
-            times = fastest(times, (short, long));
-        }
-        Ok(times)
+    let mut again = || {
+        in_turn(repeats, |run| match run {
+            0 => Ok(timed(&short.1, &short.2)?.0),
+            1 => match first_long.take() {
+                Some(seconds) => Ok(seconds),
+                None => Ok(timed(&long.1, &long.2)?.0),
+            },
+            2 => Ok(streaming_run(n, steps)),
+            _ => Ok(streaming_run(n, 2 * steps)),
+        })
     };
-    let times = retimed(in_turn()?, consistent, in_turn)?;
+    let (times, limit) = retimed(again()?, both_consistent, &mut again, fastest_of)?;
     let ns_per_step = resolved(times) * 1e9 / steps as f64;
-    let limit = streaming_limit(n, steps, repeats);
+    let limit = resolved(limit) * 1e9 / (steps as f64 * n as f64);
     crate::interrupt::checkpoint("scaling").map_err(|_| "interrupted".to_string())?;
     Ok(Point {
         engine: engine.name().to_string(),
@@ -267,6 +269,15 @@ pub const RETIMINGS: usize = 3;
 
 /// The fastest timings of runs of S and 2S increments of the same scene, seconds.
 pub type Times = (f64, f64);
+
+/// The fastest timings of a point's runs: the engine's, then the streaming loop's.
+pub type PointTimes = (Times, Times);
+
+/// No timing yet: every later one is faster.
+const UNTIMED: PointTimes = (
+    (f64::INFINITY, f64::INFINITY),
+    (f64::INFINITY, f64::INFINITY),
+);
 
 /// Whether `(short, long)` can be read as a setup plus S increments, then S more: the longer
 /// run slower. (A setup is never negative, so the longer run should also take at most twice
@@ -292,18 +303,45 @@ fn fastest(a: Times, b: Times) -> Times {
     (a.0.min(b.0), a.1.min(b.1))
 }
 
+/// A point's four runs, `run(0)` to `run(3)` (the engine's S and 2S increments, the streaming
+/// loop's S and 2S), each timed once per round, `repeats` rounds; the fastest of each. Within a
+/// round the runs follow each other, so a slow spell of the machine longer than a round falls
+/// on all four alike, and one shorter than half the repeats leaves each run fast repeats.
+fn in_turn(
+    repeats: u64,
+    mut run: impl FnMut(usize) -> Result<f64, String>,
+) -> Result<PointTimes, String> {
+    let mut times = UNTIMED;
+    for _ in 0..repeats {
+        let round = ((run(0)?, run(1)?), (run(2)?, run(3)?));
+        times = fastest_of(times, round);
+    }
+    Ok(times)
+}
+
+/// The faster of two timings of each of a point's runs.
+fn fastest_of(a: PointTimes, b: PointTimes) -> PointTimes {
+    (fastest(a.0, b.0), fastest(a.1, b.1))
+}
+
+/// Whether both the engine's pair and the loop's are [`consistent`].
+fn both_consistent((engine, limit): PointTimes) -> bool {
+    consistent(engine) && consistent(limit)
+}
+
 /// `times`, taken `again` up to [`RETIMINGS`] times while `accept` refuses them, the fastest of
-/// every timing of each run counting.
-fn retimed(
-    mut times: Times,
-    accept: impl Fn(Times) -> bool,
-    mut again: impl FnMut() -> Result<Times, String>,
-) -> Result<Times, String> {
+/// every timing of each run counting (`merge`).
+fn retimed<T: Copy>(
+    mut times: T,
+    accept: impl Fn(T) -> bool,
+    mut again: impl FnMut() -> Result<T, String>,
+    merge: fn(T, T) -> T,
+) -> Result<T, String> {
     for _ in 0..RETIMINGS {
         if accept(times) {
             break;
         }
-        times = fastest(times, again()?);
+        times = merge(times, again()?);
     }
     Ok(times)
 }
@@ -328,52 +366,59 @@ fn displacement_error(chain: &Chain, history: &crate::contract::History) -> Resu
     Ok(worst)
 }
 
-/// The streaming loop's marginal ns per DOF and increment at N: central differences of the
-/// chain over plain arrays (x, v, 1/m, k), `steps` and `2·steps` increments timed
-/// ([`streaming_times`], timed again as a point is, [`RETIMINGS`]), the difference taken, so it
-/// reads and writes what one increment of the chain must and nothing more; NaN where
-/// unresolved ([`resolved`]).
+/// The streaming loop's marginal ns per DOF and increment at N, measured alone: central
+/// differences of the chain over plain arrays (x, v, 1/m, k), runs of `steps` and `2·steps`
+/// increments ([`streaming_run`]) taken in turn, the fastest of `repeats` each, timed again as a
+/// point is ([`RETIMINGS`]), the difference taken, so it reads and writes what one increment of
+/// the chain must and nothing more; NaN where unresolved ([`resolved`]). A point of the study
+/// times the same runs in turn with the engine's.
 pub fn streaming_limit(n: usize, steps: u64, repeats: u64) -> f64 {
-    let first = streaming_times(n, steps, repeats);
-    let again = || Ok(streaming_times(n, steps, repeats));
-    let times = retimed(first, consistent, again).expect("the loop cannot fail");
+    let in_turn = || {
+        let fastest_pair = |times, _| {
+            fastest(
+                times,
+                (streaming_run(n, steps), streaming_run(n, 2 * steps)),
+            )
+        };
+        Ok((0..repeats).fold((f64::INFINITY, f64::INFINITY), fastest_pair))
+    };
+    let times = retimed(
+        in_turn().expect("the loop cannot fail"),
+        consistent,
+        in_turn,
+        fastest,
+    )
+    .expect("the loop cannot fail");
     resolved(times) * 1e9 / (steps as f64 * n as f64)
 }
 
-/// The streaming loop's runs of `steps` and `2·steps` increments over N DOFs, in turn, the
-/// fastest of `repeats` each, seconds.
-fn streaming_times(n: usize, steps: u64, repeats: u64) -> Times {
-    let run = |steps: u64| {
-        let h = 1e-3;
-        let mut x: Vec<f64> = (0..n).map(|i| (i as f64 * 0.1).sin() * 1e-3).collect();
-        let mut v = vec![0.0; n];
-        let inverse_mass = vec![1.0; n];
-        let stiffness = vec![1.0e4; n + 1];
-        let start = Instant::now();
-        for _ in 0..steps {
-            // An interruption leaves the timing meaningless; the study stops at its next
-            // checkpoint.
-            if crate::interrupt::requested() {
-                break;
-            }
-            let mut left = 0.0;
-            for i in 0..n {
-                let right = if i + 1 < n { x[i + 1] } else { 0.0 };
-                let xi = x[i];
-                let force = stiffness[i] * (left - xi) + stiffness[i + 1] * (right - xi);
-                v[i] += h * inverse_mass[i] * force;
-                left = xi;
-                x[i] = xi + h * v[i];
-            }
+/// Seconds of one run of the streaming loop over N DOFs, `steps` increments.
+fn streaming_run(n: usize, steps: u64) -> f64 {
+    let h = 1e-3;
+    let mut x: Vec<f64> = (0..n).map(|i| (i as f64 * 0.1).sin() * 1e-3).collect();
+    let mut v = vec![0.0; n];
+    let inverse_mass = vec![1.0; n];
+    let stiffness = vec![1.0e4; n + 1];
+    let start = Instant::now();
+    for _ in 0..steps {
+        // An interruption leaves the timing meaningless; the study stops at its next
+        // checkpoint.
+        if crate::interrupt::requested() {
+            break;
         }
-        let seconds = start.elapsed().as_secs_f64();
-        std::hint::black_box((&x, &v));
-        seconds
-    };
-    // In turn, as a point's runs are.
-    (0..repeats).fold((f64::INFINITY, f64::INFINITY), |times, _| {
-        fastest(times, (run(steps), run(2 * steps)))
-    })
+        let mut left = 0.0;
+        for i in 0..n {
+            let right = if i + 1 < n { x[i + 1] } else { 0.0 };
+            let xi = x[i];
+            let force = stiffness[i] * (left - xi) + stiffness[i + 1] * (right - xi);
+            v[i] += h * inverse_mass[i] * force;
+            left = xi;
+            x[i] = xi + h * v[i];
+        }
+    }
+    let seconds = start.elapsed().as_secs_f64();
+    std::hint::black_box((&x, &v));
+    seconds
 }
 
 /// Reset the process's peak resident set size (Linux: `/proc/self/clear_refs`, value 5);
@@ -449,21 +494,58 @@ mod tests {
     fn a_refused_pair_is_timed_again_and_the_fastest_counts() {
         // The first shorter run slowed by noise (2.1 s for a true 1.0 s): timed again, once.
         let mut calls = 0;
-        let times = retimed((2.1, 2.0), consistent, || {
-            calls += 1;
-            Ok((1.0, 2.2))
-        })
+        let times = retimed(
+            (2.1, 2.0),
+            consistent,
+            || {
+                calls += 1;
+                Ok((1.0, 2.2))
+            },
+            fastest,
+        )
         .unwrap();
         assert_eq!((times, calls), ((1.0, 2.0), 1));
         // Never accepted: RETIMINGS attempts, then left to `resolved` to refuse.
         let mut calls = 0;
-        let times = retimed((1.0, 0.9), consistent, || {
-            calls += 1;
-            Ok((1.0, 0.95))
-        })
+        let times = retimed(
+            (1.0, 0.9),
+            consistent,
+            || {
+                calls += 1;
+                Ok((1.0, 0.95))
+            },
+            fastest,
+        )
         .unwrap();
         assert_eq!((times, calls), ((1.0, 0.9), RETIMINGS));
         assert!(resolved(times).is_nan());
+    }
+
+    #[test]
+    fn a_slow_spell_over_half_the_runs_leaves_the_ratio_to_the_limit_exact() {
+        // A machine on which the engine's runs take 1 and 2 s and the loop's 0.5 and 1 s (the
+        // engine at exactly twice the limit), and every run in one stretch of consecutive runs,
+        // half of all, three times as long. Wherever the stretch falls, each of the four runs
+        // keeps a repeat outside it, so the ratio read is 2 to the last bit; timing every
+        // repeat of the engine before the loop's would read 6 where the stretch covers the
+        // engine's.
+        let repeats = 6u64;
+        let calls = 4 * repeats as usize;
+        for start in 0..=calls / 2 {
+            let mut call = 0;
+            let times = in_turn(repeats, |run| {
+                let slow = (start..start + calls / 2).contains(&call);
+                call += 1;
+                Ok([1.0, 2.0, 0.5, 1.0][run] * if slow { 3.0 } else { 1.0 })
+            })
+            .unwrap();
+            assert_eq!(call, calls);
+            assert_eq!(
+                resolved(times.0) / resolved(times.1),
+                2.0,
+                "stretch from {start}"
+            );
+        }
     }
 
     #[test]

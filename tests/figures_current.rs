@@ -1,7 +1,10 @@
 //! No speed figure older than the engine it measured. Every committed speed figure records the
 //! commit it was measured at (BENCHMARKS.md's table line, `report/scaling/*.provenance`); the
-//! engines' sources at that commit must be HEAD's, or the figure describes code that is gone.
+//! engines' sources at that commit must be HEAD's, or the figure describes code that is gone;
+//! the README's sentence on the chain quotes the committed chain study.
 
+use crosscheck::report::scaling::FIT_FROM_N;
+use crosscheck::run::scaling::fitted_exponent;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -156,4 +159,58 @@ fn a_figure_measured_with_uncommitted_changes_names_no_usable_commit() {
         recorded_commit("Measured on AMD EPYC, 2 cores, commit 4f245de, 2026-11-28"),
         Ok("4f245de".into())
     );
+}
+
+/// `explicit`'s points of the committed chain study from N = [`FIT_FROM_N`] up: (N, ns per
+/// increment, ns per DOF-increment over the streaming limit).
+fn committed_chain() -> Vec<(f64, f64, f64)> {
+    let path = root().join("report/scaling/scaling.csv");
+    let mut reader = csv::Reader::from_path(&path).expect("the committed chain study");
+    let headers = reader.headers().expect("a header").clone();
+    let column = |name: &str| {
+        headers
+            .iter()
+            .position(|h| h == name)
+            .unwrap_or_else(|| panic!("scaling.csv has no column {name}"))
+    };
+    let (engine, n, step) = (column("engine"), column("n"), column("ns_per_step"));
+    let (dof, limit) = (column("ns_per_dof_step"), column("limit_ns_per_dof_step"));
+    let number = |row: &csv::StringRecord, i: usize| -> f64 { row[i].parse().expect("a number") };
+    reader
+        .records()
+        .map(|r| r.expect("a row"))
+        .filter(|r| &r[engine] == "explicit" && number(r, n) >= FIT_FROM_N as f64)
+        .map(|r| {
+            (
+                number(&r, n),
+                number(&r, step),
+                number(&r, dof) / number(&r, limit),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn the_readme_states_the_chains_growth_and_ratio_as_the_committed_study_measured_them() {
+    // The README's sentence on the chain quotes the fitted exponent (two decimals) and the
+    // range of the cost per DOF over the streaming limit (one decimal) of the committed
+    // `report/scaling/scaling.csv`, so a study written again fails here until the README says
+    // what it measured.
+    let points = committed_chain();
+    assert!(
+        points.len() >= 2,
+        "the committed study has explicit from 10^3 up"
+    );
+    let fit: Vec<(f64, f64)> = points.iter().map(|p| (p.0, p.1)).collect();
+    let (exponent, _) = fitted_exponent(&fit).expect("a fit");
+    let low = points.iter().map(|p| p.2).fold(f64::INFINITY, f64::min);
+    let high = points.iter().map(|p| p.2).fold(0.0, f64::max);
+    let readme = std::fs::read_to_string(root().join("README.md")).expect("README.md");
+    let readme = readme.split_whitespace().collect::<Vec<_>>().join(" ");
+    for claim in [
+        format!("N^{exponent:.2} from 10^3 to 10^6"),
+        format!("at {low:.1}–{high:.1}× a plain loop"),
+    ] {
+        assert!(readme.contains(&claim), "README.md does not say {claim:?}");
+    }
 }

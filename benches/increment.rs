@@ -19,8 +19,8 @@
 //! scene, runs its static steps and linearises it (what a run does before stepping).
 //!
 //! `floor/<case>/{registers,slices}`: the arithmetic floor (`run::floor`), the same recurrence
-//! as the explicit engine's on the single damped oscillator (`tests/floor.rs`: equal to
-//! round-off), written out by hand, at the same increment and length as `increment/<case>/…`:
+//! as the explicit engine's on the single damped oscillator of springs_grounded_a and
+//! springs_grounded_b (`tests/floor.rs`: equal to round-off), written out by hand, at the same increment and length as `increment/<case>/…`:
 //! with the state in registers (the dependent chain alone) and in heap slices, one pass per
 //! stage (what a scene-driven engine must at least do). `floor/<case>/slices` of the pinned 2D
 //! rigid cases: the least arithmetic of the same scheme on a body turning about a pin

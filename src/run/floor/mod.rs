@@ -1,6 +1,7 @@
 //! The arithmetic floor of one increment: the explicit scheme's recurrence for a seed scene,
 //! written out by hand, so a benchmark can say how far the general engine is from the
-//! arithmetic it must do. Here the simplest, a mass on a grounded spring and dashpot; in
+//! arithmetic it must do. Here the simplest, a mass on a spring and dashpot to the ground or a
+//! held node; in
 //! [`AxialOscillator`] masses on springs and a dashpot whose lines turn, in [`PinnedBody`] a
 //! body turning about a pin, in [`SlidingBody`] a body that slides and turns with its mass
 //! centre off its reference node, in [`SlidingBody3d`] the same body in 3D, with the
@@ -21,11 +22,11 @@
 //!   with node indices, then the dashpots' centred forces, then one pass over the particles).
 //!   What one pass computes reaches the next through memory.
 
-use crate::scene::{Connection, DampingTreatment, Dof, Scene, Step, StepKind};
+use crate::scene::{Connection, DampingTreatment, Dof, Element, Scene, Step, StepKind};
 use std::hint::black_box;
 
-/// One mass on a grounded spring and a grounded dashpot acting on the same translation,
-/// released from rest at a displacement.
+/// One mass on a spring and a dashpot acting on the same translation, grounded or joining it to
+/// a held node, released from rest at a displacement.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DampedOscillator {
     /// Mass (kg).
@@ -41,30 +42,39 @@ pub struct DampedOscillator {
 }
 
 impl DampedOscillator {
-    /// The oscillator a scene describes, when it is exactly that: one mass, one grounded spring
-    /// and one grounded dashpot on the same translation of its node, no bodies, contacts, loads
-    /// or initial velocities, a static step that prescribes that translation and a dynamic step
-    /// that releases it, and the centred dashpot treatment (the recurrence written here).
+    /// The oscillator a scene describes, when it is exactly that: one node moves in the dynamic
+    /// step, along one translation of its frame (its others held in both steps), has mass and
+    /// is released from rest at the value the static step prescribes on that translation; one
+    /// spring and one dashpot act on it, each grounded on that translation or joining the node
+    /// along its direction to a node held where it starts in both steps; every other spring or
+    /// dashpot joins held nodes alone and moves nothing (springs_grounded_a: grounded
+    /// elements; springs_grounded_b: fixed-direction elements to a held node, beside a spring
+    /// between two held nodes).
     pub fn of(scene: &Scene) -> Option<Self> {
         let (static_step, dynamic, duration) = released(scene)?;
-        let [spring] = scene.springs.as_slice() else {
+        let translations = || (0..scene.dimension.count()).map(Dof::Translation);
+        let held = |step: &Step, node: usize, dof: Dof| {
+            step.conditions
+                .iter()
+                .any(|c| c.node == node && c.dof == dof && c.value.is_none())
+        };
+        let still = |node: usize| {
+            translations().all(|d| held(static_step, node, d) && held(dynamic, node, d))
+        };
+        let moving: Vec<usize> = (0..scene.nodes.len())
+            .filter(|n| !translations().all(|d| held(dynamic, *n, d)))
+            .collect();
+        let [node] = moving[..] else {
             return None;
         };
-        let [dashpot] = scene.dashpots.as_slice() else {
+        let free: Vec<Dof> = translations()
+            .filter(|d| !held(dynamic, node, *d))
+            .collect();
+        let [dof @ Dof::Translation(axis)] = free[..] else {
             return None;
         };
-        let Connection::Grounded {
-            node,
-            dof: dof @ Dof::Translation(_),
-        } = spring.connection
-        else {
-            return None;
-        };
-        if dashpot.connection != spring.connection {
-            return None;
-        }
-        let massive: Vec<_> = scene.nodes.iter().filter(|n| n.mass > 0.0).collect();
-        if massive.len() != 1 || !std::ptr::eq(massive[0], &scene.nodes[node]) {
+        let across_held = translations().all(|d| d == dof || held(static_step, node, d));
+        if scene.nodes[node].mass <= 0.0 || !across_held {
             return None;
         }
         let released_from = static_step
@@ -72,18 +82,38 @@ impl DampedOscillator {
             .iter()
             .find(|c| c.node == node && c.dof == dof)?
             .value?;
-        // Released: the dynamic step neither holds nor prescribes the spring's translation.
-        if dynamic
-            .conditions
-            .iter()
-            .any(|c| c.node == node && c.dof == dof)
-        {
+        let along = scene.nodes[node].frame.column(axis).into_owned();
+        // Whether an element acts on the node along `dof` (Some(true)), joins still nodes
+        // alone (Some(false)), or is neither (None: not this system).
+        let acts = |e: &Element| match e.connection {
+            Connection::Grounded { node: n, dof: d } if n == node => (d == dof).then_some(true),
+            Connection::Grounded { node: n, .. } => still(n).then_some(false),
+            Connection::FixedDirection { nodes, direction } if nodes.contains(&node) => {
+                let other = if nodes[0] == node { nodes[1] } else { nodes[0] };
+                let aligned = direction == along || direction == -along;
+                (aligned && still(other)).then_some(true)
+            }
+            Connection::FixedDirection { nodes, .. } | Connection::Axial { nodes } => {
+                (still(nodes[0]) && still(nodes[1])).then_some(false)
+            }
+        };
+        let acting = |elements: &'_ [Element]| -> Option<Vec<f64>> {
+            let mut out = Vec::new();
+            for e in elements {
+                if acts(e)? {
+                    out.push(e.coefficient);
+                }
+            }
+            Some(out)
+        };
+        let (springs, dashpots) = (acting(&scene.springs)?, acting(&scene.dashpots)?);
+        let (&[stiffness], &[damping]) = (&springs[..], &dashpots[..]) else {
             return None;
-        }
+        };
         Some(Self {
             mass: scene.nodes[node].mass,
-            stiffness: spring.coefficient,
-            damping: dashpot.coefficient,
+            stiffness,
+            damping,
             released_from,
             duration,
         })

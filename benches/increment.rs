@@ -31,7 +31,9 @@
 //! with the arithmetic a 3D engine needs (a quaternion turned with compensated sums, body
 //! points, forces, moments and the centripetal force as 3-vectors, the solve reduced to the
 //! two free DOFs as the engine's body solve reduces it: `run::floor::SlidingBody3d`), in heap
-//! slices; of springs_grounded_c and springs_n2n_c: the same recurrence as the engine's on
+//! slices; of rigid2d_slide_lumped and rigid3d_slide_lumped: the same bodies with the mass
+//! centre on the reference node, whose accelerations do not read the velocity and are formed
+//! once per increment; of springs_grounded_c and springs_n2n_c: the same recurrence as the engine's on
 //! masses pulled along a line by axial springs and the dashpot solved along its turning line
 //! (`run::floor::AxialOscillator`, `tests/floor.rs`: equal to round-off), in heap slices.
 //!

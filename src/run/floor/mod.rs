@@ -1,11 +1,10 @@
 //! The arithmetic floor of one increment: the explicit scheme's recurrence for a seed scene,
 //! written out by hand, so a benchmark can say how far the general engine is from the
 //! arithmetic it must do. Here the simplest, a mass on a spring and dashpot to the ground or a
-//! held node; in
-//! [`AxialOscillator`] masses on springs and a dashpot whose lines turn, in [`PinnedBody`] a
-//! body turning about a pin, in [`SlidingBody`] a body that slides and turns with its mass
-//! centre off its reference node, in [`SlidingBody3d`] the same body in 3D, with the
-//! arithmetic of a 3D engine.
+//! held node; in [`AxialOscillator`] masses on springs and a dashpot whose lines turn, in
+//! [`PinnedBody`] a body turning about a pin, in [`SlidingBody`] a body that slides and turns
+//! with its mass centre off its reference node or on it, in [`SlidingBody3d`] the same body in
+//! 3D, with the arithmetic of a 3D engine.
 //!
 //! The recurrence is the one the explicit engine runs on such a scene: central differences
 //! with the centred dashpot treatment (the dashpot's rate solves

@@ -4,7 +4,10 @@
 //! particle that slides along x on a spring, pressed against a face of the body by a penalty
 //! (rigid2d_slide_surface), written out by hand with the state in heap slices: one pass over
 //! the body's springs, the particle's springs, the contact pairs and the loads, then the
-//! centred velocity, then the update of the body and of the particle.
+//! centred velocity, then the update of the body and of the particle. The same body with its
+//! mass centre on its reference node (rigid2d_slide_lumped) has no force that reads the
+//! velocity: its accelerations are formed once per increment from a mass matrix formed once,
+//! as the engine forms them.
 //!
 //! It is the same scheme as the explicit engine's (central differences, finite rotation, a
 //! unilateral penalty). With the mass centre off the reference node the centripetal force
@@ -49,7 +52,7 @@ const VELOCITY_TOLERANCE: f64 = 1e-14;
 pub struct SlidingBody {
     /// Mass (kg).
     pub mass: f64,
-    /// Mass centre relative to the reference node (m), off it.
+    /// Mass centre relative to the reference node (m): zero where the body is lumped.
     pub centre: Vector2<f64>,
     /// Inertia about the reference node (kg·m²).
     pub inertia: f64,
@@ -135,7 +138,9 @@ impl MassMatrix {
 impl SlidingBody {
     /// The sliding body a scene describes, when it is exactly that: 2D, one body whose
     /// reference node is held in uy and free along x and to turn, with its mass centre off
-    /// that node; one particle held in uy and free along x; springs of fixed direction x from
+    /// that node (rigid2d_slide_surface) or on it (rigid2d_slide_lumped, where no force reads
+    /// the velocity and the accelerations are formed once per increment, as the engine forms
+    /// them); one particle held in uy and free along x; springs of fixed direction x from
     /// a body point or the particle to a held node; one plane contact between the particle and
     /// the body, without a contact dashpot; loads on body points; initial velocities on the
     /// reference node and the particle only; one dynamic step; no dashpots; the centred
@@ -171,7 +176,6 @@ impl SlidingBody {
         if !held(reference, Dof::Translation(1))
             || !free(reference, Dof::Translation(0))
             || !free(reference, Dof::Rotation(2))
-            || centre == Vector2::zeros()
             || on_body(particle)
             || !held(particle, Dof::Translation(1))
             || !free(particle, Dof::Translation(0))
@@ -304,11 +308,19 @@ impl SlidingBody {
         acc[0] = matrix.accelerations(&load[0], rates[0][1]);
         rates[0] = plus(rates[0], -0.5 * h, acc[0]);
         v[0] -= 0.5 * h * load[0].particle * inverse_mass[0];
+        // A body whose mass centre is its reference node (lumped) feels no centripetal force
+        // and its mass matrix does not turn with it: formed once, and the accelerations, which
+        // then do not read the velocity, once per increment, without iterating.
+        let lumped = self.centre == Vector2::zeros();
         for _ in 0..steps {
             load[0] = self.forces(&lists, &heading[0], x[0], u[0]);
-            let matrix = MassMatrix::at(self, inverse_body_mass[0], &heading[0]);
-            let at = |guess: &Rates| matrix.accelerations(&load[0], guess[1]);
-            acc[0] = centred(at, rates[0], acc[0], h);
+            if lumped {
+                acc[0] = matrix.accelerations(&load[0], 0.0);
+            } else {
+                let matrix = MassMatrix::at(self, inverse_body_mass[0], &heading[0]);
+                let at = |guess: &Rates| matrix.accelerations(&load[0], guess[1]);
+                acc[0] = centred(at, rates[0], acc[0], h);
+            }
             rates[0] = plus(rates[0], h, acc[0]);
             v[0] += h * load[0].particle * inverse_mass[0];
             let turn = h * rates[0][1];

@@ -4,7 +4,10 @@
 //! mass centre off that node, springs of fixed direction x from its points to the ground,
 //! constant loads on its points, and one particle held in y and z, pressed against a face of
 //! the body by a penalty. The answer is the 2D twin's; the arithmetic is what a 3D explicit
-//! engine must do for it, written out by hand with the state in heap slices.
+//! engine must do for it, written out by hand with the state in heap slices. With the mass
+//! centre on the reference node (rigid3d_slide_lumped) no force reads the velocity, and the
+//! accelerations are formed once per increment from a mass matrix formed once, as the engine
+//! forms them without iterating.
 //!
 //! What stays 3D, as in the explicit engine's spatial kinematics: the orientation is a unit
 //! quaternion, turned each increment by the rotation vector h·ω(n+½) (a 3-vector) as the
@@ -58,7 +61,7 @@ const ALONG: Vector3<f64> = Vector3::new(1.0, 0.0, 0.0);
 pub struct SlidingBody3d {
     /// Mass (kg).
     pub mass: f64,
-    /// Mass centre relative to the reference node (m), off it.
+    /// Mass centre relative to the reference node (m): zero where the body is lumped.
     pub centre: Vector3<f64>,
     /// Inertia about the reference node, in the body's axes (kg·m²).
     pub inertia: Matrix3<f64>,
@@ -210,7 +213,8 @@ impl MassMatrix {
 impl SlidingBody3d {
     /// The sliding body a scene describes, when it is exactly that: 3D, one body whose
     /// reference node is held in uy, uz, rx and ry and free along x and to turn about z, with
-    /// its mass centre off that node; one particle held in uy and uz and free along x; springs
+    /// its mass centre off that node (rigid3d_slide_surface) or on it (rigid3d_slide_lumped,
+    /// whose accelerations are formed once per increment without iterating); one particle held in uy and uz and free along x; springs
     /// of fixed direction x from a body point or the particle to a node held in every
     /// translation; one plane contact between the particle and the body, without a contact
     /// dashpot; loads on body points; initial velocities on the reference node and the
@@ -252,7 +256,6 @@ impl SlidingBody3d {
             || !held(reference, Dof::Rotation(0))
             || !held(reference, Dof::Rotation(1))
             || !free(reference, Dof::Rotation(2))
-            || body.centre_offset == Vector3::zeros()
             || on_body(particle)
             || !sliding(particle)
             || contact.restitution != 1.0
@@ -359,11 +362,20 @@ impl SlidingBody3d {
         acc[0] = matrix.accelerations(&load[0], &rates[0]);
         rates[0] = plus(rates[0], -0.5 * h, acc[0]);
         v[0] -= 0.5 * h * SLIDE.dot(&load[0].particle) * inverse_mass[0];
+        // A body whose mass centre is its reference node (lumped) feels no centripetal force,
+        // and turning about g leaves g·I g as it is: the mass matrix formed once, and the
+        // accelerations, which then do not read the velocity, once per increment, without
+        // iterating.
+        let lumped = self.centre == Vector3::zeros();
         for _ in 0..steps {
             load[0] = self.forces(&lists, &orientation[0], &x[0], u[0]);
-            let matrix = MassMatrix::at(self, inverse_body_mass[0], &orientation[0]);
-            let at = |guess: &Rates| matrix.accelerations(&load[0], guess);
-            acc[0] = centred(at, rates[0], acc[0], h);
+            if lumped {
+                acc[0] = matrix.accelerations(&load[0], &[0.0; 6]);
+            } else {
+                let matrix = MassMatrix::at(self, inverse_body_mass[0], &orientation[0]);
+                let at = |guess: &Rates| matrix.accelerations(&load[0], guess);
+                acc[0] = centred(at, rates[0], acc[0], h);
+            }
             rates[0] = plus(rates[0], h, acc[0]);
             v[0] += h * SLIDE.dot(&load[0].particle) * inverse_mass[0];
             let r = rates[0];

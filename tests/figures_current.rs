@@ -201,6 +201,13 @@ fn the_readme_states_the_chains_growth_and_ratio_as_the_committed_study_measured
         points.len() >= 2,
         "the committed study has explicit from 10^3 up"
     );
+    // An unresolved point (NaN) would drop out of the range unseen.
+    for (n, step, ratio) in &points {
+        assert!(
+            step.is_finite() && ratio.is_finite(),
+            "N = {n}: unresolved in the committed study"
+        );
+    }
     let fit: Vec<(f64, f64)> = points.iter().map(|p| (p.0, p.1)).collect();
     let (exponent, _) = fitted_exponent(&fit).expect("a fit");
     let low = points.iter().map(|p| p.2).fold(f64::INFINITY, f64::min);

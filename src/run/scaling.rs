@@ -18,7 +18,8 @@
 //!   and writes the bytes per DOF one increment must (position, velocity, inverse mass and
 //!   spring stiffness read; position and velocity written: 48 bytes), timed the same way and
 //!   in turn with the engine's runs ([`in_turn`]), so a slow spell of the machine falls on
-//!   both.
+//!   both (the engine's first longer run, timed alone before them for its peak memory,
+//!   counts as one of its repeats).
 
 use crate::case::chain::Chain;
 use crate::engines::explicit::ExplicitEngine;

@@ -73,7 +73,12 @@ impl DampedOscillator {
             return None;
         };
         let across_held = translations().all(|d| d == dof || held(static_step, node, d));
-        if scene.nodes[node].mass <= 0.0 || !across_held {
+        // Released: the dynamic step neither holds nor prescribes the free translation.
+        let prescribed = dynamic
+            .conditions
+            .iter()
+            .any(|c| c.node == node && c.dof == dof);
+        if scene.nodes[node].mass <= 0.0 || !across_held || prescribed {
             return None;
         }
         let released_from = static_step

@@ -1,13 +1,13 @@
-//! The arithmetic floor of a rigid-body increment whose forces read the velocity: a 2D body
-//! that slides along x and turns, its mass centre off its reference node, with springs of
-//! fixed direction from its points to the ground, constant loads on its points, and one
-//! particle that slides along x on a spring, pressed against a face of the body by a penalty
-//! (rigid2d_slide_surface), written out by hand with the state in heap slices: one pass over
-//! the body's springs, the particle's springs, the contact pairs and the loads, then the
-//! centred velocity, then the update of the body and of the particle. The same body with its
-//! mass centre on its reference node (rigid2d_slide_lumped) has no force that reads the
-//! velocity: its accelerations are formed once per increment from a mass matrix formed once,
-//! as the engine forms them.
+//! The arithmetic floor of a sliding rigid body's increment, whose forces read the velocity where
+//! its mass centre is off its reference node: a 2D body that slides along x and turns, with springs
+//! of fixed direction from its points to the ground, constant loads on its points, and one particle
+//! that slides along x on a spring, pressed against a face of the body by a penalty
+//! (rigid2d_slide_surface), written out by hand with the state in heap slices: one pass over the
+//! body's springs, the particle's springs, the contact pairs and the loads, then the centred
+//! velocity, then the update of the body and of the particle. The same body with its mass centre on
+//! its reference node (rigid2d_slide_lumped) has no force that reads the velocity: its
+//! accelerations are formed once per increment from a mass matrix formed once, as the engine forms
+//! them.
 //!
 //! It is the same scheme as the explicit engine's (central differences, finite rotation, a
 //! unilateral penalty). With the mass centre off the reference node the centripetal force
@@ -83,6 +83,9 @@ pub struct SlidingState {
     pub translation: f64,
     /// Displacement of the particle along x (m).
     pub displacement: f64,
+    /// Acceleration passes over the run (one per increment where no force reads the velocity,
+    /// more where the centred velocity is iterated).
+    pub passes: u64,
 }
 
 /// What the force pass gives: the force along x and the moment about the reference node on
@@ -124,6 +127,13 @@ impl MassMatrix {
             inverse_mass,
             inverse: 1.0 / (body.inertia - body.mass * cy * cy),
         }
+    }
+
+    /// The accelerations (a, α) under `load` of a body whose mass centre is its reference
+    /// node: (f/m, M/I).
+    #[inline(always)]
+    fn lumped_accelerations(&self, load: &Load) -> Rates {
+        [load.force * self.inverse_mass, load.moment * self.inverse]
     }
 
     /// The accelerations (a, α) under `load` at angular velocity `spin`.
@@ -312,14 +322,17 @@ impl SlidingBody {
         // and its mass matrix does not turn with it: formed once, and the accelerations, which
         // then do not read the velocity, once per increment, without iterating.
         let lumped = self.centre == Vector2::zeros();
+        let mut passes = 0;
         for _ in 0..steps {
             load[0] = self.forces(&lists, &heading[0], x[0], u[0]);
             if lumped {
-                acc[0] = matrix.accelerations(&load[0], 0.0);
+                acc[0] = matrix.lumped_accelerations(&load[0]);
+                passes += 1;
             } else {
                 let matrix = MassMatrix::at(self, inverse_body_mass[0], &heading[0]);
                 let at = |guess: &Rates| matrix.accelerations(&load[0], guess[1]);
-                acc[0] = centred(at, rates[0], acc[0], h);
+                let (a, taken) = centred(at, rates[0], acc[0], h);
+                (acc[0], passes) = (a, passes + taken);
             }
             rates[0] = plus(rates[0], h, acc[0]);
             v[0] += h * load[0].particle * inverse_mass[0];
@@ -333,6 +346,7 @@ impl SlidingBody {
             angle: angle[0],
             translation: x[0],
             displacement: u[0],
+            passes,
         }
     }
 }
@@ -361,18 +375,20 @@ fn largest<const N: usize>(f: impl Fn(usize) -> f64) -> f64 {
 /// per pass, so the guess just made is within ρ/(1−ρ)·change of the fixed point; it stops
 /// where the change is within the tolerance of the largest rate, or, after a contracting pass
 /// (ρ < ½), where that bound is: change² ≤ tolerance·(previous change − change). Returns the
-/// last pass's accelerations.
+/// last pass's accelerations and the passes taken.
 #[inline(always)]
 pub(super) fn centred<const N: usize>(
     accelerations: impl Fn(&[f64; N]) -> [f64; N],
     half: [f64; N],
     previous: [f64; N],
     h: f64,
-) -> [f64; N] {
+) -> ([f64; N], u64) {
     let mut guess = plus(half, 0.5 * h, previous);
     let mut acc = previous;
     let mut previous_change = 0.0;
+    let mut passes = 0;
     for _ in 0..MAX_PASSES {
+        passes += 1;
         acc = accelerations(&guess);
         let next = plus(half, 0.5 * h, acc);
         let change = largest::<N>(|k| (next[k] - guess[k]).abs());
@@ -385,5 +401,5 @@ pub(super) fn centred<const N: usize>(
             break;
         }
     }
-    acc
+    (acc, passes)
 }

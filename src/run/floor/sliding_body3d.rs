@@ -6,8 +6,9 @@
 //! the body by a penalty. The answer is the 2D twin's; the arithmetic is what a 3D explicit
 //! engine must do for it, written out by hand with the state in heap slices. With the mass
 //! centre on the reference node (rigid3d_slide_lumped) no force reads the velocity, and the
-//! accelerations are formed once per increment from a mass matrix formed once, as the engine
-//! forms them without iterating.
+//! accelerations are formed once per increment without iterating, as the engine forms them;
+//! the mass matrix, which a turn about the free axis leaves as it is, is formed once (the
+//! engine forms its body solve at every increment).
 //!
 //! What stays 3D, as in the explicit engine's spatial kinematics: the orientation is a unit
 //! quaternion, turned each increment by the rotation vector h·ω(n+½) (a 3-vector) as the
@@ -197,6 +198,16 @@ impl MassMatrix {
         }
     }
 
+    /// The accelerations (a, α) under `load` of a body whose mass centre is its reference
+    /// node: no centripetal force and no drag, so a = Q f/m and α = (g·M / g·I g) g.
+    #[inline(always)]
+    fn lumped_accelerations(&self, load: &Load) -> Rates {
+        let s = AXIS.dot(&load.moment) * self.inverse;
+        let a = SLIDE * (SLIDE.dot(&load.force) * self.inverse_mass);
+        let alpha = AXIS * s;
+        [a.x, a.y, a.z, alpha.x, alpha.y, alpha.z]
+    }
+
     /// The accelerations (a, α) under `load` at the rates `rates` (the centripetal force
     /// from their angular velocity).
     #[inline(always)]
@@ -211,15 +222,14 @@ impl MassMatrix {
 }
 
 impl SlidingBody3d {
-    /// The sliding body a scene describes, when it is exactly that: 3D, one body whose
-    /// reference node is held in uy, uz, rx and ry and free along x and to turn about z, with
-    /// its mass centre off that node (rigid3d_slide_surface) or on it (rigid3d_slide_lumped,
-    /// whose accelerations are formed once per increment without iterating); one particle held in uy and uz and free along x; springs
-    /// of fixed direction x from a body point or the particle to a node held in every
-    /// translation; one plane contact between the particle and the body, without a contact
-    /// dashpot; loads on body points; initial velocities on the reference node and the
-    /// particle only; one dynamic step; no dashpots; the centred velocity; the identity frame
-    /// everywhere.
+    /// The sliding body a scene describes, when it is exactly that: 3D, one body whose reference
+    /// node is held in uy, uz, rx and ry and free along x and to turn about z, with its mass centre
+    /// off that node (rigid3d_slide_surface) or on it (rigid3d_slide_lumped, whose accelerations
+    /// are formed once per increment without iterating); one particle held in uy and uz and free
+    /// along x; springs of fixed direction x from a body point or the particle to a node held in
+    /// every translation; one plane contact between the particle and the body, without a contact
+    /// dashpot; loads on body points; initial velocities on the reference node and the particle
+    /// only; one dynamic step; no dashpots; the centred velocity; the identity frame everywhere.
     pub fn of(scene: &Scene) -> Option<Self> {
         if scene.dimension != Dimension::Three
             || !scene.dashpots.is_empty()
@@ -363,18 +373,21 @@ impl SlidingBody3d {
         rates[0] = plus(rates[0], -0.5 * h, acc[0]);
         v[0] -= 0.5 * h * SLIDE.dot(&load[0].particle) * inverse_mass[0];
         // A body whose mass centre is its reference node (lumped) feels no centripetal force,
-        // and turning about g leaves g·I g as it is: the mass matrix formed once, and the
-        // accelerations, which then do not read the velocity, once per increment, without
-        // iterating.
+        // and turning about g leaves g·I g as it is: the mass matrix formed once (the engine
+        // forms its body solve at every increment in 3D), and the accelerations, which then do
+        // not read the velocity, once per increment, without iterating.
         let lumped = self.centre == Vector3::zeros();
+        let mut passes = 0;
         for _ in 0..steps {
             load[0] = self.forces(&lists, &orientation[0], &x[0], u[0]);
             if lumped {
-                acc[0] = matrix.accelerations(&load[0], &[0.0; 6]);
+                acc[0] = matrix.lumped_accelerations(&load[0]);
+                passes += 1;
             } else {
                 let matrix = MassMatrix::at(self, inverse_body_mass[0], &orientation[0]);
                 let at = |guess: &Rates| matrix.accelerations(&load[0], guess);
-                acc[0] = centred(at, rates[0], acc[0], h);
+                let (a, taken) = centred(at, rates[0], acc[0], h);
+                (acc[0], passes) = (a, passes + taken);
             }
             rates[0] = plus(rates[0], h, acc[0]);
             v[0] += h * SLIDE.dot(&load[0].particle) * inverse_mass[0];
@@ -390,6 +403,7 @@ impl SlidingBody3d {
             angle: orientation[0].twist(&AXIS),
             translation: SLIDE.dot(&x[0]),
             displacement: u[0],
+            passes,
         }
     }
 }

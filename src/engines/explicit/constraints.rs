@@ -105,6 +105,27 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         c
     }
 
+    /// The solve operators of the bodies that turn in place about one free axis under finite
+    /// rotation in 3D, formed at `cfg` (a dynamic step's start) for the whole step: turning
+    /// about the free axis g leaves Rᵀ g, and so g·I g, as it is, and the solve has no drag
+    /// terms. Where g turns into a body axis the value is the one every increment would form,
+    /// bit for bit (the orientation keeps its other components exactly zero); otherwise it
+    /// differs from it by the round-off of turning g into the body's axes.
+    pub(super) fn form_turning_operators(&self, held: &mut Constraints<S>, cfg: &Config<S>) {
+        if !FINITE || S::ROT == 1 {
+            return; // formed with the step's constraints already
+        }
+        for b in 0..self.bodies.len() {
+            if held.body_operators[b].is_none()
+                && held.body_free_r[b].len() == 1
+                && self.turns_in_place(held, b)
+            {
+                let (held_t, free_r) = (&held.body_held_t[b], &held.body_free_r[b]);
+                held.body_operators[b] = Some(BodyOperator::of(&cfg.inertia[b], held_t, free_r));
+            }
+        }
+    }
+
     /// Whether body `b` turns in place under `held`: pinned at its reference node, or with its
     /// mass centre there (which turning leaves there, `Model::oriented`), so that its solve
     /// has no drag terms and, about one free axis, an operator that turning leaves as it is.

@@ -436,8 +436,9 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
     }
 
     /// The plan of dynamic step `si` of `duration` under `held`.
-    fn plan(&self, si: usize, duration: f64, held: Constraints<S>) -> StepPlan<S> {
+    fn plan(&self, si: usize, duration: f64, mut held: Constraints<S>) -> StepPlan<S> {
         let (model, h) = (self.model, self.h);
+        model.form_turning_operators(&mut held, &self.cfg);
         let velocity = VelocityRule::of(model, &self.cfg, &held, h, self.settings.damping);
         // Rows fall on increments unless a stability study asked for an increment that does
         // not divide the output interval; then every increment is a row for the sampler, and

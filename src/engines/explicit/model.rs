@@ -202,7 +202,9 @@ pub struct Constraints<S: Space> {
     /// - here, under small rotations (a body keeps its reference mass properties), and under
     ///   finite rotation in the plane for a body pinned at its reference node or with its mass
     ///   centre there (the operator is then the inertia about the one axis, which turning
-    ///   leaves as it is).
+    ///   leaves as it is);
+    /// - at a dynamic step's start, under finite rotation in 3D, for such a body turning about
+    ///   one free axis ([`Model::form_turning_operators`]).
     ///
     /// `None` for every other body under finite rotation (formed at every increment from the
     /// configuration's mass properties), among them some whose operator happens not to change

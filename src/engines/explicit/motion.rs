@@ -3,7 +3,7 @@
 //! the consistent contact start sets (a pair's penetration and gap rate).
 
 use super::axis::{ParticleKernel, move_along, step_along};
-use super::body_solve::project;
+use super::body_solve::{BodyOperator, BodySolve, project};
 use super::model::*;
 use super::space::{BodyInertia, Lin, Space, compensated_add};
 
@@ -37,6 +37,53 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         out: &mut Rates<S>,
         counters: &mut Counters,
     ) {
+        self.particle_accelerations(forces, held, out);
+        self.body_accelerations(cfg, forces, vel, held, out, counters);
+    }
+
+    /// [`Model::accelerations`] with the bodies' solve operators already formed at `cfg` under
+    /// `held` ([`Model::body_operators`]): what the passes of an iteration at one
+    /// configuration share, formed once for all of them. The same arithmetic, bit for bit.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn accelerations_with(
+        &self,
+        cfg: &Config<S>,
+        forces: &Forces<S>,
+        vel: &Rates<S>,
+        held: &Constraints<S>,
+        operators: &[BodyOperator<S>],
+        out: &mut Rates<S>,
+        counters: &mut Counters,
+    ) {
+        self.particle_accelerations(forces, held, out);
+        self.bodies_under(cfg, forces, vel, held, Some(operators), out, counters);
+    }
+
+    /// Every body's solve operator at `cfg` under `held` into `out`: the step's where it has
+    /// one ([`Constraints::body_operators`]), otherwise formed from the configuration's mass
+    /// properties.
+    pub(super) fn body_operators(
+        &self,
+        cfg: &Config<S>,
+        held: &Constraints<S>,
+        out: &mut Vec<BodyOperator<S>>,
+    ) {
+        out.clear();
+        out.extend((0..self.bodies.len()).map(|b| {
+            held.body_operators[b].unwrap_or_else(|| {
+                BodyOperator::of(&cfg.inertia[b], &held.body_held_t[b], &held.body_free_r[b])
+            })
+        }));
+    }
+
+    /// The particles' part of [`Model::accelerations`].
+    #[inline(always)]
+    fn particle_accelerations(
+        &self,
+        forces: &Forces<S>,
+        held: &Constraints<S>,
+        out: &mut Rates<S>,
+    ) {
         match held.particle_kernel {
             ParticleKernel::Along(k) => {
                 let (a, f) = (out.p.component_mut(k), forces.p.component(k));
@@ -54,7 +101,6 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 }
             }
         }
-        self.body_accelerations(cfg, forces, vel, held, out, counters);
     }
 
     /// The bodies' part of [`Model::accelerations`].
@@ -65,6 +111,23 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         forces: &Forces<S>,
         vel: &Rates<S>,
         held: &Constraints<S>,
+        out: &mut Rates<S>,
+        counters: &mut Counters,
+    ) {
+        self.bodies_under(cfg, forces, vel, held, None, out, counters);
+    }
+
+    /// The bodies' accelerations, each solved with its operator from `operators` where given,
+    /// otherwise with the step's or one formed here ([`Constraints::body_solve`]).
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn bodies_under(
+        &self,
+        cfg: &Config<S>,
+        forces: &Forces<S>,
+        vel: &Rates<S>,
+        held: &Constraints<S>,
+        operators: Option<&[BodyOperator<S>]>,
         out: &mut Rates<S>,
         counters: &mut Counters,
     ) {
@@ -83,7 +146,14 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 }
             }
             counters.body_solves += 1;
-            let (a, alpha) = held.body_solve(inertia, b).solve(&f, &m);
+            let solve = match operators {
+                Some(formed) => {
+                    let (held_t, free_r) = (&held.body_held_t[b], &held.body_free_r[b]);
+                    BodySolve::with(inertia, held_t, free_r, formed[b])
+                }
+                None => held.body_solve(inertia, b),
+            };
+            let (a, alpha) = solve.solve(&f, &m);
             out.b[b] = a;
             out.w[b] = alpha;
         }

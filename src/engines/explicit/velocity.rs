@@ -10,6 +10,7 @@
 //! gyroscopic) these are iterated around the solve, which reads them at the last solution.
 //! The lagged treatment uses `v(n−½)` (first order, the classic explicit form).
 
+use super::body_solve::BodyOperator;
 use super::centred::ParticleDashpots;
 use super::integrate::DENSE_LIMIT;
 use super::model::{Config, Constraints, Counters, Forces, Model, Rates, Target};
@@ -65,6 +66,9 @@ pub(super) struct Velocities<S: Space> {
     /// Forces with the dashpots' added.
     total: Forces<S>,
     directions: Vec<S::V>,
+    /// The bodies' solve operators at the increment's configuration, formed once for every
+    /// pass of the iteration or the solve.
+    operators: Vec<BodyOperator<S>>,
 }
 
 impl<S: Space> Velocities<S> {
@@ -77,6 +81,7 @@ impl<S: Space> Velocities<S> {
             guess: Rates::zeros(0, 0),
             total: Forces::zeros(0, 0, 0),
             directions: Vec::new(),
+            operators: Vec::new(),
         }
     }
 
@@ -176,6 +181,7 @@ impl<S: Space> VelocityRule<S> {
             } => {
                 let work = work.shaped(model);
                 model.dashpot_directions(cfg, &mut work.directions);
+                model.body_operators(cfg, held, &mut work.operators);
                 if !*solved {
                     if iterate(at, *affine, work, acc, counters) {
                         // Without dashpots nothing dissipates (`work.total` is not used).
@@ -256,7 +262,8 @@ fn iterate<S: Space, const FINITE: bool>(
         } else {
             forces
         };
-        model.accelerations(cfg, total, &work.guess, held, acc, counters);
+        let operators = &work.operators;
+        model.accelerations_with(cfg, total, &work.guess, held, operators, acc, counters);
         work.v_n.set_plus(v_half, 0.5 * h, acc);
         let (change, size) = work.v_n.max_difference(&work.guess);
         std::mem::swap(&mut work.v_n, &mut work.guess);
@@ -294,14 +301,16 @@ fn centred_solve<S: Space, const FINITE: bool>(
         guess,
         total,
         directions,
+        operators,
     } = work;
+    let along = (directions.as_slice(), operators.as_slice());
     if !velocity_terms {
-        return centred_affine(at, dofs, directions, None, total, v_n, acc, counters);
+        return centred_affine(at, dofs, along, None, total, v_n, acc, counters);
     }
     guess.set_plus(at.v_half, 0.5 * at.h, at.acc_prev);
     let mut previous_change = 0.0;
     for _ in 0..MAX_DAMPING_ITERATIONS {
-        centred_affine(at, dofs, directions, Some(guess), total, v_n, acc, counters)?;
+        centred_affine(at, dofs, along, Some(guess), total, v_n, acc, counters)?;
         let (change, size) = v_n.max_difference(guess);
         if converged(change, previous_change, size) {
             return Ok(());
@@ -313,8 +322,9 @@ fn centred_solve<S: Space, const FINITE: bool>(
 }
 
 /// The centred velocity v(n) = v(n−½) + (h/2)·a(v(n)) solved directly, for a map that is affine
-/// in v: dashpots along `directions`, frozen for the increment, and the bodies' centripetal and
-/// gyroscopic terms read at `terms` (`None`: the scene has none). With
+/// in v: dashpots along `directions`, frozen for the increment (with the bodies' solve
+/// `operators` at its configuration), and the bodies' centripetal and gyroscopic terms read at
+/// `terms` (`None`: the scene has none). With
 /// g(v) = v(n−½) + (h/2)·a(v) = b + J·v in the free DOFs, (I − J)·v = b, J from g at the unit
 /// rates. Leaves v(n) in `v_n`, the forces and their dissipation in `total` and the
 /// accelerations in `acc`, at the solution.
@@ -322,7 +332,7 @@ fn centred_solve<S: Space, const FINITE: bool>(
 fn centred_affine<S: Space, const FINITE: bool>(
     at: &AtIncrement<S, FINITE>,
     dofs: &[Target<S>],
-    directions: &[S::V],
+    (directions, operators): (&[S::V], &[BodyOperator<S>]),
     terms: Option<&Rates<S>>,
     total: &mut Forces<S>,
     v_n: &mut Rates<S>,
@@ -334,7 +344,8 @@ fn centred_affine<S: Space, const FINITE: bool>(
     let mut map = |v: &Rates<S>, total: &mut Forces<S>, acc: &mut Rates<S>, out: &mut Rates<S>| {
         total.copy_from(forces);
         model.damping_along(cfg, directions, v, total, counters);
-        model.accelerations(cfg, total, terms.unwrap_or(v), held, acc, counters);
+        let rates = terms.unwrap_or(v);
+        model.accelerations_with(cfg, total, rates, held, operators, acc, counters);
         out.set_plus(v_half, 0.5 * h, acc);
     };
     let n = dofs.len();

@@ -30,10 +30,12 @@
 //! (`run::floor::SlidingBody`), in heap slices; of rigid3d_slide_surface: the same body in 3D
 //! with the arithmetic a 3D engine needs (a quaternion turned with compensated sums, body
 //! points, forces, moments and the centripetal force as 3-vectors, the solve reduced to the
-//! two free DOFs as the engine's body solve reduces it: `run::floor::SlidingBody3d`), in heap
+//! two free DOFs as the engine's body solve reduces it: `run::floor::TurningBody3d`), in heap
 //! slices; of rigid2d_slide_lumped and rigid3d_slide_lumped: the same bodies with the mass
 //! centre on the reference node, whose accelerations do not read the velocity and are formed
-//! once per increment; of springs_grounded_c and springs_n2n_c: the same recurrence as the engine's on
+//! once per increment; of rigid3d_pin_lumped and rigid3d_pin_surface: the 3D body pinned at its
+//! reference node (`run::floor::TurningBody3d`), whose accelerations do not read the velocity
+//! either; of springs_grounded_c and springs_n2n_c: the same recurrence as the engine's on
 //! masses pulled along a line by axial springs and the dashpot solved along its turning line
 //! (`run::floor::AxialOscillator`, `tests/floor.rs`: equal to round-off), in heap slices.
 //!
@@ -42,9 +44,7 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use crosscheck::case;
 use crosscheck::engines::RunSettings;
 use crosscheck::engines::explicit::ExplicitEngine;
-use crosscheck::run::floor::{
-    AxialOscillator, DampedOscillator, PinnedBody, SlidingBody, SlidingBody3d,
-};
+use crosscheck::run::floor::{self, DampedOscillator};
 use crosscheck::run::matching;
 use crosscheck::scene::IncrementRule;
 use std::hint::black_box;
@@ -132,7 +132,8 @@ fn setup(c: &mut Criterion) {
 /// One form of a floor: its name, the duration it runs, and a run of so many increments of h.
 type FloorForm = (&'static str, f64, Box<dyn Fn(f64, u64)>);
 
-/// The floors that apply to `scene`, in every form they have.
+/// The floors that apply to `scene`, in every form they have: in heap slices
+/// (`run::floor::in_slices`), and the damped oscillator's in registers too.
 fn floor_forms(scene: &crosscheck::scene::Scene) -> Vec<FloorForm> {
     let mut forms: Vec<FloorForm> = Vec::new();
     if let Some(o) = DampedOscillator::of(scene) {
@@ -140,38 +141,10 @@ fn floor_forms(scene: &crosscheck::scene::Scene) -> Vec<FloorForm> {
             black_box(black_box(o).in_registers(h, n));
         };
         forms.push(("registers", o.duration, Box::new(run)));
-        let run = move |h, n| {
-            black_box(black_box(o).in_slices(h, n));
-        };
-        forms.push(("slices", o.duration, Box::new(run)));
     }
-    if let Some(system) = AxialOscillator::of(scene) {
-        let duration = system.duration;
-        let run = move |h, n| {
-            black_box(black_box(&system).in_slices(h, n));
-        };
-        forms.push(("slices", duration, Box::new(run)));
-    }
-    if let Some(body) = PinnedBody::of(scene) {
-        let duration = body.duration;
-        let run = move |h, n| {
-            black_box(black_box(&body).in_slices(h, n));
-        };
-        forms.push(("slices", duration, Box::new(run)));
-    }
-    if let Some(body) = SlidingBody::of(scene) {
-        let duration = body.duration;
-        let run = move |h, n| {
-            black_box(black_box(&body).in_slices(h, n));
-        };
-        forms.push(("slices", duration, Box::new(run)));
-    }
-    if let Some(body) = SlidingBody3d::of(scene) {
-        let duration = body.duration;
-        let run = move |h, n| {
-            black_box(black_box(&body).in_slices(h, n));
-        };
-        forms.push(("slices", duration, Box::new(run)));
+    if let Some(floor) = floor::in_slices(scene) {
+        let duration = floor.duration;
+        forms.push(("slices", duration, Box::new(move |h, n| floor.run(h, n))));
     }
     forms
 }

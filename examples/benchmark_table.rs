@@ -1,12 +1,54 @@
 //! BENCHMARKS.md's table from criterion's last run of `benches/increment.rs`: per seed case,
 //! ns per increment of `explicit` and of `rapier_f64` (matched), their ratio, and the
-//! arithmetic floor where the case has one. Run by `scripts/benchmarks.sh`, which passes the
-//! commit and the date; the machine is read from `/proc/cpuinfo`.
+//! arithmetic floor where the case has one; then `explicit` against its floor timed in turn
+//! here (`run::floor::time_in_turn`, at the benchmark's increment), the median and the range
+//! of the rounds' ratios. Run by `scripts/benchmarks.sh`, which passes the commit and the date;
+//! the machine is read from `/proc/cpuinfo`.
 //!
 //! `cargo run --release --example benchmark_table -- COMMIT DATE [CRITERION_DIR]`
 
+use crosscheck::case;
+use crosscheck::engines::RunSettings;
+use crosscheck::engines::explicit::ExplicitEngine;
+use crosscheck::run::{floor, matching};
+use crosscheck::scene::IncrementRule;
 use std::collections::BTreeMap;
 use std::path::Path;
+
+/// The benchmark's increment is the case's divided by this (`benches/increment.rs`).
+const REFINEMENT: f64 = 10.0;
+
+/// Rounds of the engine and its floor timed in turn, per case.
+const ROUNDS: usize = 21;
+
+/// Per seed case with a floor: `explicit` against it timed in turn at the benchmark's
+/// increment, as "median (lowest–highest)".
+fn in_turn() -> BTreeMap<String, String> {
+    let mut out = BTreeMap::new();
+    let paths = case::discover(&case::cases_dir()).expect("cases/");
+    let engine = ExplicitEngine::finite();
+    for scene in paths
+        .iter()
+        .map(|p| case::load(p).expect("a valid seed case"))
+    {
+        let (IncrementRule::Given(h), Some(floor)) =
+            (scene.settings.increment, floor::in_slices(&scene))
+        else {
+            continue;
+        };
+        let finer = RunSettings {
+            increment: Some(IncrementRule::Given(h / REFINEMENT)),
+            ..RunSettings::default()
+        };
+        let settings = matching::job_settings(&engine, &scene, &finer);
+        let paired = floor::time_in_turn(&engine, &scene, &settings, &floor, ROUNDS)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let (low, high) = paired.range();
+        let text = format!("{:.2} ({low:.2}–{high:.2})", paired.median());
+        out.insert(scene.id.clone(), text);
+    }
+    out
+}
 
 /// ns per increment of every benchmark under `dir/group`, by criterion's id without the group
 /// (`springs_grounded_a/explicit`): the median over the increments of one iteration.
@@ -68,13 +110,15 @@ fn main() {
         );
         std::process::exit(2);
     }
+    let paired = in_turn();
     println!(
         "Measured on {}, commit {commit}, {date}, by `scripts/benchmarks.sh` (criterion's \
-         median; one thread; at a tenth of each case's increment).\n",
+         median; one thread; at a tenth of each case's increment; `explicit` / floor: {ROUNDS} \
+         rounds timed in turn, the median of their ratios and its range).\n",
         machine()
     );
     println!(
-        "| seed case | `explicit`, ns | `rapier_f64` (matched), ns | `rapier_f64` / `explicit` | floor, ns | `explicit` / floor |"
+        "| seed case | `explicit`, ns | `rapier_f64` (matched), ns | `rapier_f64` / `explicit` | floor, ns | `explicit` / floor, in turn |"
     );
     println!("|---|---:|---:|---:|---:|---:|");
     let ns = |x: Option<&f64>| x.map_or("–".to_string(), |v| format!("{v:.1}"));
@@ -87,7 +131,7 @@ fn main() {
             ns(rapier),
             rapier.map_or("–".to_string(), |r| format!("{:.0}×", r / explicit)),
             ns(slices),
-            slices.map_or("–".to_string(), |f| format!("{:.2}", explicit / f)),
+            paired.get(case).map_or("–", String::as_str),
         );
     }
 }

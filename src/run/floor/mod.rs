@@ -3,8 +3,8 @@
 //! arithmetic it must do. Here the simplest, a mass on a spring and dashpot to the ground or a
 //! held node; in [`AxialOscillator`] masses on springs and a dashpot whose lines turn, in
 //! [`PinnedBody`] a body turning about a pin, in [`SlidingBody`] a body that slides and turns
-//! with its mass centre off its reference node or on it, in [`SlidingBody3d`] the same body in
-//! 3D, with the arithmetic of a 3D engine.
+//! with its mass centre off its reference node or on it, in [`TurningBody3d`] the sliding and
+//! the pinned body in 3D, with the arithmetic of a 3D engine.
 //!
 //! The recurrence is the one the explicit engine runs on such a scene: central differences
 //! with the centred dashpot treatment (the dashpot's rate solves
@@ -214,11 +214,52 @@ fn compensated_add(x: &mut f64, carry: &mut f64, dx: f64) {
     *x = t;
 }
 
+/// A floor's run in heap slices for one scene: the duration of its dynamic step, and a run of
+/// so many increments of a given length.
+pub struct FloorRun {
+    /// Duration of the dynamic step the floor runs (s).
+    pub duration: f64,
+    run: Box<dyn Fn(f64, u64)>,
+}
+
+impl FloorRun {
+    /// Run `steps` increments of `h`, the result kept from the optimiser.
+    pub fn run(&self, h: f64, steps: u64) {
+        (self.run)(h, steps)
+    }
+}
+
+/// The floor of `scene` in heap slices, where the scene is one a floor is written for.
+pub fn in_slices(scene: &Scene) -> Option<FloorRun> {
+    fn of<T: 'static, R: 'static>(duration: f64, floor: T, run: fn(&T, f64, u64) -> R) -> FloorRun {
+        let run = Box::new(move |h, steps| {
+            black_box(run(black_box(&floor), h, steps));
+        });
+        FloorRun { duration, run }
+    }
+    if let Some(o) = DampedOscillator::of(scene) {
+        return Some(of(o.duration, o, DampedOscillator::in_slices));
+    }
+    if let Some(s) = AxialOscillator::of(scene) {
+        return Some(of(s.duration, s, AxialOscillator::in_slices));
+    }
+    if let Some(b) = PinnedBody::of(scene) {
+        return Some(of(b.duration, b, PinnedBody::in_slices));
+    }
+    if let Some(b) = SlidingBody::of(scene) {
+        return Some(of(b.duration, b, SlidingBody::in_slices));
+    }
+    let b = TurningBody3d::of(scene)?;
+    Some(of(b.duration, b, TurningBody3d::in_slices))
+}
+
 mod axial;
+mod in_turn;
 mod pinned_body;
 mod sliding_body;
-mod sliding_body3d;
+mod turning_body3d;
 pub use axial::{AxialElement, AxialOscillator, AxialState, LineMass};
+pub use in_turn::{InTurn, time_in_turn};
 pub use pinned_body::PinnedBody;
 pub use sliding_body::{SlidingBody, SlidingState};
-pub use sliding_body3d::SlidingBody3d;
+pub use turning_body3d::TurningBody3d;

@@ -1,14 +1,16 @@
-//! The arithmetic floor of the sliding body's increment in 3D (rigid3d_slide_surface): the
-//! scene of [`super::SlidingBody`] extruded in z, a body whose reference node is held in y, z
-//! and in the rotations about x and y, so that it slides along x and turns about z, with its
-//! mass centre off that node, springs of fixed direction x from its points to the ground,
-//! constant loads on its points, and one particle held in y and z, pressed against a face of
-//! the body by a penalty. The answer is the 2D twin's; the arithmetic is what a 3D explicit
-//! engine must do for it, written out by hand with the state in heap slices. With the mass
-//! centre on the reference node (rigid3d_slide_lumped) no force reads the velocity, and the
-//! accelerations are formed once per increment without iterating, as the engine forms them;
-//! the mass matrix, which a turn about the free axis leaves as it is, is formed once (the
-//! engine forms its body solve at every increment).
+//! The arithmetic floor of a 3D rigid-body increment: a body turning about z, with its
+//! reference node held in the rotations about x and y and in y and z, and either sliding along
+//! x (rigid3d_slide_surface, rigid3d_slide_lumped: the scene of [`super::SlidingBody`]
+//! extruded in z) or pinned, held in x too (rigid3d_pin_surface, rigid3d_pin_lumped: the scene
+//! of [`super::PinnedBody`] extruded in z); its mass centre off that node or on it, springs of
+//! fixed direction x from its points to the ground, constant loads on its points, and one
+//! particle held in y and z, pressed against a face of the body by a penalty. The answer is
+//! the 2D twin's; the arithmetic is what a 3D explicit engine must do for it, written out by
+//! hand with the state in heap slices. Where no force reads the velocity (the mass centre on
+//! the reference node, or the node pinned, so that the centripetal force acts on a held
+//! translation alone) the accelerations are formed once per increment without iterating, as
+//! the engine forms them; the mass matrix, which a turn about the free axis leaves as it is,
+//! is then formed once (the engine forms its body solve at every increment).
 //!
 //! What stays 3D, as in the explicit engine's spatial kinematics: the orientation is a unit
 //! quaternion, turned each increment by the rotation vector h·ω(n+½) (a 3-vector) as the
@@ -17,28 +19,29 @@
 //! back to unit norm in the same increment), and R − 1 is formed from its small parts once per
 //! increment; body points, the face's point and normal and the mass centre are turned by
 //! R − 1 as 3-vectors; forces, moments, the body's rates and accelerations are 3-vectors; the
-//! centripetal force is m ω×(ω×c) with 3-vectors; the body's translation is a 3-vector summed
-//! with a compensated addition. What exploits that only two of the body's six DOFs are free
-//! is what the engine's body solve (`BodyOperator`, one free rotation axis g and the free
-//! translations' projector Q) exploits too: the rigid-body equations are eliminated to one
-//! pivot, `(g·I g − m w·w) s = g·M − f·w` with `w = Q(g × c)`, then `a = Q f/m − w s` and
-//! `α = s g`, with g·I g formed from the body-frame inertia through `Rᵀ g` once per increment.
-//! The gyroscopic moment ω×(Iω) is left out, as the engine leaves it out on a body turning
-//! about one axis: it is perpendicular to ω and so to g, and the solve reads the moment along g
-//! only. The particle, held in y and z, moves along x alone, as the engine's particle kernel
-//! moves particles that all share one free axis: its position enters the contact as a 3D point,
-//! its force is a 3-vector, its state a scalar.
+//! centripetal force is m ω×(ω×c) with 3-vectors; a sliding body's translation is a 3-vector
+//! summed with a compensated addition (a pinned body's is not formed). What exploits that only
+//! two of the body's six DOFs are free (one where it is pinned) is what the engine's body solve
+//! (`BodyOperator`, one free rotation axis g and the free translations' projector Q) exploits
+//! too: the rigid-body equations are eliminated to one pivot,
+//! `(g·I g − m w·w) s = g·M − f·w` with `w = Q(g × c)`, then `a = Q f/m − w s` and
+//! `α = s g` (Q = 0 where pinned), with g·I g formed from the body-frame inertia through
+//! `Rᵀ g` once per increment. The gyroscopic moment ω×(Iω) is left out, as the engine leaves
+//! it out on a body turning about one axis: it is perpendicular to ω and so to g, and the solve
+//! reads the moment along g only. The particle, held in y and z, moves along x alone, as the
+//! engine's particle kernel moves particles that all share one free axis: its position enters
+//! the contact as a 3D point, its force is a 3-vector, its state a scalar.
 //!
-//! The rest is the 2D floor's scheme: the centred velocity by fixed-point iteration with the
+//! The rest is the 2D floors' scheme: the centred velocity by fixed-point iteration with the
 //! engine's stop rule ([`super::sliding_body`]), here over the body's six rates (the engine's
 //! measures the particle's too), the start at t = 0 from a(0), the contact from zero
 //! penetration, no checks and no records. The rotation increment keeps the series the engine
 //! keeps below |h·ω| of 4.5e-4 (one term of the sine's, two of the cosine's) without the
 //! engine's test of |h·ω|: the floor is for increments whose turn is that small (at the case's
-//! increment |ω| reaches about 37 rad/s and |h·ω| 3.8e-4, measured; the benchmark runs at a
-//! tenth of it). The angle it reports is the twist of the quaternion about z, formed once after
-//! the run. `tests/floor.rs` holds it to the case's exact solution at the
-//! case's tolerance and to the 2D floor's end state.
+//! increment |ω| reaches about 37 rad/s and |h·ω| 3.8e-4 when sliding, measured; the benchmark
+//! runs at a tenth of it). The angle it reports is the twist of the quaternion about z, formed
+//! once after the run. `tests/floor.rs` holds it to the case's exact solution at the case's
+//! tolerance and to the 2D floor's end state.
 
 use super::compensated_add;
 use super::pinned_body::PinnedBody;
@@ -47,7 +50,7 @@ use crate::scene::{Attachment, DampingTreatment, Dimension, Dof, Scene, StepKind
 use nalgebra::{Matrix3, Vector3, Vector4};
 use std::hint::black_box;
 
-/// The body's free translation: along x.
+/// The free translation of a sliding body and of the particle: along x.
 const SLIDE: Vector3<f64> = Vector3::new(1.0, 0.0, 0.0);
 
 /// The body's free rotation axis: z.
@@ -56,16 +59,19 @@ const AXIS: Vector3<f64> = Vector3::new(0.0, 0.0, 1.0);
 /// The springs' fixed direction: x.
 const ALONG: Vector3<f64> = Vector3::new(1.0, 0.0, 0.0);
 
-/// A body sliding along x and turning about z in 3D, as the floor needs it: every point
+/// A body turning about z in 3D, sliding along x or pinned, as the floor needs it: every point
 /// relative to the reference node, at t = 0.
 #[derive(Debug, Clone, PartialEq)]
-pub struct SlidingBody3d {
+pub struct TurningBody3d {
     /// Mass (kg).
     pub mass: f64,
     /// Mass centre relative to the reference node (m): zero where the body is lumped.
     pub centre: Vector3<f64>,
     /// Inertia about the reference node, in the body's axes (kg·m²).
     pub inertia: Matrix3<f64>,
+    /// Whether the reference node slides along x (otherwise it is pinned: held in every
+    /// translation).
+    pub slides: bool,
     /// Initial velocity of the reference node (m/s) and angular velocity (rad/s), along the
     /// free DOFs.
     pub velocity: (Vector3<f64>, Vector3<f64>),
@@ -166,12 +172,14 @@ fn small_parts(q: &Vector4<f64>) -> Matrix3<f64> {
 }
 
 /// The body's mass properties at an orientation, as the solve for (a, α) needs them, with
-/// the free translation SLIDE (Q = SLIDE SLIDEᵀ) and the free axis g = AXIS.
+/// the free translation `slide` (Q = slide slideᵀ: SLIDE, or zero where pinned) and the free
+/// axis g = AXIS.
 #[derive(Debug, Clone, Copy)]
 struct MassMatrix {
     /// m (the mass) and the mass centre in world axes.
     mass: f64,
     centre: Vector3<f64>,
+    slide: Vector3<f64>,
     /// w = Q(g × c).
     drag: Vector3<f64>,
     inverse_mass: f64,
@@ -182,16 +190,18 @@ struct MassMatrix {
 impl MassMatrix {
     /// At `orientation`, for `body` of mass 1/`inverse_mass`.
     #[inline(always)]
-    fn at(body: &SlidingBody3d, inverse_mass: f64, orientation: &Orientation) -> Self {
+    fn at(body: &TurningBody3d, inverse_mass: f64, orientation: &Orientation) -> Self {
         let t = &orientation.turn;
         let centre = body.centre + t * body.centre;
-        let drag = SLIDE * SLIDE.dot(&AXIS.cross(&centre));
+        let slide = if body.slides { SLIDE } else { Vector3::zeros() };
+        let drag = slide * slide.dot(&AXIS.cross(&centre));
         // g in the body's axes: Rᵀ g = g + (R − 1)ᵀ g.
         let u = AXIS + t.tr_mul(&AXIS);
         let axial = u.dot(&(body.inertia * u));
         MassMatrix {
             mass: body.mass,
             centre,
+            slide,
             drag,
             inverse_mass,
             inverse: 1.0 / (axial - body.mass * drag.dot(&drag)),
@@ -199,11 +209,12 @@ impl MassMatrix {
     }
 
     /// The accelerations (a, α) under `load` of a body whose mass centre is its reference
-    /// node: no centripetal force and no drag, so a = Q f/m and α = (g·M / g·I g) g.
+    /// node or which is pinned: no drag, and the centripetal force, if any, on a held
+    /// translation, so a = Q f/m and α = (g·M / g·I g) g.
     #[inline(always)]
-    fn lumped_accelerations(&self, load: &Load) -> Rates {
+    fn steady_accelerations(&self, load: &Load) -> Rates {
         let s = AXIS.dot(&load.moment) * self.inverse;
-        let a = SLIDE * (SLIDE.dot(&load.force) * self.inverse_mass);
+        let a = self.slide * (self.slide.dot(&load.force) * self.inverse_mass);
         let alpha = AXIS * s;
         [a.x, a.y, a.z, alpha.x, alpha.y, alpha.z]
     }
@@ -215,18 +226,19 @@ impl MassMatrix {
         let spin = Vector3::new(rates[3], rates[4], rates[5]);
         let f = load.force - spin.cross(&spin.cross(&self.centre)) * self.mass;
         let s = (AXIS.dot(&load.moment) - f.dot(&self.drag)) * self.inverse;
-        let a = SLIDE * (SLIDE.dot(&f) * self.inverse_mass) - self.drag * s;
+        let a = self.slide * (self.slide.dot(&f) * self.inverse_mass) - self.drag * s;
         let alpha = AXIS * s;
         [a.x, a.y, a.z, alpha.x, alpha.y, alpha.z]
     }
 }
 
-impl SlidingBody3d {
-    /// The sliding body a scene describes, when it is exactly that: 3D, one body whose reference
-    /// node is held in uy, uz, rx and ry and free along x and to turn about z, with its mass centre
-    /// off that node (rigid3d_slide_surface) or on it (rigid3d_slide_lumped, whose accelerations
-    /// are formed once per increment without iterating); one particle held in uy and uz and free
-    /// along x; springs of fixed direction x from a body point or the particle to a node held in
+impl TurningBody3d {
+    /// The turning body a scene describes, when it is exactly that: 3D, one body whose
+    /// reference node is held in uy, uz, rx and ry, free to turn about z, and free along x
+    /// (sliding: rigid3d_slide_surface, rigid3d_slide_lumped) or held there too (pinned:
+    /// rigid3d_pin_surface, rigid3d_pin_lumped), with its mass centre off that node or on it
+    /// (where it is on it or the node is pinned, the accelerations are formed once per
+    /// increment without iterating); one particle held in uy and uz and free along x; springs of fixed direction x from a body point or the particle to a node held in
     /// every translation; one plane contact between the particle and the body, without a contact
     /// dashpot; loads on body points; initial velocities on the reference node and the particle
     /// only; one dynamic step; no dashpots; the centred velocity; the identity frame everywhere.
@@ -262,7 +274,8 @@ impl SlidingBody3d {
                 && held(n, Dof::Translation(2))
                 && free(n, Dof::Translation(0))
         };
-        if !sliding(reference)
+        let slides = sliding(reference);
+        if !(slides || ground(reference))
             || !held(reference, Dof::Rotation(0))
             || !held(reference, Dof::Rotation(1))
             || !free(reference, Dof::Rotation(2))
@@ -288,14 +301,16 @@ impl SlidingBody3d {
             return None;
         };
         let initial = |n: usize| scene.initial_velocities.iter().find(|v| v.node == n);
-        let (speed, angular) = initial(reference)
-            .map_or((Vector3::zeros(), Vector3::zeros()), |v| {
-                (SLIDE * SLIDE.dot(&v.velocity), AXIS * AXIS.dot(&v.angular))
+        let (speed, angular) =
+            initial(reference).map_or((Vector3::zeros(), Vector3::zeros()), |v| {
+                let along = if slides { SLIDE.dot(&v.velocity) } else { 0.0 };
+                (SLIDE * along, AXIS * AXIS.dot(&v.angular))
             });
-        Some(SlidingBody3d {
+        Some(TurningBody3d {
             mass: body.mass,
             centre: body.centre_offset,
             inertia: body.inertia,
+            slides,
             velocity: (speed, angular),
             body_springs,
             loads,
@@ -373,15 +388,16 @@ impl SlidingBody3d {
         rates[0] = plus(rates[0], -0.5 * h, acc[0]);
         v[0] -= 0.5 * h * SLIDE.dot(&load[0].particle) * inverse_mass[0];
         // A body whose mass centre is its reference node (lumped) feels no centripetal force,
-        // and turning about g leaves g·I g as it is: the mass matrix formed once (the engine
-        // forms its body solve at every increment in 3D), and the accelerations, which then do
-        // not read the velocity, once per increment, without iterating.
-        let lumped = self.centre == Vector3::zeros();
+        // a pinned body feels it on its held translation alone, and turning about g leaves
+        // g·I g as it is: the mass matrix formed once (the engine forms its body solve at every
+        // increment in 3D), and the accelerations, which then do not read the velocity, once
+        // per increment, without iterating.
+        let steady = self.centre == Vector3::zeros() || !self.slides;
         let mut passes = 0;
         for _ in 0..steps {
             load[0] = self.forces(&lists, &orientation[0], &x[0], u[0]);
-            if lumped {
-                acc[0] = matrix.lumped_accelerations(&load[0]);
+            if steady {
+                acc[0] = matrix.steady_accelerations(&load[0]);
                 passes += 1;
             } else {
                 let matrix = MassMatrix::at(self, inverse_body_mass[0], &orientation[0]);
@@ -393,9 +409,11 @@ impl SlidingBody3d {
             v[0] += h * SLIDE.dot(&load[0].particle) * inverse_mass[0];
             let r = rates[0];
             orientation[0].turn(&(Vector3::new(r[3], r[4], r[5]) * h));
-            let dx = Vector3::new(r[0], r[1], r[2]) * h;
-            for k in 0..3 {
-                compensated_add(&mut x[0][k], &mut x_carry[0][k], dx[k]);
+            if self.slides {
+                let dx = Vector3::new(r[0], r[1], r[2]) * h;
+                for k in 0..3 {
+                    compensated_add(&mut x[0][k], &mut x_carry[0][k], dx[k]);
+                }
             }
             compensated_add(&mut u[0], &mut u_carry[0], h * v[0]);
         }

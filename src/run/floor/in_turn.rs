@@ -1,0 +1,106 @@
+//! An engine against a floor, timed in turn: each round times the engine's whole run and then
+//! the floor's run over as many increments of the same length, back to back, so that a slow
+//! spell of the machine that lasts a round slows both alike and leaves that round's ratio as
+//! it is; the median over the rounds sets aside the rounds a shorter spell split. Timed apart
+//! (criterion measures each benchmark for seconds, the floors minutes after the engine), the
+//! same code's ratio moves by up to 1.7× between runs.
+
+use super::FloorRun;
+use crate::engines::{Engine, RunSettings};
+use crate::scene::{IncrementRule, Scene};
+use std::hint::black_box;
+use std::time::Instant;
+
+/// The ratios of an engine's run time to its floor's, one per round, in increasing order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InTurn {
+    ratios: Vec<f64>,
+}
+
+impl InTurn {
+    /// From each round's (engine, floor) times.
+    pub fn from_times(rounds: &[(f64, f64)]) -> Self {
+        let mut ratios: Vec<f64> = rounds.iter().map(|(e, f)| e / f).collect();
+        ratios.sort_by(f64::total_cmp);
+        InTurn { ratios }
+    }
+
+    /// The median of the rounds' ratios (the mean of the middle two for an even count; NaN
+    /// without rounds).
+    pub fn median(&self) -> f64 {
+        let n = self.ratios.len();
+        match n {
+            0 => f64::NAN,
+            _ if n % 2 == 1 => self.ratios[n / 2],
+            _ => 0.5 * (self.ratios[n / 2 - 1] + self.ratios[n / 2]),
+        }
+    }
+
+    /// The lowest and the highest of the rounds' ratios.
+    pub fn range(&self) -> (f64, f64) {
+        let first = self.ratios.first().copied().unwrap_or(f64::NAN);
+        (first, self.ratios.last().copied().unwrap_or(f64::NAN))
+    }
+}
+
+/// `engine`'s whole run of `scene` under `settings` (an increment given, as the job planner
+/// sets it) against `floor` over as many increments of that length, timed in turn over
+/// `rounds` rounds after one untimed round of each.
+pub fn time_in_turn(
+    engine: &dyn Engine,
+    scene: &Scene,
+    settings: &RunSettings,
+    floor: &FloorRun,
+    rounds: usize,
+) -> Result<InTurn, String> {
+    let Some(IncrementRule::Given(h)) = settings.increment else {
+        return Err(format!("{}: the floor needs an increment given", scene.id));
+    };
+    let engine_run = || {
+        let started = Instant::now();
+        let output = engine.run(black_box(scene), settings);
+        let seconds = started.elapsed().as_secs_f64();
+        output.map(|o| (o.info.steps, seconds))
+    };
+    let failed = |e| format!("{}: {e}", scene.id);
+    let (steps, _) = engine_run().map_err(failed)?;
+    let floor_run = || {
+        let started = Instant::now();
+        floor.run(h, steps);
+        started.elapsed().as_secs_f64()
+    };
+    floor_run();
+    let mut times = Vec::with_capacity(rounds);
+    for _ in 0..rounds {
+        let (_, engine_seconds) = engine_run().map_err(failed)?;
+        times.push((engine_seconds, floor_run()));
+    }
+    Ok(InTurn::from_times(&times))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::InTurn;
+
+    /// A simulated machine runs the engine at exactly twice the floor's time; a spell three
+    /// times slower covers the first nine rounds whole, and a shorter one slows the engine
+    /// alone in five others. Timed in turn, the median reads the ratio to the last bit, and
+    /// the range shows what the short spells did.
+    #[test]
+    fn spells_over_whole_rounds_and_under_half_of_them_leave_the_median_exact() {
+        let rounds: Vec<(f64, f64)> = (0..21)
+            .map(|i| {
+                let spell = if i < 9 { 3.0 } else { 1.0 };
+                let engine_alone = if (10..15).contains(&i) { 1.5 } else { 1.0 };
+                (2.0e-3 * spell * engine_alone, 1.0e-3 * spell)
+            })
+            .collect();
+        let paired = InTurn::from_times(&rounds);
+        assert_eq!(paired.median(), 2.0);
+        assert_eq!(paired.range(), (2.0, 3.0));
+        // An even count takes the mean of the middle two; no rounds, no ratio.
+        let even = InTurn::from_times(&[(1.0, 1.0), (3.0, 1.0)]);
+        assert_eq!(even.median(), 2.0);
+        assert!(InTurn::from_times(&[]).median().is_nan());
+    }
+}

@@ -44,14 +44,11 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use crosscheck::case;
 use crosscheck::engines::RunSettings;
 use crosscheck::engines::explicit::ExplicitEngine;
-use crosscheck::run::floor::{self, DampedOscillator};
+use crosscheck::run::floor::{self, DampedOscillator, REFINEMENT};
 use crosscheck::run::matching;
 use crosscheck::scene::IncrementRule;
 use std::hint::black_box;
 use std::time::Duration;
-
-/// The benchmark runs at the case's increment divided by this.
-const REFINEMENT: f64 = 10.0;
 
 fn seed_cases() -> Vec<crosscheck::scene::Scene> {
     case::discover(&case::cases_dir())

@@ -10,19 +10,17 @@
 use crosscheck::case;
 use crosscheck::engines::RunSettings;
 use crosscheck::engines::explicit::ExplicitEngine;
-use crosscheck::run::{floor, matching};
+use crosscheck::run::floor::{self, REFINEMENT};
+use crosscheck::run::matching;
 use crosscheck::scene::IncrementRule;
 use std::collections::BTreeMap;
 use std::path::Path;
-
-/// The benchmark's increment is the case's divided by this (`benches/increment.rs`).
-const REFINEMENT: f64 = 10.0;
 
 /// Rounds of the engine and its floor timed in turn, per case.
 const ROUNDS: usize = 21;
 
 /// Per seed case with a floor: `explicit` against it timed in turn at the benchmark's
-/// increment, as "median (lowest–highest)".
+/// increment, as "median (lower–upper quartile)".
 fn in_turn() -> BTreeMap<String, String> {
     let mut out = BTreeMap::new();
     let paths = case::discover(&case::cases_dir()).expect("cases/");
@@ -43,7 +41,7 @@ fn in_turn() -> BTreeMap<String, String> {
         let settings = matching::job_settings(&engine, &scene, &finer);
         let paired = floor::time_in_turn(&engine, &scene, &settings, &floor, ROUNDS)
             .unwrap_or_else(|e| panic!("{e}"));
-        let (low, high) = paired.range();
+        let (low, high) = paired.quartiles();
         let text = format!("{:.2} ({low:.2}–{high:.2})", paired.median());
         out.insert(scene.id.clone(), text);
     }
@@ -114,7 +112,7 @@ fn main() {
     println!(
         "Measured on {}, commit {commit}, {date}, by `scripts/benchmarks.sh` (criterion's \
          median; one thread; at a tenth of each case's increment; `explicit` / floor: {ROUNDS} \
-         rounds timed in turn, the median of their ratios and its range).\n",
+         rounds timed in turn, the median of their ratios and their quartiles).\n",
         machine()
     );
     println!(

@@ -108,9 +108,10 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// The solve operators of the bodies that turn in place about one free axis under finite
     /// rotation in 3D, formed at `cfg` (a dynamic step's start) for the whole step: turning
     /// about the free axis g leaves Rᵀ g, and so g·I g, as it is, and the solve has no drag
-    /// terms. Where g turns into a body axis the value is the one every increment would form,
-    /// bit for bit (the orientation keeps its other components exactly zero); otherwise it
-    /// differs from it by the round-off of turning g into the body's axes.
+    /// terms. Where g is a coordinate axis and every turn of the body so far was about g, the
+    /// orientation's components off g stay exactly zero and the value is the one every
+    /// increment would form, bit for bit; otherwise it differs from it by the round-off of
+    /// turning g into the body's axes.
     pub(super) fn form_turning_operators(&self, held: &mut Constraints<S>, cfg: &Config<S>) {
         if !FINITE || S::ROT == 1 {
             return; // formed with the step's constraints already

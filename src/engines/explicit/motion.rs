@@ -56,7 +56,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         counters: &mut Counters,
     ) {
         self.particle_accelerations(forces, held, out);
-        self.bodies_under(cfg, forces, vel, held, Some(operators), out, counters);
+        self.body_accelerations_with(cfg, forces, vel, held, Some(operators), out, counters);
     }
 
     /// Every body's solve operator at `cfg` under `held` into `out`: the step's where it has
@@ -114,14 +114,14 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         out: &mut Rates<S>,
         counters: &mut Counters,
     ) {
-        self.bodies_under(cfg, forces, vel, held, None, out, counters);
+        self.body_accelerations_with(cfg, forces, vel, held, None, out, counters);
     }
 
     /// The bodies' accelerations, each solved with its operator from `operators` where given,
     /// otherwise with the step's or one formed here ([`Constraints::body_solve`]).
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn bodies_under(
+    fn body_accelerations_with(
         &self,
         cfg: &Config<S>,
         forces: &Forces<S>,

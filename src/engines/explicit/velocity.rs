@@ -303,14 +303,14 @@ fn centred_solve<S: Space, const FINITE: bool>(
         directions,
         operators,
     } = work;
-    let along = (directions.as_slice(), operators.as_slice());
+    let frozen = (directions.as_slice(), operators.as_slice());
     if !velocity_terms {
-        return centred_affine(at, dofs, along, None, total, v_n, acc, counters);
+        return centred_affine(at, dofs, frozen, None, total, v_n, acc, counters);
     }
     guess.set_plus(at.v_half, 0.5 * at.h, at.acc_prev);
     let mut previous_change = 0.0;
     for _ in 0..MAX_DAMPING_ITERATIONS {
-        centred_affine(at, dofs, along, Some(guess), total, v_n, acc, counters)?;
+        centred_affine(at, dofs, frozen, Some(guess), total, v_n, acc, counters)?;
         let (change, size) = v_n.max_difference(guess);
         if converged(change, previous_change, size) {
             return Ok(());

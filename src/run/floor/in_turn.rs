@@ -1,15 +1,20 @@
-//! An engine against a floor, timed in turn: each round times the engine's whole run and then
-//! the floor's run over as many increments of the same length, back to back, so that a slow
-//! spell of the machine that lasts a round slows both alike and leaves that round's ratio as
-//! it is; the median over the rounds sets aside the rounds a shorter spell split. Timed apart
-//! (criterion measures each benchmark for seconds, the floors minutes after the engine), the
-//! same code's ratio moves by up to 1.7× between runs.
+//! An engine against a floor, timed in turn: each round times the engine's whole run and the
+//! floor's run over as many increments of the same length back to back (the engine first in
+//! one round, the floor first in the next), so that a slow spell of the machine that lasts a
+//! round slows both alike and leaves that round's ratio as it is; the median over the rounds
+//! sets aside the rounds a shorter spell split. Timed apart (criterion measures each benchmark
+//! for seconds, the floors minutes after the engine), the same code's ratio moves by up to
+//! 1.7× between runs.
 
 use super::FloorRun;
 use crate::engines::{Engine, RunSettings};
 use crate::scene::{IncrementRule, Scene};
 use std::hint::black_box;
 use std::time::Instant;
+
+/// The benchmarks run each seed case at its increment divided by this (10^5 to 2·10^5
+/// increments), so that a run's setup is spread thin.
+pub const REFINEMENT: f64 = 10.0;
 
 /// The ratios of an engine's run time to its floor's, one per round, in increasing order.
 #[derive(Debug, Clone, PartialEq)]
@@ -36,16 +41,23 @@ impl InTurn {
         }
     }
 
-    /// The lowest and the highest of the rounds' ratios.
-    pub fn range(&self) -> (f64, f64) {
-        let first = self.ratios.first().copied().unwrap_or(f64::NAN);
-        (first, self.ratios.last().copied().unwrap_or(f64::NAN))
+    /// The lower and upper quartiles of the rounds' ratios, as order statistics: the
+    /// ⌊(n−1)/4⌋-th from the lowest and as many from the highest, counting from 0, so that
+    /// the middle half of the rounds lies between them. NaN without rounds.
+    pub fn quartiles(&self) -> (f64, f64) {
+        let n = self.ratios.len();
+        if n == 0 {
+            return (f64::NAN, f64::NAN);
+        }
+        let k = (n - 1) / 4;
+        (self.ratios[k], self.ratios[n - 1 - k])
     }
 }
 
 /// `engine`'s whole run of `scene` under `settings` (an increment given, as the job planner
-/// sets it) against `floor` over as many increments of that length, timed in turn over
-/// `rounds` rounds after one untimed round of each.
+/// sets it) against `floor` over as many increments of that length as its dynamic step takes
+/// (as the benchmark runs it), timed in turn over `rounds` rounds after one untimed run of
+/// each. The engine's time includes dropping its output, as criterion's does.
 pub fn time_in_turn(
     engine: &dyn Engine,
     scene: &Scene,
@@ -56,24 +68,29 @@ pub fn time_in_turn(
     let Some(IncrementRule::Given(h)) = settings.increment else {
         return Err(format!("{}: the floor needs an increment given", scene.id));
     };
-    let engine_run = || {
+    let steps = (floor.duration / h).round() as u64;
+    let engine_run = || -> Result<f64, String> {
         let started = Instant::now();
         let output = engine.run(black_box(scene), settings);
-        let seconds = started.elapsed().as_secs_f64();
-        output.map(|o| (o.info.steps, seconds))
+        drop(output.map_err(|e| format!("{}: {e}", scene.id))?);
+        Ok(started.elapsed().as_secs_f64())
     };
-    let failed = |e| format!("{}: {e}", scene.id);
-    let (steps, _) = engine_run().map_err(failed)?;
     let floor_run = || {
         let started = Instant::now();
         floor.run(h, steps);
         started.elapsed().as_secs_f64()
     };
+    engine_run()?;
     floor_run();
     let mut times = Vec::with_capacity(rounds);
-    for _ in 0..rounds {
-        let (_, engine_seconds) = engine_run().map_err(failed)?;
-        times.push((engine_seconds, floor_run()));
+    for round in 0..rounds {
+        let pair = if round % 2 == 0 {
+            (engine_run()?, floor_run())
+        } else {
+            let floor_seconds = floor_run();
+            (engine_run()?, floor_seconds)
+        };
+        times.push(pair);
     }
     Ok(InTurn::from_times(&times))
 }
@@ -84,23 +101,26 @@ mod tests {
 
     /// A simulated machine runs the engine at exactly twice the floor's time; a spell three
     /// times slower covers the first nine rounds whole, and a shorter one slows the engine
-    /// alone in five others. Timed in turn, the median reads the ratio to the last bit, and
-    /// the range shows what the short spells did.
+    /// alone in seven others. Timed in turn, the median reads the ratio to the last bit, and
+    /// the quartiles show what the short spells did.
     #[test]
     fn spells_over_whole_rounds_and_under_half_of_them_leave_the_median_exact() {
         let rounds: Vec<(f64, f64)> = (0..21)
             .map(|i| {
                 let spell = if i < 9 { 3.0 } else { 1.0 };
-                let engine_alone = if (10..15).contains(&i) { 1.5 } else { 1.0 };
+                let engine_alone = if (10..17).contains(&i) { 1.5 } else { 1.0 };
                 (2.0e-3 * spell * engine_alone, 1.0e-3 * spell)
             })
             .collect();
         let paired = InTurn::from_times(&rounds);
         assert_eq!(paired.median(), 2.0);
-        assert_eq!(paired.range(), (2.0, 3.0));
+        // Fourteen rounds read 2 and seven read 3: the 5th from the lowest is 2, the 5th from
+        // the highest (the 15th) is 3.
+        assert_eq!(paired.quartiles(), (2.0, 3.0));
         // An even count takes the mean of the middle two; no rounds, no ratio.
         let even = InTurn::from_times(&[(1.0, 1.0), (3.0, 1.0)]);
         assert_eq!(even.median(), 2.0);
+        assert_eq!(even.quartiles(), (1.0, 3.0));
         assert!(InTurn::from_times(&[]).median().is_nan());
     }
 }

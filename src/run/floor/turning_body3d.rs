@@ -10,7 +10,7 @@
 //! the reference node, or the node pinned, so that the centripetal force acts on a held
 //! translation alone) the accelerations are formed once per increment without iterating, as
 //! the engine forms them; the mass matrix, which a turn about the free axis leaves as it is,
-//! is then formed once (the engine forms its body solve at every increment).
+//! is then formed once, as the engine forms its body solve once per step for such a body.
 //!
 //! What stays 3D, as in the explicit engine's spatial kinematics: the orientation is a unit
 //! quaternion, turned each increment by the rotation vector h·ω(n+½) (a 3-vector) as the
@@ -212,7 +212,7 @@ impl MassMatrix {
     /// node or which is pinned: no drag, and the centripetal force, if any, on a held
     /// translation, so a = Q f/m and α = (g·M / g·I g) g.
     #[inline(always)]
-    fn steady_accelerations(&self, load: &Load) -> Rates {
+    fn accelerations_in_place(&self, load: &Load) -> Rates {
         let s = AXIS.dot(&load.moment) * self.inverse;
         let a = self.slide * (self.slide.dot(&load.force) * self.inverse_mass);
         let alpha = AXIS * s;
@@ -238,8 +238,9 @@ impl TurningBody3d {
     /// (sliding: rigid3d_slide_surface, rigid3d_slide_lumped) or held there too (pinned:
     /// rigid3d_pin_surface, rigid3d_pin_lumped), with its mass centre off that node or on it
     /// (where it is on it or the node is pinned, the accelerations are formed once per
-    /// increment without iterating); one particle held in uy and uz and free along x; springs of fixed direction x from a body point or the particle to a node held in
-    /// every translation; one plane contact between the particle and the body, without a contact
+    /// increment without iterating); one particle held in uy and uz and free along x; springs
+    /// of fixed direction x from a body point or the particle to a node held in every
+    /// translation; one plane contact between the particle and the body, without a contact
     /// dashpot; loads on body points; initial velocities on the reference node and the particle
     /// only; one dynamic step; no dashpots; the centred velocity; the identity frame everywhere.
     pub fn of(scene: &Scene) -> Option<Self> {
@@ -389,15 +390,15 @@ impl TurningBody3d {
         v[0] -= 0.5 * h * SLIDE.dot(&load[0].particle) * inverse_mass[0];
         // A body whose mass centre is its reference node (lumped) feels no centripetal force,
         // a pinned body feels it on its held translation alone, and turning about g leaves
-        // g·I g as it is: the mass matrix formed once (the engine forms its body solve at every
-        // increment in 3D), and the accelerations, which then do not read the velocity, once
-        // per increment, without iterating.
-        let steady = self.centre == Vector3::zeros() || !self.slides;
+        // g·I g as it is: the mass matrix formed once (as the engine forms its body solve once
+        // per step for a body turning in place), and the accelerations, which then do not read
+        // the velocity, once per increment, without iterating.
+        let in_place = self.centre == Vector3::zeros() || !self.slides;
         let mut passes = 0;
         for _ in 0..steps {
             load[0] = self.forces(&lists, &orientation[0], &x[0], u[0]);
-            if steady {
-                acc[0] = matrix.steady_accelerations(&load[0]);
+            if in_place {
+                acc[0] = matrix.accelerations_in_place(&load[0]);
                 passes += 1;
             } else {
                 let matrix = MassMatrix::at(self, inverse_body_mass[0], &orientation[0]);

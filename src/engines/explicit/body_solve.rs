@@ -118,36 +118,49 @@ impl<S: Space> BodySolve<'_, S> {
     /// The accelerations `(a, α)` of the reference node under `force` and `moment`.
     #[inline(always)]
     pub fn solve(&self, force: &S::V, moment: &S::W) -> (S::V, S::W) {
-        let n = self.free_rotations.len();
-        let pinned = self.held_translations.len() == S::DIM;
+        let constraints = (self.held_translations, self.free_rotations);
+        self.operator.solve(self.body, constraints, force, moment)
+    }
+}
+
+impl<S: Space> BodyOperator<S> {
+    /// The accelerations `(a, α)` of the reference node of body `body` under `force` and
+    /// `moment`, with this operator formed for its mass properties and constraints (the held
+    /// translations and the free rotations).
+    #[inline(always)]
+    pub fn solve(
+        &self,
+        body: &BodyInertia<S>,
+        (held_translations, free_rotations): (&[S::V], &[S::W]),
+        force: &S::V,
+        moment: &S::W,
+    ) -> (S::V, S::W) {
+        let n = free_rotations.len();
+        let pinned = held_translations.len() == S::DIM;
         if n == 1 {
             // One free axis g (α = s·g), as in `BodyOperator::of`, written out (the reciprocal
             // pivot is NaN where the factorisation failed).
-            let (g, inverse) = (&self.free_rotations[0], self.operator.factor[0][0]);
+            let (g, inverse) = (&free_rotations[0], self.factor[0][0]);
             if pinned {
                 return (S::V::zero(), *g * (g.dot(moment) * inverse));
             }
-            let s = (g.dot(moment) - force.dot(&self.operator.drag[0])) * inverse;
-            let a = project(self.held_translations, *force) * (1.0 / self.body.mass);
-            return (a - self.operator.drag[0] * s, *g * s);
+            let s = (g.dot(moment) - force.dot(&self.drag[0])) * inverse;
+            let a = project(held_translations, *force) * (1.0 / body.mass);
+            return (a - self.drag[0] * s, *g * s);
         }
         let mut r = [0.0; 3];
-        for ((r, g), w) in r
-            .iter_mut()
-            .zip(self.free_rotations)
-            .zip(&self.operator.drag)
-        {
+        for ((r, g), w) in r.iter_mut().zip(free_rotations).zip(&self.drag) {
             *r = g.dot(moment);
             if !pinned {
                 *r -= force.dot(w);
             }
         }
-        let s = substitute(n, &self.operator.factor, &r);
+        let s = substitute(n, &self.factor, &r);
         let (mut a, mut alpha) = (S::V::zero(), S::W::zero());
         if !pinned {
-            a = project(self.held_translations, *force) * (1.0 / self.body.mass);
+            a = project(held_translations, *force) * (1.0 / body.mass);
         }
-        for ((g, w), s) in self.free_rotations.iter().zip(&self.operator.drag).zip(s) {
+        for ((g, w), s) in free_rotations.iter().zip(&self.drag).zip(s) {
             alpha += *g * s;
             if !pinned {
                 a -= *w * s;

@@ -224,6 +224,12 @@ impl<S: Space> ParticleDashpots<S> {
 /// Gaussian elimination with partial pivoting of a k × (k + 1) augmented system (row-major,
 /// right-hand side last); the solution goes to `x[..k]`.
 fn eliminate(a: &mut [f64], k: usize, x: &mut [f64; MAX_DASHPOTS]) {
+    if k == 1 {
+        // One row: no pivot to choose and nothing to eliminate; the back-substitution below
+        // reduces to this division.
+        x[0] = a[1] / a[0];
+        return;
+    }
     let w = k + 1;
     for col in 0..k {
         let pivot = (col..k)

@@ -87,9 +87,7 @@ impl ImpactWork {
                 if pair.work.abs() <= SETTLED * pair.scale {
                     (pair.work, pair.scale) = (0.0, 0.0);
                 } else if let Some(last) = pair.gaps[0] {
-                    let compliance = h * h * model.contact_inverse_mass(k);
-                    force = balancing_force(pair.work, gap - last, compliance);
-                    model.push_along_normal(cfg, k, force, forces);
+                    force = push_back(model, cfg, (k, pair.work, gap - last), forces, h);
                     balanced = true;
                 }
             }
@@ -98,6 +96,25 @@ impl ImpactWork {
         }
         balanced
     }
+}
+
+/// The balancing force on pair `k` with `work` left and a gap that moved by `step` over the
+/// last increment of `h`, added to `forces`. Apart from [`ImpactWork::balance`], which runs at
+/// every increment: an open pair with work left is rare, and the contact geometry this reads
+/// would otherwise be loaded ahead of every increment's loop.
+#[cold]
+#[inline(never)]
+fn push_back<S: Space, const FINITE: bool>(
+    model: &Model<S, FINITE>,
+    cfg: &Config<S>,
+    (k, work, step): (usize, f64, f64),
+    forces: &mut Forces<S>,
+    h: f64,
+) -> f64 {
+    let compliance = h * h * model.contact_inverse_mass(k);
+    let force = balancing_force(work, step, compliance);
+    model.push_along_normal(cfg, k, force, forces);
+    force
 }
 
 /// The normal force F that takes work `work` back over one increment, for a gap that moved

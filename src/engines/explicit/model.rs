@@ -6,7 +6,7 @@
 //! small-rotation idealisation (`explicit_small`); it is resolved at compile time.
 
 use super::axis::{LineSprings, ParticleKernel};
-use super::body_solve::{BodyOperator, BodySolve};
+use super::body_solve::BodyOperator;
 use super::space::{BodyInertia, Lin, Space};
 pub use super::state::{Config, ContactMode, Counters, Forces, Rates, Vectors, fill_zero};
 use crate::scene::{
@@ -224,14 +224,25 @@ impl<S: Space> Constraints<S> {
         self.velocity_terms.iter().any(|x| *x)
     }
 
-    /// The solve of body `b` at mass properties `inertia` under this step's constraints, with
-    /// the step's operator where it has one ([`Constraints::body_operators`]).
+    /// The accelerations of body `b` at mass properties `inertia` under `force` and `moment`
+    /// and this step's constraints, with `operator` where one is formed for them, otherwise
+    /// the step's operator where it has one ([`Constraints::body_operators`]), otherwise one
+    /// formed here.
     #[inline(always)]
-    pub fn body_solve<'a>(&'a self, inertia: &'a BodyInertia<S>, b: usize) -> BodySolve<'a, S> {
-        let (held_t, free_r) = (&self.body_held_t[b], &self.body_free_r[b]);
-        match self.body_operators[b] {
-            Some(operator) => BodySolve::with(inertia, held_t, free_r, operator),
-            None => BodySolve::new(inertia, held_t, free_r),
+    pub fn body_accelerations(
+        &self,
+        (inertia, b): (&BodyInertia<S>, usize),
+        operator: Option<&BodyOperator<S>>,
+        force: &S::V,
+        moment: &S::W,
+    ) -> (S::V, S::W) {
+        let held = (
+            self.body_held_t[b].as_slice(),
+            self.body_free_r[b].as_slice(),
+        );
+        match operator.or(self.body_operators[b].as_ref()) {
+            Some(operator) => operator.solve(inertia, held, force, moment),
+            None => BodyOperator::of(inertia, held.0, held.1).solve(inertia, held, force, moment),
         }
     }
 }
@@ -344,6 +355,9 @@ pub struct Model<S: Space, const FINITE: bool> {
     pub penalty: f64,
     /// Node → point.
     pub points: Vec<Point<S>>,
+    /// Whether any dashpot acts (grounded, two-point or on a contact pair): read by every pass
+    /// of the centred velocity, so kept rather than found again.
+    dashpots_act: bool,
 }
 
 /// The springs of fixed direction between particles or a particle and the ground, in their
@@ -600,7 +614,10 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         let (line_springs, springs) = line_springs(scene.springs.iter().filter_map(two_point));
         let grounded_springs = grounded(&scene.springs);
         let grounded_dashpots = grounded(&scene.dashpots);
-        let dashpots = scene.dashpots.iter().filter_map(two_point).collect();
+        let dashpots: Vec<_> = scene.dashpots.iter().filter_map(two_point).collect();
+        let dashpots_act = !grounded_dashpots.is_empty()
+            || !dashpots.is_empty()
+            || contacts.iter().any(|c| c.damping > 0.0);
         Model {
             inverse_masses: particles.iter().map(|p| 1.0 / p.mass).collect(),
             particles,
@@ -616,14 +633,14 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             ramped_loads,
             penalty,
             points,
+            dashpots_act,
         }
     }
 
     /// Whether the scene has dashpots.
+    #[inline]
     pub fn has_dashpots(&self) -> bool {
-        !self.grounded_dashpots.is_empty()
-            || !self.dashpots.is_empty()
-            || self.has_contact_dashpots()
+        self.dashpots_act
     }
 
     /// The axes of particle `i`'s frame.

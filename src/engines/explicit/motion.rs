@@ -3,7 +3,7 @@
 //! the consistent contact start sets (a pair's penetration and gap rate).
 
 use super::axis::{ParticleKernel, move_along, step_along};
-use super::body_solve::{BodyOperator, BodySolve, project};
+use super::body_solve::{BodyOperator, project};
 use super::model::*;
 use super::space::{BodyInertia, Lin, Space, compensated_add};
 
@@ -56,6 +56,22 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         counters: &mut Counters,
     ) {
         self.particle_accelerations(forces, held, out);
+        self.body_accelerations_formed(cfg, forces, vel, held, operators, out, counters);
+    }
+
+    /// The bodies' part of [`Model::accelerations_with`].
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub(super) fn body_accelerations_formed(
+        &self,
+        cfg: &Config<S>,
+        forces: &Forces<S>,
+        vel: &Rates<S>,
+        held: &Constraints<S>,
+        operators: &[BodyOperator<S>],
+        out: &mut Rates<S>,
+        counters: &mut Counters,
+    ) {
         self.body_accelerations_with(cfg, forces, vel, held, Some(operators), out, counters);
     }
 
@@ -76,9 +92,9 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         }));
     }
 
-    /// The particles' part of [`Model::accelerations`].
+    /// The particles' part of [`Model::accelerations`] (it reads the forces alone).
     #[inline(always)]
-    fn particle_accelerations(
+    pub(super) fn particle_accelerations(
         &self,
         forces: &Forces<S>,
         held: &Constraints<S>,
@@ -118,7 +134,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     }
 
     /// The bodies' accelerations, each solved with its operator from `operators` where given,
-    /// otherwise with the step's or one formed here ([`Constraints::body_solve`]).
+    /// otherwise with the step's or one formed here ([`Constraints::body_accelerations`]).
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn body_accelerations_with(
@@ -146,14 +162,8 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 }
             }
             counters.body_solves += 1;
-            let solve = match operators {
-                Some(formed) => {
-                    let (held_t, free_r) = (&held.body_held_t[b], &held.body_free_r[b]);
-                    BodySolve::with(inertia, held_t, free_r, formed[b])
-                }
-                None => held.body_solve(inertia, b),
-            };
-            let (a, alpha) = solve.solve(&f, &m);
+            let formed = operators.map(|formed| &formed[b]);
+            let (a, alpha) = held.body_accelerations((inertia, b), formed, &f, &m);
             out.b[b] = a;
             out.w[b] = alpha;
         }

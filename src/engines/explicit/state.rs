@@ -156,22 +156,16 @@ impl<S: Space> Rates<S> {
         out
     }
     /// In place: `self = a + s · b`.
+    #[inline]
     pub fn set_plus(&mut self, a: &Self, s: f64, b: &Self) {
-        let (ap, bp) = (a.p.flat(), b.p.flat());
-        for (o, (x, y)) in self.p.flat_mut().iter_mut().zip(ap.iter().zip(bp)) {
-            *o = *x + *y * s;
-        }
+        plus_into(self.p.flat_mut(), a.p.flat(), s, b.p.flat());
         self.set_plus_bodies(a, s, b);
     }
     /// [`Rates::set_plus`] for the bodies alone.
     #[inline(always)]
     pub fn set_plus_bodies(&mut self, a: &Self, s: f64, b: &Self) {
-        for (o, (x, y)) in self.b.iter_mut().zip(a.b.iter().zip(&b.b)) {
-            *o = *x + *y * s;
-        }
-        for (o, (x, y)) in self.w.iter_mut().zip(a.w.iter().zip(&b.w)) {
-            *o = *x + *y * s;
-        }
+        plus_into(&mut self.b, &a.b, s, &b.b);
+        plus_into(&mut self.w, &a.w, s, &b.w);
     }
     /// Whether every component is finite.
     pub fn is_finite(&self) -> bool {
@@ -184,26 +178,47 @@ impl<S: Space> Rates<S> {
     /// such norm of `self` (square roots taken once, of the maxima).
     #[inline]
     pub fn max_difference(&self, other: &Self) -> (f64, f64) {
-        let mut d: f64 = 0.0;
-        let mut m: f64 = 0.0;
-        let mut note = |a: S::V, b: S::V| {
-            let e = a - b;
-            d = d.max(e.dot(&e));
-            m = m.max(a.dot(&a));
-        };
-        for i in 0..self.p.len() {
-            note(self.p.get(i), other.p.get(i));
+        let (mut d, mut m) = (0.0, 0.0);
+        let (a, b, len) = (self.p.flat(), other.p.flat(), self.p.len());
+        let b = &b[..a.len()];
+        for i in 0..len {
+            // Each particle's components in the order its vector's `dot` adds them.
+            let (mut e2, mut a2) = (0.0, 0.0);
+            for k in 0..S::V::DIM {
+                let (x, y) = (a[k * len + i], b[k * len + i]);
+                let e = x - y;
+                if k == 0 {
+                    (e2, a2) = (e * e, x * x);
+                } else {
+                    (e2, a2) = (e2 + e * e, a2 + x * x);
+                }
+            }
+            note_largest(&mut d, &mut m, e2, a2);
         }
-        for (a, b) in self.b.iter().zip(&other.b) {
-            note(*a, *b);
-        }
-        for (a, b) in self.w.iter().zip(&other.w) {
-            let e = *a - *b;
-            d = d.max(e.dot(&e));
-            m = m.max(a.dot(a));
+        let bodies = self.b.len();
+        let (b, w, ow) = (&other.b[..bodies], &self.w[..bodies], &other.w[..bodies]);
+        for (i, a) in self.b.iter().enumerate() {
+            let (e, f) = (*a - b[i], w[i] - ow[i]);
+            note_largest(&mut d, &mut m, e.dot(&e), a.dot(a));
+            note_largest(&mut d, &mut m, f.dot(&f), w[i].dot(&w[i]));
         }
         (d.sqrt(), m.sqrt())
     }
+}
+
+/// `out = a + s · b`, element by element, for slices as long as `out`.
+#[inline(always)]
+fn plus_into<T: Lin>(out: &mut [T], a: &[T], s: f64, b: &[T]) {
+    let (a, b) = (&a[..out.len()], &b[..out.len()]);
+    for i in 0..out.len() {
+        out[i] = a[i] + b[i] * s;
+    }
+}
+
+#[inline(always)]
+fn note_largest(d: &mut f64, m: &mut f64, e2: f64, a2: f64) {
+    *d = d.max(e2);
+    *m = m.max(a2);
 }
 
 /// Forces on particles and wrenches on bodies (about their reference nodes), plus what the

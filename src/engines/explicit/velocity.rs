@@ -246,38 +246,37 @@ fn iterate<S: Space, const FINITE: bool>(
     let (v_half, acc_prev, h, held) = (at.v_half, at.acc_prev, at.h, at.held);
     work.guess.set_plus(v_half, 0.5 * h, acc_prev);
     let mut previous_change = 0.0;
+    // Without dashpots the velocity enters through the centripetal and gyroscopic terms only:
+    // the position forces, and the particles' accelerations from them, serve every pass as
+    // they are.
+    let dashpots = model.has_dashpots();
+    if !dashpots {
+        model.particle_accelerations(forces, held, acc);
+    }
     for pass in 0..MAX_DAMPING_ITERATIONS {
-        // Without dashpots the velocity enters through the centripetal and gyroscopic terms
-        // only: the position forces serve every pass as they are.
-        let total = if model.has_dashpots() {
-            work.total.copy_from(forces);
-            model.damping_along(
-                cfg,
-                &work.directions,
-                &work.guess,
-                &mut work.total,
-                counters,
-            );
-            &work.total
-        } else {
-            forces
-        };
         let operators = &work.operators;
-        model.accelerations_with(cfg, total, &work.guess, held, operators, acc, counters);
+        if dashpots {
+            work.total.copy_from(forces);
+            let (directions, guess) = (&work.directions, &work.guess);
+            model.damping_along(cfg, directions, guess, &mut work.total, counters);
+            let total = &work.total;
+            model.accelerations_with(cfg, total, guess, held, operators, acc, counters);
+        } else {
+            let guess = &work.guess;
+            model.body_accelerations_formed(cfg, forces, guess, held, operators, acc, counters);
+        }
         work.v_n.set_plus(v_half, 0.5 * h, acc);
         let (change, size) = work.v_n.max_difference(&work.guess);
-        std::mem::swap(&mut work.v_n, &mut work.guess);
         // ρ ≈ (h/2)·|∂a/∂v| ([`converged`]).
-        let met = converged(change, previous_change, size);
-        let diverging = pass >= 3 && change > previous_change;
-        previous_change = change;
-        if met {
-            std::mem::swap(&mut work.v_n, &mut work.guess);
+        if converged(change, previous_change, size) {
             return true;
         }
-        if diverging && stop_diverging {
-            break;
+        if stop_diverging && pass >= 3 && change > previous_change {
+            return false;
         }
+        previous_change = change;
+        // The new iterate is the next pass's guess.
+        std::mem::swap(&mut work.v_n, &mut work.guess);
     }
     std::mem::swap(&mut work.v_n, &mut work.guess);
     false

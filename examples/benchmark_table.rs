@@ -1,17 +1,21 @@
 //! BENCHMARKS.md's table from criterion's last run of `benches/increment.rs`: per seed case,
 //! ns per increment of `explicit` and of `rapier_f64` (matched), their ratio, and the
-//! arithmetic floor where the case has one; then `explicit` against its floor timed in turn
-//! here (`run::floor::time_in_turn`, at the benchmark's increment), the median and the range
-//! of the rounds' ratios. Run by `scripts/benchmarks.sh`, which passes the commit and the date;
-//! the machine is read from `/proc/cpuinfo`.
+//! arithmetic floor where the case has one; then, timed in turn here at the benchmark's
+//! increment, `rapier_f64` against `explicit` (`run::floor::engines_in_turn`) and `explicit`
+//! against its floor (`run::floor::time_in_turn`), each as the median and the quartiles of the
+//! rounds' ratios. Criterion times each benchmark apart, minutes from the others, and a ratio
+//! of two of its medians moves with the machine in between; a ratio timed in turn does not.
+//! Run by `scripts/benchmarks.sh`, which passes the commit and the date; the machine is read
+//! from `/proc/cpuinfo`.
 //!
 //! `cargo run --release --example benchmark_table -- COMMIT DATE [CRITERION_DIR]`
 
 use crosscheck::case;
+use crosscheck::engines::Engine;
 use crosscheck::engines::RunSettings;
 use crosscheck::engines::explicit::ExplicitEngine;
-use crosscheck::run::floor::{self, REFINEMENT};
-use crosscheck::run::matching;
+use crosscheck::run::floor::{self, InTurn, REFINEMENT};
+use crosscheck::run::{matching, registry};
 use crosscheck::scene::IncrementRule;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -19,19 +23,32 @@ use std::path::Path;
 /// Rounds of the engine and its floor timed in turn, per case.
 const ROUNDS: usize = 21;
 
-/// Per seed case with a floor: `explicit` against it timed in turn at the benchmark's
-/// increment, as "median (lower–upper quartile)".
-fn in_turn() -> BTreeMap<String, String> {
-    let mut out = BTreeMap::new();
+/// Rounds of `rapier_f64` and `explicit` timed in turn, per case (a run of `rapier_f64` at the
+/// benchmark's increment takes about a second).
+const ENGINE_ROUNDS: usize = 7;
+
+/// "median`unit` (lower–upper quartile)" of rounds timed in turn, each ratio scaled by
+/// `scale`.
+fn as_text(paired: &InTurn, scale: f64, digits: usize, unit: &str) -> String {
+    let (low, high) = paired.quartiles();
+    let (median, low, high) = (paired.median() * scale, low * scale, high * scale);
+    format!("{median:.digits$}{unit} ({low:.digits$}–{high:.digits$})")
+}
+
+/// Per seed case, timed in turn at the benchmark's increment: `rapier_f64` (matched) against
+/// `explicit`, per increment, and `explicit` against the case's floor where it has one.
+fn in_turn() -> (BTreeMap<String, String>, BTreeMap<String, String>) {
+    let (mut against_rapier, mut against_floor) = (BTreeMap::new(), BTreeMap::new());
     let paths = case::discover(&case::cases_dir()).expect("cases/");
     let engine = ExplicitEngine::finite();
+    let rapier = registry::all()
+        .into_iter()
+        .find(|e| e.name() == "rapier_f64");
     for scene in paths
         .iter()
         .map(|p| case::load(p).expect("a valid seed case"))
     {
-        let (IncrementRule::Given(h), Some(floor)) =
-            (scene.settings.increment, floor::in_slices(&scene))
-        else {
+        let IncrementRule::Given(h) = scene.settings.increment else {
             continue;
         };
         let finer = RunSettings {
@@ -39,13 +56,30 @@ fn in_turn() -> BTreeMap<String, String> {
             ..RunSettings::default()
         };
         let settings = matching::job_settings(&engine, &scene, &finer);
-        let paired = floor::time_in_turn(&engine, &scene, &settings, &floor, ROUNDS)
+        if let Some(rapier) = rapier.as_deref() {
+            let rapier_settings = matching::job_settings(rapier, &scene, &finer);
+            let steps = |e: &dyn Engine, s: &RunSettings| {
+                let output = e.run(&scene, s).unwrap_or_else(|e| panic!("{e}"));
+                output.info.steps as f64
+            };
+            // Per increment: the whole runs' ratio times explicit's increments over rapier's.
+            let scale = steps(&engine, &settings) / steps(rapier, &rapier_settings);
+            let paired = floor::engines_in_turn(
+                &scene,
+                (rapier, &rapier_settings),
+                (&engine, &settings),
+                ENGINE_ROUNDS,
+            )
             .unwrap_or_else(|e| panic!("{e}"));
-        let (low, high) = paired.quartiles();
-        let text = format!("{:.2} ({low:.2}–{high:.2})", paired.median());
-        out.insert(scene.id.clone(), text);
+            against_rapier.insert(scene.id.clone(), as_text(&paired, scale, 0, "×"));
+        }
+        if let Some(floor) = floor::in_slices(&scene) {
+            let paired = floor::time_in_turn(&engine, &scene, &settings, &floor, ROUNDS)
+                .unwrap_or_else(|e| panic!("{e}"));
+            against_floor.insert(scene.id.clone(), as_text(&paired, 1.0, 2, ""));
+        }
     }
-    out
+    (against_rapier, against_floor)
 }
 
 /// ns per increment of every benchmark under `dir/group`, by criterion's id without the group
@@ -108,28 +142,31 @@ fn main() {
         );
         std::process::exit(2);
     }
-    let paired = in_turn();
+    let (against_rapier, against_floor) = in_turn();
     println!(
         "Measured on {}, commit {commit}, {date}, by `scripts/benchmarks.sh` (criterion's \
-         median; one thread; at a tenth of each case's increment; `explicit` / floor: {ROUNDS} \
-         rounds timed in turn, the median of their ratios and their quartiles).\n",
+         median; one thread; at a tenth of each case's increment; in turn: whole runs timed \
+         back to back, {ENGINE_ROUNDS} rounds of `rapier_f64` and `explicit`, {ROUNDS} of \
+         `explicit` and its floor, the median of the rounds' ratios and their quartiles).\n",
         machine()
     );
     println!(
-        "| seed case | `explicit`, ns | `rapier_f64` (matched), ns | `rapier_f64` / `explicit` | floor, ns | `explicit` / floor, in turn |"
+        "| seed case | `explicit`, ns | `rapier_f64` (matched), ns | `rapier_f64` / `explicit` | `rapier_f64` / `explicit`, in turn | floor, ns | `explicit` / floor, in turn |"
     );
-    println!("|---|---:|---:|---:|---:|---:|");
+    println!("|---|---:|---:|---:|---:|---:|---:|");
     let ns = |x: Option<&f64>| x.map_or("–".to_string(), |v| format!("{v:.1}"));
     for case in cases {
         let explicit = increment[&format!("{case}/explicit")];
         let rapier = increment.get(&format!("{case}/rapier_f64"));
         let slices = floor.get(&format!("{case}/slices"));
+        let text = |map: &BTreeMap<String, String>| map.get(case).cloned();
         println!(
-            "| {case} | {explicit:.1} | {} | {} | {} | {} |",
+            "| {case} | {explicit:.1} | {} | {} | {} | {} | {} |",
             ns(rapier),
             rapier.map_or("–".to_string(), |r| format!("{:.0}×", r / explicit)),
+            text(&against_rapier).unwrap_or("–".to_string()),
             ns(slices),
-            paired.get(case).map_or("–", String::as_str),
+            text(&against_floor).unwrap_or("–".to_string()),
         );
     }
 }

@@ -1,10 +1,10 @@
-//! An engine against a floor, timed in turn: each round times the engine's whole run and the
-//! floor's run over as many increments of the same length back to back (the engine first in
-//! one round, the floor first in the next), so that a slow spell of the machine that lasts a
-//! round slows both alike and leaves that round's ratio as it is; the median over the rounds
-//! sets aside the rounds a shorter spell split. Timed apart (criterion measures each benchmark
-//! for seconds, the floors minutes after the engine), the same code's ratio moves by up to
-//! 1.7× between runs.
+//! An engine against a floor, or against another engine, timed in turn: each round times the
+//! engine's whole run and the floor's run over as many increments of the same length (or the
+//! other engine's whole run) back to back (one first in one round, the other in the next), so
+//! that a slow spell of the machine that lasts a round slows both alike and leaves that
+//! round's ratio as it is; the median over the rounds sets aside the rounds a shorter spell
+//! split. Timed apart (criterion measures each benchmark for seconds, the floors minutes after
+//! the engine), the same code's ratio moves by up to 1.7× between runs.
 
 use super::FloorRun;
 use crate::engines::{Engine, RunSettings};
@@ -16,14 +16,15 @@ use std::time::Instant;
 /// increments), so that a run's setup is spread thin.
 pub const REFINEMENT: f64 = 10.0;
 
-/// The ratios of an engine's run time to its floor's, one per round, in increasing order.
+/// The ratios of one run time to another's (an engine's to its floor's, or one engine's to
+/// another's), one per round, in increasing order.
 #[derive(Debug, Clone, PartialEq)]
 pub struct InTurn {
     ratios: Vec<f64>,
 }
 
 impl InTurn {
-    /// From each round's (engine, floor) times.
+    /// From each round's two times, (numerator, denominator).
     pub fn from_times(rounds: &[(f64, f64)]) -> Self {
         let mut ratios: Vec<f64> = rounds.iter().map(|(e, f)| e / f).collect();
         ratios.sort_by(f64::total_cmp);
@@ -69,26 +70,54 @@ pub fn time_in_turn(
         return Err(format!("{}: the floor needs an increment given", scene.id));
     };
     let steps = (floor.duration / h).round() as u64;
-    let engine_run = || -> Result<f64, String> {
-        let started = Instant::now();
-        let output = engine.run(black_box(scene), settings);
-        drop(output.map_err(|e| format!("{}: {e}", scene.id))?);
-        Ok(started.elapsed().as_secs_f64())
-    };
+    let engine_run = || whole_run(engine, scene, settings);
     let floor_run = || {
         let started = Instant::now();
         floor.run(h, steps);
-        started.elapsed().as_secs_f64()
+        Ok(started.elapsed().as_secs_f64())
     };
-    engine_run()?;
-    floor_run();
+    in_turn(engine_run, floor_run, rounds)
+}
+
+/// Engine `first`'s whole run of `scene` under `first_settings` against engine `second`'s
+/// under `second_settings`, timed in turn over `rounds` rounds after one untimed run of each:
+/// the ratios are `first`'s time over `second`'s.
+pub fn engines_in_turn(
+    scene: &Scene,
+    (first, first_settings): (&dyn Engine, &RunSettings),
+    (second, second_settings): (&dyn Engine, &RunSettings),
+    rounds: usize,
+) -> Result<InTurn, String> {
+    let first_run = || whole_run(first, scene, first_settings);
+    let second_run = || whole_run(second, scene, second_settings);
+    in_turn(first_run, second_run, rounds)
+}
+
+/// The seconds of `engine`'s whole run of `scene` under `settings`, dropping its output
+/// included, as criterion's time includes it.
+fn whole_run(engine: &dyn Engine, scene: &Scene, settings: &RunSettings) -> Result<f64, String> {
+    let started = Instant::now();
+    let output = engine.run(black_box(scene), settings);
+    drop(output.map_err(|e| format!("{}: {e}", scene.id))?);
+    Ok(started.elapsed().as_secs_f64())
+}
+
+/// `first` against `second` (each returns its run's seconds) over `rounds` rounds after one
+/// untimed run of each, the one that goes first alternating.
+fn in_turn(
+    first: impl Fn() -> Result<f64, String>,
+    second: impl Fn() -> Result<f64, String>,
+    rounds: usize,
+) -> Result<InTurn, String> {
+    first()?;
+    second()?;
     let mut times = Vec::with_capacity(rounds);
     for round in 0..rounds {
         let pair = if round % 2 == 0 {
-            (engine_run()?, floor_run())
+            (first()?, second()?)
         } else {
-            let floor_seconds = floor_run();
-            (engine_run()?, floor_seconds)
+            let second_seconds = second()?;
+            (first()?, second_seconds)
         };
         times.push(pair);
     }

@@ -4,7 +4,8 @@
 //! increment, `rapier_f64` against `explicit` (`run::floor::engines_in_turn`) and `explicit`
 //! against its floor (`run::floor::time_in_turn`), each as the median and the quartiles of the
 //! rounds' ratios. Criterion times each benchmark apart, minutes from the others, and a ratio
-//! of two of its medians moves with the machine in between; a ratio timed in turn does not.
+//! of two of its medians moves with the machine in between; a ratio timed in turn moves much
+//! less.
 //! Run by `scripts/benchmarks.sh`, which passes the commit and the date; the machine is read
 //! from `/proc/cpuinfo`.
 //!

@@ -1,8 +1,8 @@
-//! The explicit engine's reduced body solve (`BodySolve`, block elimination onto the free
-//! rotation axes) against the full constrained rigid-body system solved densely: the 6×6 (3D)
-//! or 3×3 (2D) mass matrix at the reference node bordered by one row per held direction
-//! (Lagrange multipliers), factorised by nalgebra's LU. The two share nothing but the
-//! equations they solve.
+//! The explicit engine's reduced body solve (`BodyOperator::solve`, called here through
+//! `BodySolve`: block elimination onto the free rotation axes) against the full constrained
+//! rigid-body system solved densely: the 6×6 (3D) or 3×3 (2D) mass matrix at the reference
+//! node bordered by one row per held direction (Lagrange multipliers), factorised by
+//! nalgebra's LU. The two share nothing but the equations they solve.
 
 use crosscheck::engines::explicit::body_solve::{BodyOperator, BodySolve};
 use crosscheck::engines::explicit::space::{

@@ -2,12 +2,22 @@
 
 use super::space::{BodyInertia, Lin, Space};
 
+/// One body's solve with its constraints and operator bound together:
+/// [`BodyOperator::solve`] for a body and constraints given once, as a caller solving one body
+/// alone reads it (the engine keeps each body's operator and calls [`BodyOperator::solve`]).
+pub struct BodySolve<'a, S: Space> {
+    body: &'a BodyInertia<S>,
+    held_translations: &'a [S::V],
+    free_rotations: &'a [S::W],
+    operator: BodyOperator<S>,
+}
+
 /// The rigid-body equations of one body at the reference node,
 /// `m a + m α×c = f`, `m c×a + I_O α = m_O`, with the accelerations along the held translation
 /// axes (orthonormal, `held_translations`) forced to zero and α confined to the span of the
 /// free rotation axes g_i (orthonormal), factorised once for the body's configuration so that
-/// several loads can be solved against one factorisation (the centred velocity of a body
-/// turning about one axis solves two).
+/// several loads can be solved against one factorisation (the passes of the centred velocity
+/// iteration solve one each).
 ///
 /// Block elimination: with Q the projector onto the free translations, `a = Q(f/m − α×c)`, and
 /// α = Σ s_j g_j solves the reduced rotational system on the free axes,
@@ -17,17 +27,12 @@ use super::space::{BodyInertia, Lin, Space};
 /// mass (about the centre of mass when no translation is held). A non-positive pivot (only a
 /// diverged, non-finite state gives one) yields non-finite accelerations, which the time loop
 /// reports as a failed run.
-pub struct BodySolve<'a, S: Space> {
-    body: &'a BodyInertia<S>,
-    held_translations: &'a [S::V],
-    free_rotations: &'a [S::W],
-    operator: BodyOperator<S>,
-}
-
-/// The part of a [`BodySolve`] that depends on the body's mass properties and constraints
-/// only, not on the loads: formed once per step where it does not change over the step (every
-/// body under small rotations; under finite rotation a body that turns about one axis, pinned
-/// at its reference node or with its mass centre there; `Constraints::body_operators`).
+///
+/// The operator depends on the body's mass properties and constraints only, not on the loads:
+/// it is formed once per step where it does not change over the step (every body under small
+/// rotations; under finite rotation a body that turns about one axis, pinned at its reference
+/// node or with its mass centre there; `Constraints::body_operators`), otherwise once per
+/// configuration.
 #[derive(Debug, Clone, Copy)]
 pub struct BodyOperator<S: Space> {
     /// `w_i = Q(g_i × c)`, the translation each unit rotation rate drags through the held

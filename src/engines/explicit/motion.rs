@@ -6,6 +6,7 @@ use super::axis::{ParticleKernel, move_along, step_along};
 use super::body_solve::{BodyOperator, project};
 use super::model::*;
 use super::space::{BodyInertia, Lin, Space, compensated_add};
+use super::state::note_largest;
 
 impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// Mass properties of a body at orientation `r` (finite rotation): the centre in world
@@ -56,22 +57,6 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         counters: &mut Counters,
     ) {
         self.particle_accelerations(forces, held, out);
-        self.body_accelerations_formed(cfg, forces, vel, held, operators, out, counters);
-    }
-
-    /// The bodies' part of [`Model::accelerations_with`].
-    #[allow(clippy::too_many_arguments)]
-    #[inline(always)]
-    pub(super) fn body_accelerations_formed(
-        &self,
-        cfg: &Config<S>,
-        forces: &Forces<S>,
-        vel: &Rates<S>,
-        held: &Constraints<S>,
-        operators: &[BodyOperator<S>],
-        out: &mut Rates<S>,
-        counters: &mut Counters,
-    ) {
         self.body_accelerations_with(cfg, forces, vel, held, Some(operators), out, counters);
     }
 
@@ -137,7 +122,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// otherwise with the step's or one formed here ([`Constraints::body_accelerations`]).
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn body_accelerations_with(
+    pub(super) fn body_accelerations_with(
         &self,
         cfg: &Config<S>,
         forces: &Forces<S>,
@@ -148,25 +133,75 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         counters: &mut Counters,
     ) {
         for b in 0..self.bodies.len() {
-            let inertia = &cfg.inertia[b];
-            let mut f = forces.b[b];
-            let mut m = forces.m[b];
-            if FINITE && held.velocity_terms[b] {
-                let w = vel.w[b];
-                f -= S::cross(&w, &S::cross(&w, &inertia.centre)) * inertia.mass;
-                // ω × I ω is perpendicular to ω: on a body turning about one axis g (ω along
-                // g, the held components removed) the solve, which reads only the moment along
-                // g, would see round-off of it alone.
-                if held.body_free_r[b].len() > 1 {
-                    m -= S::gyroscopic(&w, &inertia.apply(&w));
-                }
-            }
-            counters.body_solves += 1;
             let formed = operators.map(|formed| &formed[b]);
-            let (a, alpha) = held.body_accelerations((inertia, b), formed, &f, &m);
+            let (a, alpha) = self.body_acceleration(cfg, forces, vel, held, (b, formed), counters);
             out.b[b] = a;
             out.w[b] = alpha;
         }
+    }
+
+    /// Body `b`'s accelerations at velocities `vel`, solved with the operator `formed` where
+    /// given ([`Constraints::body_accelerations`]).
+    #[inline(always)]
+    fn body_acceleration(
+        &self,
+        cfg: &Config<S>,
+        forces: &Forces<S>,
+        vel: &Rates<S>,
+        held: &Constraints<S>,
+        (b, formed): (usize, Option<&BodyOperator<S>>),
+        counters: &mut Counters,
+    ) -> (S::V, S::W) {
+        let inertia = &cfg.inertia[b];
+        let mut f = forces.b[b];
+        let mut m = forces.m[b];
+        if FINITE && held.velocity_terms[b] {
+            let w = vel.w[b];
+            f -= S::cross(&w, &S::cross(&w, &inertia.centre)) * inertia.mass;
+            // ω × I ω is perpendicular to ω: on a body turning about one axis g (ω along
+            // g, the held components removed) the solve, which reads only the moment along
+            // g, would see round-off of it alone.
+            if held.body_free_r[b].len() > 1 {
+                m -= S::gyroscopic(&w, &inertia.apply(&w));
+            }
+        }
+        counters.body_solves += 1;
+        held.body_accelerations((inertia, b), formed, &f, &m)
+    }
+
+    /// One pass of the centred velocity iteration over the bodies alone, where no force reads
+    /// the velocity, in one loop: each body's accelerations `acc` at the rates `guess` (with
+    /// its operator from `operators`, one per body), its centred rates
+    /// `v_n = v(n−½) + (h/2)·acc`, and their change from `guess`. Returns the largest squared
+    /// norm of a body's change and of its rates, as [`Rates::max_difference`] takes them
+    /// before its square roots. The arithmetic of [`Model::body_accelerations_with`],
+    /// [`Rates::set_plus_bodies`] and that difference, bit for bit.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub(super) fn centred_body_pass(
+        &self,
+        (cfg, forces, held): (&Config<S>, &Forces<S>, &Constraints<S>),
+        operators: &[BodyOperator<S>],
+        (v_half, h): (&Rates<S>, f64),
+        guess: &Rates<S>,
+        v_n: &mut Rates<S>,
+        acc: &mut Rates<S>,
+        counters: &mut Counters,
+    ) -> (f64, f64) {
+        let (mut d, mut m) = (0.0, 0.0);
+        let s = 0.5 * h;
+        for (b, operator) in operators.iter().enumerate() {
+            let formed = Some(operator);
+            let (a, alpha) =
+                self.body_acceleration(cfg, forces, guess, held, (b, formed), counters);
+            (acc.b[b], acc.w[b]) = (a, alpha);
+            let (v, w) = (v_half.b[b] + a * s, v_half.w[b] + alpha * s);
+            (v_n.b[b], v_n.w[b]) = (v, w);
+            let (e, f) = (v - guess.b[b], w - guess.w[b]);
+            note_largest(&mut d, &mut m, e.dot(&e), v.dot(&v));
+            note_largest(&mut d, &mut m, f.dot(&f), w.dot(&w));
+        }
+        (d, m)
     }
 
     /// Kinetic energy at velocities `vel`.

@@ -158,8 +158,13 @@ impl<S: Space> Rates<S> {
     /// In place: `self = a + s · b`.
     #[inline]
     pub fn set_plus(&mut self, a: &Self, s: f64, b: &Self) {
-        plus_into(self.p.flat_mut(), a.p.flat(), s, b.p.flat());
+        self.set_plus_particles(a, s, b);
         self.set_plus_bodies(a, s, b);
+    }
+    /// [`Rates::set_plus`] for the particles alone.
+    #[inline(always)]
+    pub fn set_plus_particles(&mut self, a: &Self, s: f64, b: &Self) {
+        plus_into(self.p.flat_mut(), a.p.flat(), s, b.p.flat());
     }
     /// [`Rates::set_plus`] for the bodies alone.
     #[inline(always)]
@@ -178,6 +183,20 @@ impl<S: Space> Rates<S> {
     /// such norm of `self` (square roots taken once, of the maxima).
     #[inline]
     pub fn max_difference(&self, other: &Self) -> (f64, f64) {
+        let (mut d, mut m) = self.particle_differences(other);
+        let bodies = self.b.len();
+        let (b, w, ow) = (&other.b[..bodies], &self.w[..bodies], &other.w[..bodies]);
+        for (i, a) in self.b.iter().enumerate() {
+            let (e, f) = (*a - b[i], w[i] - ow[i]);
+            note_largest(&mut d, &mut m, e.dot(&e), a.dot(a));
+            note_largest(&mut d, &mut m, f.dot(&f), w[i].dot(&w[i]));
+        }
+        (d.sqrt(), m.sqrt())
+    }
+    /// The particles' part of [`Rates::max_difference`], before its square roots: the largest
+    /// squared norm of a particle's difference, and of a particle's rate in `self`.
+    #[inline(always)]
+    pub fn particle_differences(&self, other: &Self) -> (f64, f64) {
         let (mut d, mut m) = (0.0, 0.0);
         let (a, b, len) = (self.p.flat(), other.p.flat(), self.p.len());
         let b = &b[..a.len()];
@@ -195,14 +214,7 @@ impl<S: Space> Rates<S> {
             }
             note_largest(&mut d, &mut m, e2, a2);
         }
-        let bodies = self.b.len();
-        let (b, w, ow) = (&other.b[..bodies], &self.w[..bodies], &other.w[..bodies]);
-        for (i, a) in self.b.iter().enumerate() {
-            let (e, f) = (*a - b[i], w[i] - ow[i]);
-            note_largest(&mut d, &mut m, e.dot(&e), a.dot(a));
-            note_largest(&mut d, &mut m, f.dot(&f), w[i].dot(&w[i]));
-        }
-        (d.sqrt(), m.sqrt())
+        (d, m)
     }
 }
 
@@ -215,8 +227,9 @@ fn plus_into<T: Lin>(out: &mut [T], a: &[T], s: f64, b: &[T]) {
     }
 }
 
+/// `d` and `m` raised to `e2` and `a2` where those are larger (a NaN is passed over).
 #[inline(always)]
-fn note_largest(d: &mut f64, m: &mut f64, e2: f64, a2: f64) {
+pub(super) fn note_largest(d: &mut f64, m: &mut f64, e2: f64, a2: f64) {
     *d = d.max(e2);
     *m = m.max(a2);
 }

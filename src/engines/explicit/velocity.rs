@@ -72,6 +72,11 @@ pub(super) struct Velocities<S: Space> {
 }
 
 impl<S: Space> Velocities<S> {
+    /// Exchange the bodies' rates of `v_n` and `guess` (the particles' stay).
+    fn swap_bodies(&mut self) {
+        std::mem::swap(&mut self.v_n.b, &mut self.guess.b);
+        std::mem::swap(&mut self.v_n.w, &mut self.guess.w);
+    }
     /// v(n) shaped like the model; the solve's work space is made by the first increment that
     /// needs it ([`Velocities::shaped`]), so a scene whose forces never read the velocity holds
     /// none.
@@ -245,26 +250,16 @@ fn iterate<S: Space, const FINITE: bool>(
     let (model, cfg, forces) = (at.model, at.cfg, at.forces);
     let (v_half, acc_prev, h, held) = (at.v_half, at.acc_prev, at.h, at.held);
     work.guess.set_plus(v_half, 0.5 * h, acc_prev);
-    let mut previous_change = 0.0;
-    // Without dashpots the velocity enters through the centripetal and gyroscopic terms only:
-    // the position forces, and the particles' accelerations from them, serve every pass as
-    // they are.
-    let dashpots = model.has_dashpots();
-    if !dashpots {
-        model.particle_accelerations(forces, held, acc);
+    if !model.has_dashpots() {
+        return iterate_bodies(at, stop_diverging, work, acc, counters);
     }
+    let mut previous_change = 0.0;
     for pass in 0..MAX_DAMPING_ITERATIONS {
-        let operators = &work.operators;
-        if dashpots {
-            work.total.copy_from(forces);
-            let (directions, guess) = (&work.directions, &work.guess);
-            model.damping_along(cfg, directions, guess, &mut work.total, counters);
-            let total = &work.total;
-            model.accelerations_with(cfg, total, guess, held, operators, acc, counters);
-        } else {
-            let guess = &work.guess;
-            model.body_accelerations_formed(cfg, forces, guess, held, operators, acc, counters);
-        }
+        work.total.copy_from(forces);
+        let (directions, guess) = (&work.directions, &work.guess);
+        model.damping_along(cfg, directions, guess, &mut work.total, counters);
+        let (total, operators) = (&work.total, &work.operators);
+        model.accelerations_with(cfg, total, guess, held, operators, acc, counters);
         work.v_n.set_plus(v_half, 0.5 * h, acc);
         let (change, size) = work.v_n.max_difference(&work.guess);
         // ρ ≈ (h/2)·|∂a/∂v| ([`converged`]).
@@ -279,6 +274,49 @@ fn iterate<S: Space, const FINITE: bool>(
         std::mem::swap(&mut work.v_n, &mut work.guess);
     }
     std::mem::swap(&mut work.v_n, &mut work.guess);
+    false
+}
+
+/// [`iterate`] where no dashpot acts, from the predictor in `work.guess`: the velocity enters
+/// through the bodies' centripetal and gyroscopic terms alone, so the particles' accelerations
+/// and centred velocities are formed once, from the position forces, and every pass runs over
+/// the bodies alone ([`Model::centred_body_pass`]). After the first pass a particle's change is
+/// exactly 0 and its size the same, as the general iteration finds them: the same iterates and
+/// stop, bit for bit.
+fn iterate_bodies<S: Space, const FINITE: bool>(
+    at: &AtIncrement<S, FINITE>,
+    stop_diverging: bool,
+    work: &mut Velocities<S>,
+    acc: &mut Rates<S>,
+    counters: &mut Counters,
+) -> bool {
+    let (model, cfg, forces) = (at.model, at.cfg, at.forces);
+    let (v_half, h, held) = (at.v_half, at.h, at.held);
+    model.particle_accelerations(forces, held, acc);
+    work.v_n.set_plus_particles(v_half, 0.5 * h, acc);
+    let (mut particle_change, particle_size) = work.v_n.particle_differences(&work.guess);
+    let mut previous_change = 0.0;
+    for pass in 0..MAX_DAMPING_ITERATIONS {
+        let (guess, v_n, operators) = (&work.guess, &mut work.v_n, &work.operators);
+        let state = (cfg, forces, held);
+        let (d, m) =
+            model.centred_body_pass(state, operators, (v_half, h), guess, v_n, acc, counters);
+        let (change, size) = (d.max(particle_change).sqrt(), m.max(particle_size).sqrt());
+        if converged(change, previous_change, size) {
+            return true;
+        }
+        if stop_diverging && pass >= 3 && change > previous_change {
+            return false;
+        }
+        previous_change = change;
+        if pass == 0 {
+            // From here the particles' iterate is their centred velocity in both sets.
+            work.guess.p.copy_from(&work.v_n.p);
+            particle_change = 0.0;
+        }
+        work.swap_bodies();
+    }
+    work.swap_bodies();
     false
 }
 

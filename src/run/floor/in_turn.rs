@@ -44,7 +44,7 @@ impl InTurn {
 
     /// The lower and upper quartiles of the rounds' ratios, as order statistics: the
     /// ⌊(n−1)/4⌋-th from the lowest and as many from the highest, counting from 0, so that
-    /// the middle half of the rounds lies between them. NaN without rounds.
+    /// at least half of the rounds lie between them (11 of 21, 5 of 7). NaN without rounds.
     pub fn quartiles(&self) -> (f64, f64) {
         let n = self.ratios.len();
         if n == 0 {

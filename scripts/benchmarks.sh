@@ -1,13 +1,17 @@
 #!/bin/sh
-# Measure the seed cases with criterion, the chain study and the element-cost study, and write
-# them into BENCHMARKS.md between its markers and into report/scaling/. Run from the
-# repository's root on an otherwise idle machine (about 10 minutes), at a commit: every figure
-# records the commit it measured, and tests/figures_current.rs fails once the engines' sources
-# differ from it.
+# Measure the seed cases with criterion, count their instructions per increment with valgrind,
+# run the chain study and the element-cost study, and write them into BENCHMARKS.md between
+# its markers and into report/scaling/. Run from the repository's root on an otherwise idle
+# machine (about 20 minutes), at a commit: every figure records the commit it measured, and
+# tests/figures_current.rs fails once the engines' sources differ from it.
 set -eu
 if ! git diff --quiet HEAD -- src Cargo.toml Cargo.lock; then
     echo "error: uncommitted changes under src/ or in Cargo.toml/Cargo.lock; commit them first," >&2
     echo "so that the figures name the commit they measured" >&2
+    exit 2
+fi
+if ! command -v valgrind > /dev/null; then
+    echo "error: valgrind counts the instructions per increment (Debian: apt install valgrind)" >&2
     exit 2
 fi
 cargo bench --bench increment -- --warm-up-time 1 --measurement-time 3 \
@@ -15,6 +19,7 @@ cargo bench --bench increment -- --warm-up-time 1 --measurement-time 3 \
 commit=$(git rev-parse --short HEAD)
 date=$(date -u +%Y-%m-%d)
 table=$(cargo run --release --quiet --example benchmark_table -- "$commit" "$date")
+instructions=$(cargo run --release --quiet --example increment_instructions -- "$commit" "$date")
 chain=$(cargo run --release --quiet -- scaling --study chain --out report/scaling --quiet |
     sed '/^written:/d')
 elements=$(cargo run --release --quiet -- scaling --study elements --out report/scaling --quiet |
@@ -28,5 +33,6 @@ splice() {
     ' BENCHMARKS.md > BENCHMARKS.md.new && mv BENCHMARKS.md.new BENCHMARKS.md
 }
 splice table "$table"
+splice instructions "$instructions"
 splice chain "$(printf 'Measured at commit %s, %s, by `scripts/benchmarks.sh`.\n\n```text\n%s\n```' "$commit" "$date" "$chain")"
 splice elements "$elements"

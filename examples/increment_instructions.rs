@@ -1,0 +1,148 @@
+//! BENCHMARKS.md's instruction counts: per seed case, the instructions one increment of
+//! `explicit` executes and those of the case's arithmetic floor (`run::floor::in_slices`),
+//! counted by valgrind's cachegrind. A count does not move with the machine, as a time does:
+//! it says how much work the engine adds to the arithmetic its numerics need, where the
+//! times say what that work costs on the machine that day.
+//!
+//! Each count is the difference of two whole runs, at a tenth and a twentieth of the case's
+//! increment, over the difference of their increments, so what a run does once (compiling the
+//! scene, the static steps, the 501 output rows) cancels. The runs are this program started
+//! again under `valgrind --tool=cachegrind`, with the arguments `run CASE REFINEMENT WHAT`.
+//! Run by `scripts/benchmarks.sh`, which passes the commit and the date.
+//!
+//! `cargo run --release --example increment_instructions -- COMMIT DATE`
+
+use crosscheck::case;
+use crosscheck::engines::Engine;
+use crosscheck::engines::RunSettings;
+use crosscheck::engines::explicit::ExplicitEngine;
+use crosscheck::run::floor::{self, REFINEMENT};
+use crosscheck::scene::{IncrementRule, Scene};
+use std::path::Path;
+use std::process::Command;
+
+/// What a counted run steps: the engine, or the case's floor.
+const ENGINE: &str = "explicit";
+const FLOOR: &str = "floor";
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    match args.as_slice() {
+        [run, case, refinement, what] if run == "run" => {
+            let refinement: f64 = refinement.parse().expect("a refinement");
+            println!("{}", counted_run(&load(case), refinement, what));
+        }
+        [commit, date] => print_table(commit, date),
+        _ => {
+            eprintln!("usage: increment_instructions COMMIT DATE");
+            std::process::exit(2);
+        }
+    }
+}
+
+fn load(id: &str) -> Scene {
+    let path = case::cases_dir().join(format!("{id}.toml"));
+    case::load(&path).expect("a valid seed case")
+}
+
+/// The increment of `scene` over `refinement`; None for a case whose increment is not given.
+fn increment(scene: &Scene, refinement: f64) -> Option<f64> {
+    match scene.settings.increment {
+        IncrementRule::Given(h) => Some(h / refinement),
+        _ => None,
+    }
+}
+
+/// One whole run of `what` on `scene` at its increment over `refinement`: the increments it
+/// took.
+fn counted_run(scene: &Scene, refinement: f64, what: &str) -> u64 {
+    let h = increment(scene, refinement).expect("a given increment");
+    if what == FLOOR {
+        let floor = floor::in_slices(scene).expect("a case with a floor");
+        let increments = (floor.duration / h).round() as u64;
+        floor.run(h, increments);
+        return increments;
+    }
+    let settings = RunSettings {
+        increment: Some(IncrementRule::Given(h)),
+        ..RunSettings::default()
+    };
+    let engine = ExplicitEngine::finite();
+    let out = engine.run(scene, &settings).expect("a seed case runs");
+    out.info.steps
+}
+
+/// Instructions and increments of one run under cachegrind.
+fn counted(id: &str, refinement: f64, what: &str) -> (u64, u64) {
+    let exe = std::env::current_exe().expect("this program's path");
+    let out_file = std::env::temp_dir().join(format!(
+        "increment_instructions.{}.{id}.{what}.{refinement}",
+        std::process::id()
+    ));
+    let output = Command::new("valgrind")
+        .args(["--tool=cachegrind", "--cache-sim=no"])
+        .arg(format!("--cachegrind-out-file={}", out_file.display()))
+        .arg(&exe)
+        .args(["run", id, &refinement.to_string(), what])
+        .output()
+        .expect("valgrind runs (Debian: the `valgrind` package)");
+    assert!(
+        output.status.success(),
+        "{id} {what} under cachegrind: {}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let increments = String::from_utf8_lossy(&output.stdout)
+        .trim()
+        .parse()
+        .expect("the increments the run took");
+    let instructions = summary(&out_file);
+    let _ = std::fs::remove_file(&out_file);
+    (instructions, increments)
+}
+
+/// The total instructions of a cachegrind output file (its `summary:` line).
+fn summary(path: &Path) -> u64 {
+    let text = std::fs::read_to_string(path).expect("cachegrind's output file");
+    text.lines()
+        .find_map(|l| l.strip_prefix("summary:"))
+        .and_then(|s| s.split_whitespace().next())
+        .and_then(|s| s.parse().ok())
+        .expect("a summary line")
+}
+
+/// Instructions per increment of `what` on case `id`: two runs, at a tenth and a twentieth of
+/// its increment, differenced.
+fn per_increment(id: &str, what: &str) -> f64 {
+    let (coarse, fine) = (
+        counted(id, REFINEMENT, what),
+        counted(id, 2.0 * REFINEMENT, what),
+    );
+    (fine.0 as f64 - coarse.0 as f64) / (fine.1 as f64 - coarse.1 as f64)
+}
+
+fn print_table(commit: &str, date: &str) {
+    println!(
+        "Counted at commit {commit}, {date}, by `scripts/benchmarks.sh` (valgrind's cachegrind; the difference of whole runs at a tenth and a twentieth of each case's increment, per increment)."
+    );
+    println!();
+    println!("| seed case | `explicit`, instructions | floor, instructions | `explicit` / floor |");
+    println!("|---|---:|---:|---:|");
+    let paths = case::discover(&case::cases_dir()).expect("cases/");
+    for scene in paths
+        .iter()
+        .map(|p| case::load(p).expect("a valid seed case"))
+    {
+        if increment(&scene, REFINEMENT).is_none() {
+            continue;
+        }
+        let engine = per_increment(&scene.id, ENGINE);
+        let (floor, ratio) = match floor::in_slices(&scene) {
+            Some(_) => {
+                let floor = per_increment(&scene.id, FLOOR);
+                (format!("{floor:.0}"), format!("{:.2}", engine / floor))
+            }
+            None => ("–".to_string(), "–".to_string()),
+        };
+        println!("| {} | {engine:.0} | {floor} | {ratio} |", scene.id);
+    }
+}

@@ -1,14 +1,16 @@
-//! BENCHMARKS.md's instruction counts: per seed case, the instructions one increment of
-//! `explicit` executes and those of the case's arithmetic floor (`run::floor::in_slices`),
-//! counted by valgrind's cachegrind. A count does not move with the machine, as a time does:
-//! it says how much work the engine adds to the arithmetic its numerics need, where the
-//! times say what that work costs on the machine that day.
+//! BENCHMARKS.md's instruction counts: per seed case, the instructions per increment of
+//! `explicit` and of the case's arithmetic floor (`run::floor::in_slices`), counted by
+//! valgrind's cachegrind. A count does not move with the machine's load, as a time does: it
+//! says how much work the engine adds to the arithmetic its numerics need, where the times
+//! say what that work costs on the machine that day.
 //!
 //! Each count is the difference of two whole runs, at a tenth and a twentieth of the case's
 //! increment, over the difference of their increments, so what a run does once (compiling the
-//! scene, the static steps, the 501 output rows) cancels. The runs are this program started
-//! again under `valgrind --tool=cachegrind`, with the arguments `run CASE REFINEMENT WHAT`.
-//! Run by `scripts/benchmarks.sh`, which passes the commit and the date.
+//! scene, the static steps, the 501 output rows) cancels. It is the cost of one increment
+//! where that does not change with the increment; the cases whose centred velocity is iterated
+//! take two passes per increment at both. The runs are this program started again under
+//! `valgrind --tool=cachegrind`, with the arguments `run CASE REFINEMENT WHAT`. Run by
+//! `scripts/benchmarks.sh`, which passes the commit and the date.
 //!
 //! `cargo run --release --example increment_instructions -- COMMIT DATE`
 
@@ -18,7 +20,6 @@ use crosscheck::engines::RunSettings;
 use crosscheck::engines::explicit::ExplicitEngine;
 use crosscheck::run::floor::{self, REFINEMENT};
 use crosscheck::scene::{IncrementRule, Scene};
-use std::path::Path;
 use std::process::Command;
 
 /// What a counted run steps: the engine, or the case's floor.
@@ -84,8 +85,19 @@ fn counted(id: &str, refinement: f64, what: &str) -> (u64, u64) {
         .arg(format!("--cachegrind-out-file={}", out_file.display()))
         .arg(&exe)
         .args(["run", id, &refinement.to_string(), what])
-        .output()
-        .expect("valgrind runs (Debian: the `valgrind` package)");
+        .output();
+    let output = match output {
+        Ok(output) => output,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            eprintln!(
+                "error: valgrind not found; it counts the instructions (Debian: apt install valgrind)"
+            );
+            std::process::exit(2);
+        }
+        Err(e) => panic!("valgrind: {e}"),
+    };
+    let instructions = std::fs::read_to_string(&out_file).map(|t| instruction_total(&t));
+    let _ = std::fs::remove_file(&out_file);
     assert!(
         output.status.success(),
         "{id} {what} under cachegrind: {}",
@@ -95,19 +107,24 @@ fn counted(id: &str, refinement: f64, what: &str) -> (u64, u64) {
         .trim()
         .parse()
         .expect("the increments the run took");
-    let instructions = summary(&out_file);
-    let _ = std::fs::remove_file(&out_file);
+    let instructions = instructions
+        .expect("cachegrind's output file")
+        .expect("an Ir total in cachegrind's output file");
     (instructions, increments)
 }
 
-/// The total instructions of a cachegrind output file (its `summary:` line).
-fn summary(path: &Path) -> u64 {
-    let text = std::fs::read_to_string(path).expect("cachegrind's output file");
-    text.lines()
-        .find_map(|l| l.strip_prefix("summary:"))
-        .and_then(|s| s.split_whitespace().next())
-        .and_then(|s| s.parse().ok())
-        .expect("a summary line")
+/// The total of the `Ir` event in a cachegrind output file: the field of its `summary:` line
+/// at the place `Ir` takes in its `events:` line.
+fn instruction_total(text: &str) -> Option<u64> {
+    let field = |prefix: &str| text.lines().find_map(|l| l.strip_prefix(prefix));
+    let place = field("events:")?
+        .split_whitespace()
+        .position(|e| e == "Ir")?;
+    field("summary:")?
+        .split_whitespace()
+        .nth(place)?
+        .parse()
+        .ok()
 }
 
 /// Instructions per increment of `what` on case `id`: two runs, at a tenth and a twentieth of

@@ -11,7 +11,7 @@ if ! git diff --quiet HEAD -- src Cargo.toml Cargo.lock; then
     exit 2
 fi
 if ! command -v valgrind > /dev/null; then
-    echo "error: valgrind counts the instructions per increment (Debian: apt install valgrind)" >&2
+    echo "error: valgrind not found; it counts the instructions per increment (Debian: apt install valgrind)" >&2
     exit 2
 fi
 cargo bench --bench increment -- --warm-up-time 1 --measurement-time 3 \

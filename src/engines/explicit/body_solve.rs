@@ -16,8 +16,8 @@ pub struct BodySolve<'a, S: Space> {
 /// `m a + m α×c = f`, `m c×a + I_O α = m_O`, with the accelerations along the held translation
 /// axes (orthonormal, `held_translations`) forced to zero and α confined to the span of the
 /// free rotation axes g_i (orthonormal), factorised once for the body's configuration so that
-/// several loads can be solved against one factorisation (the passes of the centred velocity
-/// iteration solve one each).
+/// several loads can be solved against one factorisation (every pass of an increment's centred
+/// velocity iteration, and every increment of a step where the operator does not change).
 ///
 /// Block elimination: with Q the projector onto the free translations, `a = Q(f/m − α×c)`, and
 /// α = Σ s_j g_j solves the reduced rotational system on the free axes,

@@ -169,8 +169,9 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         held.body_accelerations((inertia, b), formed, &f, &m)
     }
 
-    /// One pass of the centred velocity iteration over the bodies alone, where no force reads
-    /// the velocity, in one loop: each body's accelerations `acc` at the rates `guess` (with
+    /// One pass of the centred velocity iteration over the bodies alone, where no dashpot acts
+    /// (the velocity enters through the bodies' centripetal and gyroscopic terms alone), in one
+    /// loop: each body's accelerations `acc` at the rates `guess` (with
     /// its operator from `operators`, one per body), its centred rates
     /// `v_n = v(n−½) + (h/2)·acc`, and their change from `guess`. Returns the largest squared
     /// norm of a body's change and of its rates, as [`Rates::max_difference`] takes them
@@ -188,6 +189,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         acc: &mut Rates<S>,
         counters: &mut Counters,
     ) -> (f64, f64) {
+        debug_assert_eq!(operators.len(), self.bodies.len());
         let (mut d, mut m) = (0.0, 0.0);
         let s = 0.5 * h;
         for (b, operator) in operators.iter().enumerate() {

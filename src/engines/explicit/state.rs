@@ -163,7 +163,7 @@ impl<S: Space> Rates<S> {
     }
     /// [`Rates::set_plus`] for the particles alone.
     #[inline(always)]
-    pub fn set_plus_particles(&mut self, a: &Self, s: f64, b: &Self) {
+    pub(super) fn set_plus_particles(&mut self, a: &Self, s: f64, b: &Self) {
         plus_into(self.p.flat_mut(), a.p.flat(), s, b.p.flat());
     }
     /// [`Rates::set_plus`] for the bodies alone.
@@ -196,7 +196,7 @@ impl<S: Space> Rates<S> {
     /// The particles' part of [`Rates::max_difference`], before its square roots: the largest
     /// squared norm of a particle's difference, and of a particle's rate in `self`.
     #[inline(always)]
-    pub fn particle_differences(&self, other: &Self) -> (f64, f64) {
+    pub(super) fn particle_differences(&self, other: &Self) -> (f64, f64) {
         let (mut d, mut m) = (0.0, 0.0);
         let (a, b, len) = (self.p.flat(), other.p.flat(), self.p.len());
         let b = &b[..a.len()];

@@ -251,7 +251,7 @@ fn iterate<S: Space, const FINITE: bool>(
     let (v_half, acc_prev, h, held) = (at.v_half, at.acc_prev, at.h, at.held);
     work.guess.set_plus(v_half, 0.5 * h, acc_prev);
     if !model.has_dashpots() {
-        return iterate_bodies(at, stop_diverging, work, acc, counters);
+        return iterate_bodies(at, work, acc, counters);
     }
     let mut previous_change = 0.0;
     for pass in 0..MAX_DAMPING_ITERATIONS {
@@ -282,10 +282,10 @@ fn iterate<S: Space, const FINITE: bool>(
 /// and centred velocities are formed once, from the position forces, and every pass runs over
 /// the bodies alone ([`Model::centred_body_pass`]). After the first pass a particle's change is
 /// exactly 0 and its size the same, as the general iteration finds them: the same iterates and
-/// stop, bit for bit.
+/// stop, bit for bit. It is not given up early where it diverges: without dashpots there is no
+/// direct solve to turn to ([`VelocityRule::of`]).
 fn iterate_bodies<S: Space, const FINITE: bool>(
     at: &AtIncrement<S, FINITE>,
-    stop_diverging: bool,
     work: &mut Velocities<S>,
     acc: &mut Rates<S>,
     counters: &mut Counters,
@@ -304,9 +304,6 @@ fn iterate_bodies<S: Space, const FINITE: bool>(
         let (change, size) = (d.max(particle_change).sqrt(), m.max(particle_size).sqrt());
         if converged(change, previous_change, size) {
             return true;
-        }
-        if stop_diverging && pass >= 3 && change > previous_change {
-            return false;
         }
         previous_change = change;
         if pass == 0 {

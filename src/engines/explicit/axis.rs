@@ -177,15 +177,18 @@ fn general<S: Space, const ENERGY: bool>(
 /// How a step's particles are stepped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ParticleKernel {
-    /// Every one free along coordinate axis `k` alone.
+    /// Every one free along coordinate axis `k` alone, or held along every coordinate axis
+    /// (stepped along `k` with no inverse mass: [`super::model::Constraints::along_inverse_masses`]).
     Along(usize),
     /// Any other freedoms (each particle's projection).
     General,
 }
 
-/// One particle's part of an increment along the one axis it is free on, on that component:
-/// the acceleration f·(1/m) (the general projection leaves that component as it is and the
-/// others exactly 0), then v(n+½) and x(n+1), the force cleared. Returns the acceleration.
+/// One particle's part of an increment along the one axis it is free on (or, with
+/// `inverse_mass` 0, held on), on that component: the acceleration f·(1/m) (the general
+/// projection leaves that component as it is and the others exactly 0; of a held particle,
+/// ±0 for a finite force), then v(n+½) and x(n+1), the force cleared. Returns the
+/// acceleration.
 #[inline(always)]
 pub fn step_along(
     x: &mut f64,

@@ -1,7 +1,7 @@
 //! A step's boundary conditions compiled, and the generalised DOFs they leave free: moving
 //! along them, projecting on them, their mass, and a bound on their highest frequency.
 
-use super::axis::{ParticleKernel, free_axis};
+use super::axis::{ParticleKernel, axis_of, free_axis};
 use super::body_solve::BodyOperator;
 use super::model::*;
 use super::space::{Lin, Space};
@@ -20,6 +20,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             motions: Vec::new(),
             particle_motion: Vec::new(),
             particle_kernel: ParticleKernel::General,
+            along_inverse_masses: Vec::new(),
             body_held_t: vec![Vec::new(); nb],
             body_held_r: vec![Vec::new(); nb],
             body_free_r: vec![Vec::new(); nb],
@@ -75,11 +76,34 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
             })
             .collect();
         c.motions = distinct.iter().map(|h| Motion::of(h, S::DIM)).collect();
-        let mut axes = distinct.iter().map(|h| free_axis(h, S::DIM));
+        // Along one axis where every particle is free along it alone or held along every
+        // coordinate axis: a held one moves by nothing under a zero inverse mass (a finite
+        // force on it times 0), and its velocity, which the step's start projects to exactly
+        // 0 on each axis, leaves its other components as they are. A hold in a turned frame
+        // leaves round-off in the velocity, which the general kernel moves it by: it stays
+        // there.
+        let held_in_all =
+            |h: &&[S::V]| h.len() == S::DIM && h.iter().all(|d| axis_of(d, S::DIM).is_some());
+        let mut axes = distinct
+            .iter()
+            .filter(|h| !held_in_all(h))
+            .map(|h| free_axis(h, S::DIM));
         c.particle_kernel = match axes.next() {
             Some(Some(k)) if axes.all(|a| a == Some(k)) => ParticleKernel::Along(k),
             _ => ParticleKernel::General,
         };
+        if matches!(c.particle_kernel, ParticleKernel::Along(_)) && distinct.iter().any(held_in_all)
+        {
+            let particles = self.inverse_masses.iter().zip(&c.particle_motion);
+            let mass = |(m, set): (&f64, &u32)| {
+                if held_in_all(&distinct[*set as usize]) {
+                    0.0
+                } else {
+                    *m
+                }
+            };
+            c.along_inverse_masses = particles.map(mass).collect();
+        }
         c.held_sets = distinct.into_iter().map(<[S::V]>::to_vec).collect();
         for b in 0..nb {
             c.body_free_r[b] = S::free_rotations(&c.body_held_r[b]);
@@ -350,5 +374,118 @@ impl<V: Lin> HeldSet<V> {
 
     fn directions(&self) -> &[V] {
         &self.directions[..self.count]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::case;
+    use crate::engines::explicit::space::Planar;
+    use crate::scene::Scene;
+    use nalgebra::{Matrix3, Vector2};
+
+    /// springs_grounded_b and its model: ground 11, middle mass 12 (held in every direction in
+    /// the dynamic step, `steps[1]`), end mass 13 (held across x).
+    fn grounded_b() -> (Scene, Model<Planar, true>) {
+        let path = case::cases_dir().join("springs_grounded_b.toml");
+        let scene = case::load(&path).expect("the seed case");
+        let model = Model::compile(&scene, 1.0);
+        (scene, model)
+    }
+
+    fn particle(scene: &Scene, model: &Model<Planar, true>, name: &str) -> usize {
+        match model.points[scene.node_named(name).unwrap()] {
+            Point::Particle(i) => i,
+            _ => panic!("node {name} is a particle"),
+        }
+    }
+
+    /// The dynamic step holds 12 on both axes and leaves 13 free along x alone: the particles
+    /// step along x, 12 with no inverse mass, 13 with its own (1/0.02588, the case's mass).
+    /// Released along x, 12 is free along x too and the model's masses serve; released along
+    /// y instead, the particles move along different axes and each is projected; held on both
+    /// axes of a frame turned by 30°, it is not held on the coordinate axes, and each is
+    /// projected too.
+    #[test]
+    fn a_particle_held_on_every_axis_steps_along_the_axis_with_no_inverse_mass() {
+        let (mut scene, model) = grounded_b();
+        let held = model.constraints(&scene.steps[1]);
+        assert_eq!(held.particle_kernel, ParticleKernel::Along(0));
+        let masses = &held.along_inverse_masses;
+        assert_eq!(masses[particle(&scene, &model, "12")], 0.0);
+        assert_eq!(masses[particle(&scene, &model, "13")], 1.0 / 0.02588);
+        let n12 = scene.node_named("12").unwrap();
+        let releasing = |k: usize| {
+            let mut step = scene.steps[1].clone();
+            let released = Dof::Translation(k);
+            step.conditions
+                .retain(|c| c.node != n12 || c.dof != released);
+            model.constraints(&step)
+        };
+        let along_x = releasing(0);
+        assert_eq!(along_x.particle_kernel, ParticleKernel::Along(0));
+        assert!(along_x.along_inverse_masses.is_empty());
+        assert_eq!(releasing(1).particle_kernel, ParticleKernel::General);
+        let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+        scene.nodes[n12].frame = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
+        let turned = Model::<Planar, true>::compile(&scene, 1.0);
+        let held = turned.constraints(&scene.steps[1]);
+        assert_eq!(held.particle_kernel, ParticleKernel::General);
+    }
+
+    /// An increment of that step by the fused pass, then a further motion by the pass that takes
+    /// formed accelerations, under the axis kernel and under the projections, from a state with
+    /// every component of both particles set (but the velocities and carries on their held axes
+    /// other than x, which the step's start leaves 0): the same positions, carries and
+    /// velocities, bit for bit, and the same accelerations (12's ±0 for +0).
+    #[test]
+    fn the_axis_kernel_with_a_held_particle_steps_as_the_projections_do() {
+        let (scene, model) = grounded_b();
+        let along = model.constraints(&scene.steps[1]);
+        let mut general = along.clone();
+        general.particle_kernel = ParticleKernel::General;
+        let mut cfg = model.initial_config();
+        let (mut forces, mut v, mut carry) =
+            (model.zero_forces(), model.zero_rates(), model.zero_rates());
+        for (i, name) in ["12", "13"].iter().enumerate() {
+            let p = particle(&scene, &model, name);
+            let x = 0.3 + i as f64;
+            cfg.u.set(p, Vector2::new(x, -0.7 * x));
+            forces.add_particle(p, Vector2::new(-2.5 * x, 1.5 + x));
+            carry.p.set(p, Vector2::new(3e-17 * (1.0 + x), 0.0));
+        }
+        v.p.set(particle(&scene, &model, "13"), Vector2::new(0.9, 0.0));
+        let h = 5.0e-5;
+        let step = |held: &Constraints<Planar>| {
+            let (mut cfg, mut forces, mut v, mut carry) =
+                (cfg.clone(), forces.clone(), v.clone(), carry.clone());
+            let mut acc = model.zero_rates();
+            model.particle_accelerations(&forces, held, &mut acc);
+            let formed = acc.p.clone();
+            model.step_particles::<true>(
+                &mut cfg,
+                &mut carry,
+                h,
+                &mut forces,
+                held,
+                &mut v,
+                &mut acc,
+            );
+            assert_eq!(acc.p, formed, "the fused pass forms the same accelerations");
+            model.move_particles(&mut cfg, &mut carry, h, held, &mut v, &acc);
+            (cfg.u, carry.p, v.p, acc.p)
+        };
+        let (by_axis, by_projection) = (step(&along), step(&general));
+        let bits =
+            |x: &Vectors<Vector2<f64>>| x.flat().iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&by_axis.0), bits(&by_projection.0), "positions");
+        assert_eq!(bits(&by_axis.1), bits(&by_projection.1), "carries");
+        assert_eq!(bits(&by_axis.2), bits(&by_projection.2), "velocities");
+        assert_eq!(by_axis.3, by_projection.3, "accelerations, ±0 alike");
+        // Both pushed back along x: 12, held, does not move; 13, free, slows.
+        let velocity = |name| by_axis.2.get(particle(&scene, &model, name));
+        assert_eq!(velocity("12"), Vector2::zeros());
+        assert!(velocity("13").x < 0.9);
     }
 }

@@ -185,6 +185,11 @@ pub struct Constraints<S: Space> {
     pub particle_motion: Vec<u32>,
     /// The kernel that steps the particles ([`super::axis`]).
     pub particle_kernel: ParticleKernel,
+    /// Under [`ParticleKernel::Along`], where some particle is held along every coordinate
+    /// axis: each particle's inverse mass along the axis, 0 for a held one (a finite force
+    /// then moves it by nothing, as its projection gives). Empty otherwise: the model's
+    /// inverse masses.
+    pub along_inverse_masses: Vec<f64>,
     /// Held translation axes per body.
     pub body_held_t: Vec<Vec<S::V>>,
     /// Held rotation axes per body.

@@ -77,6 +77,17 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         }));
     }
 
+    /// The inverse masses along the axis of a step under [`ParticleKernel::Along`]: 0 for a
+    /// particle held in every direction ([`Constraints::along_inverse_masses`]).
+    #[inline(always)]
+    fn along_masses<'a>(&'a self, held: &'a Constraints<S>) -> &'a [f64] {
+        if held.along_inverse_masses.is_empty() {
+            &self.inverse_masses
+        } else {
+            &held.along_inverse_masses
+        }
+    }
+
     /// The particles' part of [`Model::accelerations`] (it reads the forces alone).
     #[inline(always)]
     pub(super) fn particle_accelerations(
@@ -88,10 +99,11 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         match held.particle_kernel {
             ParticleKernel::Along(k) => {
                 let (a, f) = (out.p.component_mut(k), forces.p.component(k));
-                for ((a, f), m) in a.iter_mut().zip(f).zip(&self.inverse_masses) {
+                for ((a, f), m) in a.iter_mut().zip(f).zip(self.along_masses(held)) {
                     *a = *f * *m;
                 }
-                // The held components exactly 0, as the projection gives them.
+                // The held components exactly 0, as the projection gives them (along `k`, a
+                // particle held on every axis has ±0).
                 out.p.fill_zero_except(k);
             }
             ParticleKernel::General => {
@@ -252,8 +264,9 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// `v_half`, and x(n+1) = x(n) + h·v(n+½) into `cfg` (compensated); the components of the
     /// particle forces it read cleared for the next force pass (any other component a pass
     /// wrote stays marked in [`Forces::written`] for [`Forces::clear`]). The arithmetic of [`Model::accelerations`],
-    /// [`Rates::set_plus`] and [`Model::advance`], bit for bit. Where every particle moves along
-    /// one axis, in one pass over that component (each particle's data read once, the
+    /// [`Rates::set_plus`] and [`Model::advance`], bit for bit (a held particle's acceleration
+    /// ±0 for +0). Where every particle moves along one axis or is held on every axis
+    /// ([`ParticleKernel::Along`]), in one pass over that component (each particle's data read once, the
     /// acceleration written only where `STORE_ACC`: where a later increment reads it); otherwise
     /// the projections first, then each pass over every component alike.
     #[allow(clippy::too_many_arguments)]
@@ -275,7 +288,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
                 let f = forces.p.component_mut(k);
                 let a = acc.p.component_mut(k);
                 let state = (x.iter_mut().zip(c.iter_mut())).zip(v.iter_mut());
-                let data = (f.iter_mut().zip(&self.inverse_masses)).zip(a);
+                let data = (f.iter_mut().zip(self.along_masses(held))).zip(a);
                 for (((x, c), v), ((f, m), a)) in state.zip(data) {
                     let acceleration = step_along(x, c, v, f, *m, h);
                     if STORE_ACC {
@@ -306,9 +319,9 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// The particles' motion from accelerations `acc` already formed under `held`:
     /// v(n+½) = v(n−½) + h·a(n) in place of v(n−½) in `v_half`, and x(n+1) = x(n) + h·v(n+½)
     /// into `cfg` (compensated). The arithmetic of [`Rates::set_plus`] and [`Model::advance`]
-    /// on the particles, bit for bit; where every particle moves along one axis, on that
-    /// component alone (the others, held, keep their values as in
-    /// [`Model::step_particles`]), otherwise each pass over every component alike.
+    /// on the particles, bit for bit; under [`ParticleKernel::Along`], on that component alone
+    /// (the others, held, keep their values as in [`Model::step_particles`]), otherwise each
+    /// pass over every component alike.
     pub fn move_particles(
         &self,
         cfg: &mut Config<S>,

@@ -1,30 +1,36 @@
 //! BENCHMARKS.md's instruction counts: per seed case, the instructions per increment of
-//! `explicit` and of the case's arithmetic floor (`run::floor::in_slices`), counted by
-//! valgrind's cachegrind. A count does not move with the machine's load, as a time does: it
-//! says how much work the engine adds to the arithmetic its numerics need, where the times
-//! say what that work costs on the machine that day.
+//! `explicit`, of the case's arithmetic floor (`run::floor::in_slices`) and of `rapier_f64` in
+//! its matched configuration, counted by valgrind's cachegrind. A count does not move with the
+//! machine's load, as a time does: it says how much work the engine adds to the arithmetic its
+//! numerics need, and how much less it does than rapier, where the times say what that work
+//! costs on the machine that day.
 //!
-//! Each count is the difference of two whole runs, at a tenth and a twentieth of the case's
-//! increment, over the difference of their increments, so what a run does once (compiling the
-//! scene, the static steps, the 501 output rows) cancels. It is the cost of one increment
-//! where that does not change with the increment; the cases whose centred velocity is iterated
-//! take two passes per increment at both. The runs are this program started again under
+//! The count of `explicit` and of the floor is the difference of two whole runs, at a tenth and
+//! a twentieth of the case's increment, over the difference of their increments, so what a run
+//! does once (compiling the scene, the static steps, the 501 output rows) cancels. It is the
+//! cost of one increment where that does not change with the increment; the cases whose
+//! centred velocity is iterated take two passes per increment at both. The count of
+//! `rapier_f64` is one whole run at a tenth of the case's increment (the run criterion times)
+//! over its increments: an increment costs it some 25 000 to 100 000 instructions, so what the
+//! run does once is a small part of the count (the difference of two runs, as above, gave the
+//! same to within 0.15 % on every seed case), and a second run would triple the minutes
+//! cachegrind takes. The runs are this program started again under
 //! `valgrind --tool=cachegrind`, with the arguments `run CASE REFINEMENT WHAT`. Run by
 //! `scripts/benchmarks.sh`, which passes the commit and the date.
 //!
 //! `cargo run --release --example increment_instructions -- COMMIT DATE`
 
 use crosscheck::case;
-use crosscheck::engines::Engine;
 use crosscheck::engines::RunSettings;
-use crosscheck::engines::explicit::ExplicitEngine;
 use crosscheck::run::floor::{self, REFINEMENT};
+use crosscheck::run::{matching, registry};
 use crosscheck::scene::{IncrementRule, Scene};
 use std::process::Command;
 
 /// What a counted run steps: the engine, or the case's floor.
 const ENGINE: &str = "explicit";
 const FLOOR: &str = "floor";
+const RAPIER: &str = "rapier_f64";
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -64,11 +70,12 @@ fn counted_run(scene: &Scene, refinement: f64, what: &str) -> u64 {
         floor.run(h, increments);
         return increments;
     }
-    let settings = RunSettings {
+    let engine = registry::named(what).expect("a registered engine");
+    let finer = RunSettings {
         increment: Some(IncrementRule::Given(h)),
         ..RunSettings::default()
     };
-    let engine = ExplicitEngine::finite();
+    let settings = matching::job_settings(engine.as_ref(), scene, &finer);
     let out = engine.run(scene, &settings).expect("a seed case runs");
     out.info.steps
 }
@@ -137,13 +144,22 @@ fn per_increment(id: &str, what: &str) -> f64 {
     (fine.0 as f64 - coarse.0 as f64) / (fine.1 as f64 - coarse.1 as f64)
 }
 
+/// Instructions per increment of `what` on case `id`: one whole run at a tenth of its
+/// increment, over its increments.
+fn whole_run_average(id: &str, what: &str) -> f64 {
+    let (instructions, increments) = counted(id, REFINEMENT, what);
+    instructions as f64 / increments as f64
+}
+
 fn print_table(commit: &str, date: &str) {
     println!(
-        "Counted at commit {commit}, {date}, by `scripts/benchmarks.sh` (valgrind's cachegrind; the difference of whole runs at a tenth and a twentieth of each case's increment, per increment)."
+        "Counted at commit {commit}, {date}, by `scripts/benchmarks.sh` (valgrind's cachegrind; `explicit` and its floor: the difference of whole runs at a tenth and a twentieth of each case's increment, per increment; `rapier_f64`, matched: one whole run at a tenth, per increment)."
     );
     println!();
-    println!("| seed case | `explicit`, instructions | floor, instructions | `explicit` / floor |");
-    println!("|---|---:|---:|---:|");
+    println!(
+        "| seed case | `explicit`, instructions | floor, instructions | `explicit` / floor | `rapier_f64`, instructions | `rapier_f64` / `explicit` |"
+    );
+    println!("|---|---:|---:|---:|---:|---:|");
     let paths = case::discover(&case::cases_dir()).expect("cases/");
     for scene in paths
         .iter()
@@ -160,6 +176,11 @@ fn print_table(commit: &str, date: &str) {
             }
             None => ("–".to_string(), "–".to_string()),
         };
-        println!("| {} | {engine:.0} | {floor} | {ratio} |", scene.id);
+        let rapier = whole_run_average(&scene.id, RAPIER);
+        println!(
+            "| {} | {engine:.0} | {floor} | {ratio} | {rapier:.0} | {:.0}× |",
+            scene.id,
+            rapier / engine
+        );
     }
 }

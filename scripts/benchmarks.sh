@@ -2,7 +2,7 @@
 # Measure the seed cases with criterion, count their instructions per increment with valgrind,
 # run the chain study and the element-cost study, and write them into BENCHMARKS.md between
 # its markers and into report/scaling/. Run from the repository's root on an otherwise idle
-# machine (about 20 minutes), at a commit: every figure records the commit it measured, and
+# machine (about 30 minutes), at a commit: every figure records the commit it measured, and
 # tests/figures_current.rs fails once the engines' sources differ from it.
 set -eu
 if ! git diff --quiet HEAD -- src Cargo.toml Cargo.lock; then

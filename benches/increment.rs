@@ -37,7 +37,10 @@
 //! reference node (`run::floor::TurningBody3d`), whose accelerations do not read the velocity
 //! either; of springs_grounded_c and springs_n2n_c: the same recurrence as the engine's on
 //! masses pulled along a line by axial springs and the dashpot solved along its turning line
-//! (`run::floor::AxialOscillator`, `tests/floor.rs`: equal to round-off), in heap slices.
+//! (`run::floor::AxialOscillator`, `tests/floor.rs`: equal to round-off), in heap slices; of
+//! springs_n2n_b: the same recurrence on masses that move along one line, on springs and a
+//! dashpot of fixed direction along it, in the one coordinate each mass has
+//! (`run::floor::LineOscillator`, `tests/floor.rs`: equal to round-off), in heap slices.
 //!
 //! Run with `cargo bench --bench increment`; `BENCHMARKS.md` gives the table.
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};

@@ -78,7 +78,7 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     }
 
     /// The inverse masses along the axis of a step under [`ParticleKernel::Along`]: 0 for a
-    /// particle held in every direction ([`Constraints::along_inverse_masses`]).
+    /// particle held on every coordinate axis ([`Constraints::along_inverse_masses`]).
     #[inline(always)]
     fn along_masses<'a>(&'a self, held: &'a Constraints<S>) -> &'a [f64] {
         if held.along_inverse_masses.is_empty() {

@@ -1,7 +1,8 @@
 //! The arithmetic floor of one increment: the explicit scheme's recurrence for a seed scene,
 //! written out by hand, so a benchmark can say how far the general engine is from the
 //! arithmetic it must do. Here the simplest, a mass on a spring and dashpot to the ground or a
-//! held node; in [`AxialOscillator`] masses on springs and a dashpot whose lines turn, in
+//! held node; in [`LineOscillator`] masses that move along one line on springs and a dashpot
+//! along it; in [`AxialOscillator`] masses on springs and a dashpot whose lines turn, in
 //! [`PinnedBody`] a body turning about a pin, in [`SlidingBody`] a body that slides and turns
 //! with its mass centre off its reference node or on it, in [`TurningBody3d`] the sliding and
 //! the pinned body in 3D, with the arithmetic of a 3D engine.
@@ -243,6 +244,9 @@ pub fn in_slices(scene: &Scene) -> Option<FloorRun> {
     if let Some(s) = AxialOscillator::of(scene) {
         return Some(of(s.duration, s, AxialOscillator::in_slices));
     }
+    if let Some(s) = LineOscillator::of(scene) {
+        return Some(of(s.duration, s, LineOscillator::in_slices));
+    }
     if let Some(b) = PinnedBody::of(scene) {
         return Some(of(b.duration, b, PinnedBody::in_slices));
     }
@@ -255,11 +259,13 @@ pub fn in_slices(scene: &Scene) -> Option<FloorRun> {
 
 mod axial;
 mod in_turn;
+mod line;
 mod pinned_body;
 mod sliding_body;
 mod turning_body3d;
 pub use axial::{AxialElement, AxialOscillator, AxialState, LineMass};
 pub use in_turn::{InTurn, REFINEMENT, engines_in_turn, time_in_turn};
+pub use line::{LineElement, LineOscillator, LineState};
 pub use pinned_body::PinnedBody;
 pub use sliding_body::{SlidingBody, SlidingState};
 pub use turning_body3d::TurningBody3d;

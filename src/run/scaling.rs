@@ -8,8 +8,11 @@
 //!   [`MIN_REPEATS`] times, more often where a point takes under [`POINT_SECONDS`], the
 //!   fastest repeat taken, since on a shared machine interference only ever adds time),
 //!   (t₂ − t₁)/S, so the setup (building the scene's model, the static step, the stable
-//!   increment) drops out; the two runs are taken in turn, and a pair whose longer run is not
-//!   slower ([`consistent`]) is timed again, and printed as unresolved if it stays so;
+//!   increment) drops out; S is long enough that the increments take [`SETUP_SHARE`] times the
+//!   setup, read from a pilot ([`steps_over_setup`]), so that the setup's spread from run to
+//!   run does not fall whole on the difference; the two runs are taken in turn, and a pair
+//!   whose longer run is not slower ([`consistent`]) is timed again, and printed as unresolved
+//!   if it stays so;
 //! - the peak resident memory of the longer run (the kernel's high-water mark, reset before
 //!   it);
 //! - the error of the probed displacements against the exact solution, with the error that
@@ -34,12 +37,12 @@ use std::time::Instant;
 pub const STUDY_SECONDS: f64 = 150.0;
 
 /// Wall-clock seconds one point aims at: its runs are repeated as often as that allows (at
-/// least [`MIN_REPEATS`], at most [`repeats_for`] N), so a slow engine's point is not repeated
+/// least [`MIN_REPEATS`], at most [`repeats_for`]), so a slow engine's point is not repeated
 /// as often as a fast one's.
 pub const POINT_SECONDS: f64 = 10.0;
 
-/// Increments of the shorter of the two timed runs from N = 1000 up (the longer takes twice
-/// as many): about 2.5 periods of the mode at h = 0.1·√(m/k).
+/// Increments of the shorter of the two timed runs from N = 1000 up, before the setup is
+/// weighed (the longer takes twice as many): about 2.5 periods of the mode at h = 0.1·√(m/k).
 pub const STEPS: u64 = 400;
 
 /// DOF-increments the shorter timed run takes at least ([`steps_for`]): a smaller chain runs
@@ -48,10 +51,54 @@ pub const STEPS: u64 = 400;
 /// fastest repeats of the two runs differed by as much).
 const WORK_PER_RUN: f64 = 4.0e5;
 
-/// Increments of the shorter timed run at N: [`STEPS`], or more on a chain smaller than
-/// [`WORK_PER_RUN`] / [`STEPS`] masses.
+/// Increments of the shorter timed run at N before the setup is weighed ([`steps_over_setup`]):
+/// [`STEPS`], or more on a chain smaller than [`WORK_PER_RUN`] / [`STEPS`] masses.
 pub fn steps_for(n: usize) -> u64 {
     STEPS.max((WORK_PER_RUN / n.max(1) as f64).ceil() as u64)
+}
+
+/// The increments of the shorter timed run take at least this many times the run's setup
+/// (building the model, the static step, the stable increment, the first touch of its memory).
+/// A point is the difference of two runs with the same setup, so the setup cancels on average,
+/// but not its spread: the fastest of a few runs' setups still differs from run to run by some
+/// tenths of it (`explicit` on the chain at N = 10^5: a setup of 150 ms, against 78 ms for
+/// [`STEPS`] increments, from 150 to 215 ms over 15 runs, measured), and that error falls
+/// whole on the difference. With the increments at twice the setup, a spread of δ of the setup
+/// is at most δ/2 of the point ([`steps_over_setup`]).
+pub const SETUP_SHARE: f64 = 2.0;
+
+/// A point's runs never take more than this many times [`steps_for`] N increments.
+pub const MAX_LENGTHENING: u64 = 64;
+
+/// Increments of the pilot run that times the setup (one per output interval: the fewest a chain
+/// takes).
+const PILOT_STEPS: u64 = 100;
+
+/// Increments of the shorter timed run for an engine whose setup takes `setup` seconds and whose
+/// increment takes `per_increment` (both from a pilot, [`timed_steps`]): `base`, or enough that
+/// the increments take [`SETUP_SHARE`] times the setup, in whole output intervals
+/// ([`Chain::new`]), at most [`MAX_LENGTHENING`] times `base`. Where the pilot could not
+/// separate the two (a time not positive, or not a number), `base`.
+pub fn steps_over_setup(base: u64, setup: f64, per_increment: f64) -> u64 {
+    if !(setup > 0.0 && per_increment > 0.0) {
+        return base;
+    }
+    let needed = (SETUP_SHARE * setup / per_increment).ceil();
+    let most = (MAX_LENGTHENING * base) as f64;
+    (needed.min(most) as u64).max(base).div_ceil(PILOT_STEPS) * PILOT_STEPS
+}
+
+/// Increments of the shorter timed run at N for an engine whose run of `steps` increments takes
+/// `run(steps)` seconds: a pilot times the fastest of two runs of [`PILOT_STEPS`] increments
+/// (the setup, nearly all of it) and one of [`steps_for`] N, and reads the setup and the
+/// increment's time from them ([`steps_over_setup`]).
+fn timed_steps(n: usize, mut run: impl FnMut(u64) -> Result<f64, String>) -> Result<u64, String> {
+    let base = steps_for(n);
+    let few = run(PILOT_STEPS)?.min(run(PILOT_STEPS)?);
+    let many = run(base)?;
+    let per_increment = (many - few) / base.saturating_sub(PILOT_STEPS).max(1) as f64;
+    let setup = few - PILOT_STEPS as f64 * per_increment;
+    Ok(steps_over_setup(base, setup, per_increment))
 }
 
 /// DOF-increments each timed run is repeated up to (R·S·N ≥ this): a small chain's run takes
@@ -120,9 +167,9 @@ pub fn sizes(max_n: usize) -> Vec<usize> {
         .collect()
 }
 
-/// Times each run is repeated at N.
-pub fn repeats_for(n: usize) -> u64 {
-    ((WORK_PER_POINT / (n as f64 * steps_for(n) as f64)).ceil() as u64).max(MIN_REPEATS)
+/// Times each run is repeated at N, its shorter run `steps` increments long.
+pub fn repeats_for(n: usize, steps: u64) -> u64 {
+    ((WORK_PER_POINT / (n as f64 * steps as f64)).ceil() as u64).max(MIN_REPEATS)
 }
 
 /// Run the study; `progress` is told each point as it starts (engine, N).
@@ -134,20 +181,25 @@ pub fn study(max_n: usize, mut progress: impl FnMut(&str, usize)) -> Result<Stud
         .chain(crate::run::registry::named("rapier_f64"))
         .collect();
     for engine in &engines {
-        // Seconds of one point (all its runs) at the last N, and of its longer run.
-        let mut last: Option<(usize, f64, f64)> = None;
+        // The last N, the increments of its shorter run, and the seconds of its point (all
+        // its runs) and of its longer run.
+        let mut last: Option<(usize, u64, f64, f64)> = None;
         for n in sizes(max_n) {
             crate::interrupt::checkpoint("scaling").map_err(|_| "interrupted".to_string())?;
             let name = engine.name().to_string();
             let left = STUDY_SECONDS - started.elapsed().as_secs_f64();
-            // In proportion to the DOF-increments a run takes (N × increments).
-            let work = |n: usize| n as f64 * steps_for(n) as f64;
-            let predicted = last.map(|(n0, point, long)| {
-                let scale = work(n) / work(n0);
+            // In proportion to the DOF-increments a run takes (N × increments), at least as
+            // many increments as the last point's: the setup and the increments both grow
+            // with N, so a point lengthened for its setup ([`steps_over_setup`]) predicts the
+            // next one's.
+            let predicted = last.map(|(n0, steps0, point, long)| {
+                let steps = steps_for(n).max(steps0);
+                let scale = (n as f64 * steps as f64) / (n0 as f64 * steps0 as f64);
                 (point * scale, long * scale)
             });
-            // The point at its fewest repeats: a short and a long run each, MIN_REPEATS times.
-            let fewest = predicted.map(|(_, long)| 1.5 * long * MIN_REPEATS as f64);
+            // The point at its fewest repeats: the pilot (about half a longer run) and the first
+            // longer run, then a short and a long run each, and the loop's, MIN_REPEATS times.
+            let fewest = predicted.map(|(_, long)| (1.5 + 2.0 * MIN_REPEATS as f64) * long);
             if let Some(fewest) = fewest.filter(|s| *s > left) {
                 out.skipped.push(Skipped {
                     engine: name,
@@ -173,24 +225,24 @@ pub fn study(max_n: usize, mut progress: impl FnMut(&str, usize)) -> Result<Stud
                     1e-9 * pilot.ns_per_step * 2.0 * pilot.steps as f64
                 }
             };
-            let most = repeats_for(n).max(MIN_REPEATS);
-            let repeats = ((POINT_SECONDS / (1.5 * long)) as u64).clamp(MIN_REPEATS, most);
+            let repeats = ((POINT_SECONDS / (1.5 * long)) as u64).max(MIN_REPEATS);
             let begun = Instant::now();
             let point = measure_with(engine.as_ref(), n, repeats)?;
             let long = 1e-9 * point.ns_per_step * 2.0 * point.steps as f64;
-            last = Some((n, begun.elapsed().as_secs_f64(), long));
+            last = Some((n, point.steps, begun.elapsed().as_secs_f64(), long));
             out.points.push(point);
         }
     }
     Ok(out)
 }
 
-/// Measure one engine at one N, its runs repeated [`repeats_for`] N times.
+/// Measure one engine at one N, its runs repeated as often as [`repeats_for`] allows.
 pub fn measure(engine: &dyn Engine, n: usize) -> Result<Point, String> {
-    measure_with(engine, n, repeats_for(n))
+    measure_with(engine, n, u64::MAX)
 }
 
-/// Measure one engine at one N, its runs repeated `repeats` times (the fastest counts).
+/// Measure one engine at one N, its runs repeated `repeats` times, at most [`repeats_for`] N and
+/// its increments (the fastest counts), the increments chosen by a pilot ([`timed_steps`]).
 pub fn measure_with(engine: &dyn Engine, n: usize, repeats: u64) -> Result<Point, String> {
     // A chain of `steps` increments, its scene and the engine's settings for it, and the
     // resident memory building the scene added.
@@ -212,8 +264,14 @@ pub fn measure_with(engine: &dyn Engine, n: usize, repeats: u64) -> Result<Point
         crate::interrupt::checkpoint("scaling").map_err(|_| "interrupted".to_string())?;
         Ok::<_, String>((seconds, output))
     };
+    // Increments enough that they, not the setup, set a run's time; the repeats bounded by
+    // the work they take.
+    let steps = timed_steps(n, |steps| {
+        let pilot = prepared(steps);
+        Ok(timed(&pilot.1, &pilot.2)?.0)
+    })?;
+    let repeats = repeats.min(repeats_for(n, steps));
     // The longer run alone first, for its peak memory (and what its scene holds) and error.
-    let steps = Chain::new(n, steps_for(n)).steps;
     reset_peak_rss();
     let long = prepared(2 * steps);
     let (first_long, output) = timed(&long.1, &long.2)?;
@@ -547,6 +605,66 @@ mod tests {
                 "stretch from {start}"
             );
         }
+    }
+
+    #[test]
+    fn a_run_whose_setup_outweighs_its_increments_is_lengthened() {
+        // `explicit` at N = 10^5: a setup of 0.15 s, 0.2 ms an increment; 400 increments take
+        // half the setup, 1500 take twice it.
+        assert_eq!(steps_over_setup(400, 0.15, 0.2e-3), 1500);
+        // Rounded up to whole output intervals: 1001 needed, 1100 run.
+        assert_eq!(steps_over_setup(400, 0.1001, 0.2e-3), 1100);
+        // A setup the base increments already outweigh twice: the base.
+        assert_eq!(steps_over_setup(400, 0.01, 0.2e-3), 400);
+        // Never more than MAX_LENGTHENING times the base.
+        assert_eq!(steps_over_setup(400, 100.0, 1.0e-6), MAX_LENGTHENING * 400);
+        // A pilot that could not separate the setup from the increments: the base.
+        for (setup, per_increment) in [(-0.01, 1.0e-3), (0.1, 0.0), (f64::NAN, 1.0e-3)] {
+            assert_eq!(steps_over_setup(400, setup, per_increment), 400);
+        }
+    }
+
+    #[test]
+    fn the_pilot_reads_the_setup_and_the_increment_of_a_run() {
+        // A run of s increments taking 0.15 s + s · 0.2 ms: the pilot's three runs read them
+        // back and lengthen the point as the setup asks.
+        let mut runs = Vec::new();
+        let steps = timed_steps(100_000, |s| {
+            runs.push(s);
+            Ok(0.15 + s as f64 * 0.2e-3)
+        })
+        .unwrap();
+        assert_eq!(runs, vec![PILOT_STEPS, PILOT_STEPS, STEPS]);
+        assert_eq!(steps, steps_over_setup(STEPS, 0.15, 0.2e-3));
+    }
+
+    #[test]
+    fn a_setup_that_spreads_costs_the_point_at_most_its_share() {
+        // A machine whose setup takes from 0.15 s to 30 % more, the worst way round: every
+        // shorter run's setup at the top, every longer run's at the bottom; 0.2 ms an
+        // increment, the loop exact. At STEPS increments the difference reads the increment at
+        // 44 % of its time; lengthened for the setup, within δ/SETUP_SHARE = 15 % of it.
+        let (setup, spread, increment) = (0.15, 0.3, 0.2e-3);
+        let read = |steps: u64| {
+            let s = steps as f64;
+            let times = in_turn(MIN_REPEATS, |run| {
+                Ok(match run {
+                    0 => setup * (1.0 + spread) + s * increment,
+                    1 => setup + 2.0 * s * increment,
+                    2 => s * 1e-4,
+                    _ => 2.0 * s * 1e-4,
+                })
+            })
+            .unwrap();
+            resolved(times.0) / s
+        };
+        let short = read(STEPS) / increment;
+        assert!((short - 0.4375).abs() < 1e-12, "{short}");
+        let lengthened = read(steps_over_setup(STEPS, setup, increment)) / increment;
+        assert!(
+            1.0 - lengthened <= spread / SETUP_SHARE + 1e-12,
+            "{lengthened}"
+        );
     }
 
     #[test]

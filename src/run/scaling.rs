@@ -9,8 +9,9 @@
 //!   fastest repeat taken, since on a shared machine interference only ever adds time),
 //!   (t₂ − t₁)/S, so the setup (building the scene's model, the static step, the stable
 //!   increment) drops out; S is long enough that the increments take [`SETUP_SHARE`] times the
-//!   setup, read from a pilot ([`steps_over_setup`]), so that the setup's spread from run to
-//!   run does not fall whole on the difference; the two runs are taken in turn, and a pair
+//!   setup (at most [`MAX_LENGTHENING`] times the least S, [`steps_for`]), the setup read from
+//!   a pilot ([`timed_steps`]), so that the setup's spread from run to run does not fall whole
+//!   on the difference; the two runs are taken in turn, and a pair
 //!   whose longer run is not slower ([`consistent`]) is timed again, and printed as unresolved
 //!   if it stays so;
 //! - the peak resident memory of the longer run (the kernel's high-water mark, reset before
@@ -32,7 +33,8 @@ use crate::scene::Scene;
 use std::time::Instant;
 
 /// Wall-clock seconds the chain study may take in all: a point is run only while its time,
-/// predicted from the engine's previous point (linearly in N), fits in what is left. What is
+/// predicted from the engine's previous point (in proportion to N × increments), fits in what
+/// is left. What is
 /// not run is listed with its prediction.
 pub const STUDY_SECONDS: f64 = 150.0;
 
@@ -67,36 +69,46 @@ pub fn steps_for(n: usize) -> u64 {
 /// is at most δ/2 of the point ([`steps_over_setup`]).
 pub const SETUP_SHARE: f64 = 2.0;
 
-/// A point's runs never take more than this many times [`steps_for`] N increments.
-pub const MAX_LENGTHENING: u64 = 64;
+/// The shorter run of a point never takes more than this many times [`steps_for`] N increments
+/// (the longer twice that), whatever its pilot reads: a point lengthened for its setup stays
+/// within a few times its unlengthened cost.
+pub const MAX_LENGTHENING: u64 = 8;
 
-/// Increments of the pilot run that times the setup (one per output interval: the fewest a chain
-/// takes).
+/// Increments of the pilot's runs that time the setup (the fewest a chain takes: one per output
+/// interval).
 const PILOT_STEPS: u64 = 100;
 
 /// Increments of the shorter timed run for an engine whose setup takes `setup` seconds and whose
-/// increment takes `per_increment` (both from a pilot, [`timed_steps`]): `base`, or enough that
-/// the increments take [`SETUP_SHARE`] times the setup, in whole output intervals
-/// ([`Chain::new`]), at most [`MAX_LENGTHENING`] times `base`. Where the pilot could not
-/// separate the two (a time not positive, or not a number), `base`.
+/// increment takes `per_increment` ([`timed_steps`]): `base`, or enough that the increments take
+/// [`SETUP_SHARE`] times the setup, at most [`MAX_LENGTHENING`] times `base`. Where the two
+/// could not be told apart (a time not positive, or not a number), `base`. ([`Chain::new`]
+/// rounds the count up to whole output intervals.)
 pub fn steps_over_setup(base: u64, setup: f64, per_increment: f64) -> u64 {
     if !(setup > 0.0 && per_increment > 0.0) {
         return base;
     }
     let needed = (SETUP_SHARE * setup / per_increment).ceil();
     let most = (MAX_LENGTHENING * base) as f64;
-    (needed.min(most) as u64).max(base).div_ceil(PILOT_STEPS) * PILOT_STEPS
+    (needed.min(most) as u64).max(base)
 }
 
 /// Increments of the shorter timed run at N for an engine whose run of `steps` increments takes
-/// `run(steps)` seconds: a pilot times the fastest of two runs of [`PILOT_STEPS`] increments
-/// (the setup, nearly all of it) and one of [`steps_for`] N, and reads the setup and the
-/// increment's time from them ([`steps_over_setup`]).
-fn timed_steps(n: usize, mut run: impl FnMut(u64) -> Result<f64, String>) -> Result<u64, String> {
+/// `run(steps)` seconds and whose increment takes about `per_increment` seconds (the study's
+/// previous point, scaled by N): a pilot times the fastest of two runs of [`PILOT_STEPS`]
+/// increments, nearly all of it setup, and takes the setup from it ([`steps_over_setup`]).
+/// Without `per_increment` (an engine's first point), the pilot also times a run of
+/// [`steps_for`] N increments and reads the increment's time from the two.
+fn timed_steps(
+    n: usize,
+    per_increment: Option<f64>,
+    mut run: impl FnMut(u64) -> Result<f64, String>,
+) -> Result<u64, String> {
     let base = steps_for(n);
     let few = run(PILOT_STEPS)?.min(run(PILOT_STEPS)?);
-    let many = run(base)?;
-    let per_increment = (many - few) / base.saturating_sub(PILOT_STEPS).max(1) as f64;
+    let per_increment = match per_increment {
+        Some(seconds) => seconds,
+        None => (run(base)? - few) / base.saturating_sub(PILOT_STEPS).max(1) as f64,
+    };
     let setup = few - PILOT_STEPS as f64 * per_increment;
     Ok(steps_over_setup(base, setup, per_increment))
 }
@@ -188,13 +200,13 @@ pub fn study(max_n: usize, mut progress: impl FnMut(&str, usize)) -> Result<Stud
             crate::interrupt::checkpoint("scaling").map_err(|_| "interrupted".to_string())?;
             let name = engine.name().to_string();
             let left = STUDY_SECONDS - started.elapsed().as_secs_f64();
-            // In proportion to the DOF-increments a run takes (N × increments), at least as
-            // many increments as the last point's: the setup and the increments both grow
-            // with N, so a point lengthened for its setup ([`steps_over_setup`]) predicts the
-            // next one's.
+            // In proportion to the DOF-increments a run takes (N × increments), the last point's
+            // lengthening for its setup ([`steps_over_setup`]) kept: the setup and the
+            // increments both grow with N.
             let predicted = last.map(|(n0, steps0, point, long)| {
-                let steps = steps_for(n).max(steps0);
-                let scale = (n as f64 * steps as f64) / (n0 as f64 * steps0 as f64);
+                let lengthening = steps0 as f64 / steps_for(n0) as f64;
+                let steps = steps_for(n) as f64 * lengthening;
+                let scale = (n as f64 * steps) / (n0 as f64 * steps0 as f64);
                 (point * scale, long * scale)
             });
             // The point at its fewest repeats: the pilot (about half a longer run) and the first
@@ -221,13 +233,16 @@ pub fn study(max_n: usize, mut progress: impl FnMut(&str, usize)) -> Result<Stud
             let long = match predicted {
                 Some((_, long)) => long,
                 None => {
-                    let pilot = measure_with(engine.as_ref(), n, 1)?;
+                    let pilot = measure_with(engine.as_ref(), n, 1, None)?;
                     1e-9 * pilot.ns_per_step * 2.0 * pilot.steps as f64
                 }
             };
             let repeats = ((POINT_SECONDS / (1.5 * long)) as u64).max(MIN_REPEATS);
             let begun = Instant::now();
-            let point = measure_with(engine.as_ref(), n, repeats)?;
+            // The last point's seconds per increment, in proportion to N.
+            let per_increment = last
+                .map(|(n0, steps0, _, long)| long / (2.0 * steps0 as f64) * (n as f64 / n0 as f64));
+            let point = measure_with(engine.as_ref(), n, repeats, per_increment)?;
             let long = 1e-9 * point.ns_per_step * 2.0 * point.steps as f64;
             last = Some((n, point.steps, begun.elapsed().as_secs_f64(), long));
             out.points.push(point);
@@ -238,12 +253,18 @@ pub fn study(max_n: usize, mut progress: impl FnMut(&str, usize)) -> Result<Stud
 
 /// Measure one engine at one N, its runs repeated as often as [`repeats_for`] allows.
 pub fn measure(engine: &dyn Engine, n: usize) -> Result<Point, String> {
-    measure_with(engine, n, u64::MAX)
+    measure_with(engine, n, u64::MAX, None)
 }
 
 /// Measure one engine at one N, its runs repeated `repeats` times, at most [`repeats_for`] N and
-/// its increments (the fastest counts), the increments chosen by a pilot ([`timed_steps`]).
-pub fn measure_with(engine: &dyn Engine, n: usize, repeats: u64) -> Result<Point, String> {
+/// its increments (the fastest counts), the increments chosen by a pilot ([`timed_steps`];
+/// `per_increment`: the seconds an increment is expected to take, where known).
+pub fn measure_with(
+    engine: &dyn Engine,
+    n: usize,
+    repeats: u64,
+    per_increment: Option<f64>,
+) -> Result<Point, String> {
     // A chain of `steps` increments, its scene and the engine's settings for it, and the
     // resident memory building the scene added.
     let prepared = |steps: u64| {
@@ -266,10 +287,11 @@ pub fn measure_with(engine: &dyn Engine, n: usize, repeats: u64) -> Result<Point
     };
     // Increments enough that they, not the setup, set a run's time; the repeats bounded by
     // the work they take.
-    let steps = timed_steps(n, |steps| {
+    let steps = timed_steps(n, per_increment, |steps| {
         let pilot = prepared(steps);
         Ok(timed(&pilot.1, &pilot.2)?.0)
     })?;
+    let steps = Chain::new(n, steps).steps;
     let repeats = repeats.min(repeats_for(n, steps));
     // The longer run alone first, for its peak memory (and what its scene holds) and error.
     reset_peak_rss();
@@ -609,15 +631,13 @@ mod tests {
 
     #[test]
     fn a_run_whose_setup_outweighs_its_increments_is_lengthened() {
-        // `explicit` at N = 10^5: a setup of 0.15 s, 0.2 ms an increment; 400 increments take
-        // half the setup, 1500 take twice it.
-        assert_eq!(steps_over_setup(400, 0.15, 0.2e-3), 1500);
-        // Rounded up to whole output intervals: 1001 needed, 1100 run.
-        assert_eq!(steps_over_setup(400, 0.1001, 0.2e-3), 1100);
+        // `explicit` at N = 10^5: a setup of 0.15 s, 0.21 ms an increment; 400 increments take
+        // about half the setup, 1429 (2 · 0.15 / 0.21e-3 = 1428.6, rounded up) twice it.
+        assert_eq!(steps_over_setup(400, 0.15, 0.21e-3), 1429);
         // A setup the base increments already outweigh twice: the base.
         assert_eq!(steps_over_setup(400, 0.01, 0.2e-3), 400);
         // Never more than MAX_LENGTHENING times the base.
-        assert_eq!(steps_over_setup(400, 100.0, 1.0e-6), MAX_LENGTHENING * 400);
+        assert_eq!(steps_over_setup(400, 100.0, 1.0e-6), 3200);
         // A pilot that could not separate the setup from the increments: the base.
         for (setup, per_increment) in [(-0.01, 1.0e-3), (0.1, 0.0), (f64::NAN, 1.0e-3)] {
             assert_eq!(steps_over_setup(400, setup, per_increment), 400);
@@ -626,16 +646,25 @@ mod tests {
 
     #[test]
     fn the_pilot_reads_the_setup_and_the_increment_of_a_run() {
-        // A run of s increments taking 0.15 s + s · 0.2 ms: the pilot's three runs read them
-        // back and lengthen the point as the setup asks.
-        let mut runs = Vec::new();
-        let steps = timed_steps(100_000, |s| {
+        // A run of s increments taking 0.15 s + s · 0.21 ms: on its own, the pilot's three runs
+        // read the setup and the increment back (1429 increments, as above); told the
+        // increment's time, it runs only the two that time the setup.
+        let run = |runs: &mut Vec<u64>, s: u64| {
             runs.push(s);
-            Ok(0.15 + s as f64 * 0.2e-3)
-        })
-        .unwrap();
-        assert_eq!(runs, vec![PILOT_STEPS, PILOT_STEPS, STEPS]);
-        assert_eq!(steps, steps_over_setup(STEPS, 0.15, 0.2e-3));
+            Ok(0.15 + s as f64 * 0.21e-3)
+        };
+        let mut runs = Vec::new();
+        let steps = timed_steps(100_000, None, |s| run(&mut runs, s)).unwrap();
+        assert_eq!((steps, runs), (1429, vec![PILOT_STEPS, PILOT_STEPS, STEPS]));
+        let mut runs = Vec::new();
+        let steps = timed_steps(100_000, Some(0.21e-3), |s| run(&mut runs, s)).unwrap();
+        assert_eq!((steps, runs), (1429, vec![PILOT_STEPS, PILOT_STEPS]));
+        // Told twice the increment's time (a guess scaled from a smaller chain, say), it reads
+        // less setup, 0.171 − 100 · 0.42e-3 = 0.129 s, and asks 2 · 0.129 / 0.42e-3 = 614.3
+        // increments: 615.
+        let mut runs = Vec::new();
+        let steps = timed_steps(100_000, Some(0.42e-3), |s| run(&mut runs, s)).unwrap();
+        assert_eq!(steps, 615);
     }
 
     #[test]

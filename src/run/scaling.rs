@@ -78,17 +78,24 @@ pub const MAX_LENGTHENING: u64 = 8;
 /// interval).
 const PILOT_STEPS: u64 = 100;
 
+/// A point's increments at its fewest repeats, in shorter runs of S: the first longer run (2S),
+/// then [`MIN_REPEATS`] times a shorter and a longer (3S).
+const RUNS_OF_S_PER_POINT: f64 = 2.0 + 3.0 * MIN_REPEATS as f64;
+
 /// Increments of the shorter timed run for an engine whose setup takes `setup` seconds and whose
 /// increment takes `per_increment` ([`timed_steps`]): `base`, or enough that the increments take
-/// [`SETUP_SHARE`] times the setup, at most [`MAX_LENGTHENING`] times `base`. Where the two
-/// could not be told apart (a time not positive, or not a number), `base`. ([`Chain::new`]
-/// rounds the count up to whole output intervals.)
+/// [`SETUP_SHARE`] times the setup, at most [`MAX_LENGTHENING`] times `base` and at most what
+/// keeps the point's increments within [`POINT_SECONDS`] (at N = 10^6, where a run of `base`
+/// increments already takes seconds, the study's time allows none). Where the two could not be
+/// told apart (a time not positive, or not a number), `base`. ([`Chain::new`] rounds the count
+/// up to whole output intervals.)
 pub fn steps_over_setup(base: u64, setup: f64, per_increment: f64) -> u64 {
     if !(setup > 0.0 && per_increment > 0.0) {
         return base;
     }
     let needed = (SETUP_SHARE * setup / per_increment).ceil();
-    let most = (MAX_LENGTHENING * base) as f64;
+    let most = ((MAX_LENGTHENING * base) as f64)
+        .min(POINT_SECONDS / (RUNS_OF_S_PER_POINT * per_increment));
     (needed.min(most) as u64).max(base)
 }
 
@@ -638,6 +645,11 @@ mod tests {
         assert_eq!(steps_over_setup(400, 0.01, 0.2e-3), 400);
         // Never more than MAX_LENGTHENING times the base.
         assert_eq!(steps_over_setup(400, 100.0, 1.0e-6), 3200);
+        // Nor than the point's time allows: at N = 10^6 (a setup of 1.5 s, 4 ms an increment)
+        // 750 increments would take twice the setup, but 11 runs of 400 already take 17.6 s.
+        assert_eq!(steps_over_setup(400, 1.5, 4.0e-3), 400);
+        // At 0.5 ms an increment, 10 s allow 10 / (11 · 0.5e-3) = 1818 of the 6000 asked.
+        assert_eq!(steps_over_setup(400, 1.5, 0.5e-3), 1818);
         // A pilot that could not separate the setup from the increments: the base.
         for (setup, per_increment) in [(-0.01, 1.0e-3), (0.1, 0.0), (f64::NAN, 1.0e-3)] {
             assert_eq!(steps_over_setup(400, setup, per_increment), 400);

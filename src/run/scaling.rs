@@ -63,9 +63,9 @@ pub fn steps_for(n: usize) -> u64 {
 /// (building the model, the static step, the stable increment, the first touch of its memory).
 /// A point is the difference of two runs with the same setup, so the setup cancels on average,
 /// but not its spread: the fastest of a few runs' setups still differs from run to run by some
-/// tenths of it (`explicit` on the chain at N = 10^5: a setup of 150 ms, against 78 ms for
-/// [`STEPS`] increments, from 150 to 215 ms over 15 runs, measured), and that error falls
-/// whole on the difference. With the increments at twice the setup, a spread of δ of the setup
+/// tenths of it (`explicit` on the chain at N = 10^5: 15 runs of 100 increments took 150 to
+/// 215 ms, measured, and [`STEPS`] increments take about 100 ms), and that error falls whole on
+/// the difference. With the increments at twice the setup, a spread of δ of the setup
 /// is at most δ/2 of the point ([`steps_over_setup`]).
 pub const SETUP_SHARE: f64 = 2.0;
 

@@ -86,7 +86,7 @@ const RUNS_OF_S_PER_POINT: f64 = 2.0 + 3.0 * MIN_REPEATS as f64;
 /// increment takes `per_increment` ([`timed_steps`]): `base`, or enough that the increments take
 /// [`SETUP_SHARE`] times the setup, at most [`MAX_LENGTHENING`] times `base` and at most what
 /// keeps the point's increments within [`POINT_SECONDS`] (at N = 10^6, where a run of `base`
-/// increments already takes seconds, the study's time allows none). Where the two could not be
+/// increments already takes seconds, little or none). Where the two could not be
 /// told apart (a time not positive, or not a number), `base`. ([`Chain::new`] rounds the count
 /// up to whole output intervals.)
 pub fn steps_over_setup(base: u64, setup: f64, per_increment: f64) -> u64 {

@@ -182,6 +182,16 @@ fn through_solid(scene: &Scene, k: usize, speed: f64, h: f64, t: f64) -> EngineE
     ))
 }
 
+/// The first multiple of `stride` at or after `n` (for a `stride` of 0, `n` itself where it is
+/// 0, as `u64::is_multiple_of` reads it); u64::MAX where none is left.
+fn next_multiple(n: u64, stride: u64) -> u64 {
+    match stride {
+        0 if n == 0 => 0,
+        0 => u64::MAX,
+        _ => n.checked_next_multiple_of(stride).unwrap_or(u64::MAX),
+    }
+}
+
 /// Run a scene through all its steps.
 pub fn integrate<S: Space, const FINITE: bool>(
     scene: &Scene,
@@ -279,6 +289,9 @@ struct StepPlan<S: Space> {
     velocity: VelocityRule<S>,
     /// Increments between output rows (1 where rows are interpolated).
     stride: u64,
+    /// The next increment that writes a row: the next multiple of `stride` (u64::MAX once
+    /// none is left), counted forward so that an increment tests it without a division.
+    next_row: u64,
     /// The step's first increment and how many it takes.
     first: u64,
     count: u64,
@@ -453,6 +466,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
             held,
             velocity,
             stride,
+            next_row: next_multiple(self.n, stride),
             first: self.n,
             count,
             last: !self.dynamic_after(si),
@@ -471,7 +485,10 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
     /// v(n+½) and x(n+1) (not after the run's last increment).
     fn increment(&mut self, n: u64, plan: &mut StepPlan<S>) -> Result<(), EngineError> {
         let (model, h) = (self.model, self.h);
-        let row = n.is_multiple_of(plan.stride);
+        let row = n == plan.next_row;
+        if row {
+            plan.next_row = next_multiple(n + 1, plan.stride);
+        }
         // Only an increment that writes a row reads the elastic energy.
         let (cfg, mode, counters) = (&self.cfg, ContactMode::Unilateral, &mut self.counters);
         if row {
@@ -581,18 +598,30 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         } else {
             model.step_particles::<false>(cfg, carry, h, forces, held, v_half, acc);
         }
-        let counters = &mut self.counters;
-        let v_next = &mut self.v_next;
-        model.body_accelerations(cfg, forces, v_half, held, acc, counters);
-        v_next.set_plus_bodies(v_half, h, acc);
-        model.advance_bodies(cfg, carry, h, v_next, held, counters);
+        if !model.bodies.is_empty() {
+            let counters = &mut self.counters;
+            model.body_accelerations(cfg, forces, v_half, held, acc, counters);
+            self.move_bodies(held);
+        }
         if n > 0 {
             self.dissipated += 0.5 * h * self.last_power;
         }
         self.last_power = 0.0;
+        std::mem::swap(&mut self.acc_prev, &mut self.acc);
+    }
+
+    /// The bodies' half-step velocities and configuration from the accelerations in `acc`, as
+    /// the general path forms them (nothing to do in a scene without bodies).
+    fn move_bodies(&mut self, held: &Constraints<S>) {
+        let (model, h) = (self.model, self.h);
+        if model.bodies.is_empty() {
+            return;
+        }
+        let (cfg, carry, v_next) = (&mut self.cfg, &mut self.carry, &mut self.v_next);
+        v_next.set_plus_bodies(&self.v_half, h, &self.acc);
+        model.advance_bodies(cfg, carry, h, v_next, held, &mut self.counters);
         std::mem::swap(&mut self.v_half.b, &mut self.v_next.b);
         std::mem::swap(&mut self.v_half.w, &mut self.v_next.w);
-        std::mem::swap(&mut self.acc_prev, &mut self.acc);
     }
 
     /// The rest of increment n where the dashpots' rates are solved directly
@@ -621,11 +650,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         self.last_power = power;
         let (held, cfg, carry, acc) = (&plan.held, &mut self.cfg, &mut self.carry, &self.acc);
         model.move_particles(cfg, carry, h, held, &mut self.v_half, acc);
-        let v_next = &mut self.v_next;
-        v_next.set_plus_bodies(&self.v_half, h, acc);
-        model.advance_bodies(cfg, carry, h, v_next, held, &mut self.counters);
-        std::mem::swap(&mut self.v_half.b, &mut self.v_next.b);
-        std::mem::swap(&mut self.v_half.w, &mut self.v_next.w);
+        self.move_bodies(held);
         std::mem::swap(&mut self.acc_prev, &mut self.acc);
     }
 
@@ -803,5 +828,27 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         EngineError::Unstable(format!(
             "{what} by t = {t:e}: the run is unstable at increment {h:e} (stable increment: {limit}){mode}"
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::next_multiple;
+
+    /// The counted-forward row increment is the one a division finds: the first n' ≥ n with
+    /// `n'.is_multiple_of(stride)`, for every stride a plan can take (0 included).
+    #[test]
+    fn next_row_is_the_next_multiple_of_the_stride() {
+        for stride in 0..8u64 {
+            for n in 0..40u64 {
+                let divided = (n..n + 8).find(|m| m.is_multiple_of(stride));
+                assert_eq!(
+                    next_multiple(n, stride),
+                    divided.unwrap_or(u64::MAX),
+                    "n = {n}, stride = {stride}"
+                );
+            }
+        }
+        assert_eq!(next_multiple(u64::MAX - 2, 5), u64::MAX);
     }
 }

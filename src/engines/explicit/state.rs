@@ -33,41 +33,65 @@ impl<V: Lin> Vectors<V> {
     pub fn is_empty(&self) -> bool {
         self.len == 0
     }
+    // The accessors below check `i < len` and `k < V::DIM` and then index `data` without a
+    // second check: those two put `k · len + i` below `V::DIM · len`, which is `data.len()`
+    // (set by `Vectors::zeros`; `data` is private and nothing resizes it). The index-level
+    // checks they replace, with the products they repeated, cost a small scene's increment
+    // more than its arithmetic on some passes.
+
     /// Vector `i`.
     #[inline(always)]
     pub fn get(&self, i: usize) -> V {
-        V::from_components(|k| self.data[k * self.len + i])
+        assert!(i < self.len);
+        V::from_components(|k| {
+            assert!(k < V::DIM);
+            // SAFETY: k < V::DIM and i < len (above).
+            unsafe { *self.data.get_unchecked(k * self.len + i) }
+        })
     }
     /// Set vector `i`.
     #[inline(always)]
     pub fn set(&mut self, i: usize, v: V) {
+        assert!(i < self.len);
         for k in 0..V::DIM {
-            self.data[k * self.len + i] = v.component(k);
+            // SAFETY: k < V::DIM and i < len.
+            unsafe { *self.data.get_unchecked_mut(k * self.len + i) = v.component(k) };
         }
     }
     /// Vector `i` += `v`.
     #[inline(always)]
     pub fn add(&mut self, i: usize, v: V) {
+        assert!(i < self.len);
         for k in 0..V::DIM {
-            self.data[k * self.len + i] += v.component(k);
+            // SAFETY: k < V::DIM and i < len.
+            unsafe { *self.data.get_unchecked_mut(k * self.len + i) += v.component(k) };
         }
     }
     /// Vector `i` −= `v`.
     #[inline(always)]
     pub fn sub(&mut self, i: usize, v: V) {
+        assert!(i < self.len);
         for k in 0..V::DIM {
-            self.data[k * self.len + i] -= v.component(k);
+            // SAFETY: k < V::DIM and i < len.
+            unsafe { *self.data.get_unchecked_mut(k * self.len + i) -= v.component(k) };
         }
     }
     /// Component `k` of every vector.
     #[inline(always)]
     pub fn component(&self, k: usize) -> &[f64] {
-        &self.data[k * self.len..(k + 1) * self.len]
+        assert!(k < V::DIM);
+        // SAFETY: k < V::DIM, so (k + 1) · len ≤ data.len().
+        unsafe { self.data.get_unchecked(k * self.len..(k + 1) * self.len) }
     }
     /// Component `k` of every vector, to write.
     #[inline(always)]
     pub fn component_mut(&mut self, k: usize) -> &mut [f64] {
-        &mut self.data[k * self.len..(k + 1) * self.len]
+        assert!(k < V::DIM);
+        // SAFETY: k < V::DIM, so (k + 1) · len ≤ data.len().
+        unsafe {
+            self.data
+                .get_unchecked_mut(k * self.len..(k + 1) * self.len)
+        }
     }
     /// Every component of every vector, by component: for the passes that treat each
     /// component alike (sets of as many vectors share this layout).

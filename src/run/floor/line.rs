@@ -14,8 +14,8 @@
 //! run (rows, energy). It is written here from the scheme, not taken from the engine, and
 //! `tests/floor.rs` checks that the two agree to round-off.
 
-use super::{compensated_add, released};
-use crate::scene::{Connection, Dof, Element, Scene, Step};
+use super::{Release, compensated_add};
+use crate::scene::{Connection, Dof, Element, Scene};
 use nalgebra::Vector3;
 use std::hint::black_box;
 
@@ -66,42 +66,17 @@ impl LineOscillator {
     /// with a moving end act along the line (grounded on a mass's free translation, or of fixed
     /// direction along the line), and every other joins still nodes alone.
     pub fn of(scene: &Scene) -> Option<Self> {
-        let (static_step, dynamic, duration) = released(scene)?;
-        let translations = || (0..scene.dimension.count()).map(Dof::Translation);
-        let holds = |step: &Step, node: usize, dof: Dof| {
-            step.conditions
-                .iter()
-                .any(|c| c.node == node && c.dof == dof && c.value.is_none())
-        };
-        let still = |node: usize| {
-            translations().all(|d| holds(static_step, node, d) && holds(dynamic, node, d))
-        };
+        let (steps, duration) = Release::of(scene)?;
+        let still = |node: usize| steps.still(node);
         let mut moving: Vec<Moving> = Vec::new();
         let mut released_from = Vec::new();
         for node in 0..scene.nodes.len() {
             if still(node) {
                 continue;
             }
-            let free: Vec<Dof> = translations()
-                .filter(|d| !holds(dynamic, node, *d))
-                .collect();
-            let [dof @ Dof::Translation(axis)] = free[..] else {
-                return None;
-            };
-            let across_held = translations().all(|d| d == dof || holds(static_step, node, d));
-            let prescribed = dynamic
-                .conditions
-                .iter()
-                .any(|c| c.node == node && c.dof == dof);
-            let start = static_step
-                .conditions
-                .iter()
-                .find(|c| c.node == node && c.dof == dof)?;
-            if scene.nodes[node].mass <= 0.0 || !across_held || prescribed {
-                return None;
-            }
-            moving.push((node, dof, scene.nodes[node].frame.column(axis).into_owned()));
-            released_from.push(start.value.unwrap_or(0.0));
+            let (dof, along, start) = steps.free_translation(node)?;
+            moving.push((node, dof, along));
+            released_from.push(start.unwrap_or(0.0));
         }
         let line = moving.first()?.2;
         if moving.iter().any(|m| m.2 != line) {

@@ -23,6 +23,7 @@
 //!   What one pass computes reaches the next through memory.
 
 use crate::scene::{Connection, DampingTreatment, Dof, Element, Scene, Step, StepKind};
+use nalgebra::Vector3;
 use std::hint::black_box;
 
 /// One mass on a spring and a dashpot acting on the same translation, grounded or joining it to
@@ -51,43 +52,16 @@ impl DampedOscillator {
     /// elements; springs_grounded_b: fixed-direction elements to a held node, beside a spring
     /// between two held nodes).
     pub fn of(scene: &Scene) -> Option<Self> {
-        let (static_step, dynamic, duration) = released(scene)?;
-        let translations = || (0..scene.dimension.count()).map(Dof::Translation);
-        let held = |step: &Step, node: usize, dof: Dof| {
-            step.conditions
-                .iter()
-                .any(|c| c.node == node && c.dof == dof && c.value.is_none())
-        };
-        let still = |node: usize| {
-            translations().all(|d| held(static_step, node, d) && held(dynamic, node, d))
-        };
+        let (steps, duration) = Release::of(scene)?;
+        let still = |node: usize| steps.still(node);
         let moving: Vec<usize> = (0..scene.nodes.len())
-            .filter(|n| !translations().all(|d| held(dynamic, *n, d)))
+            .filter(|n| !steps.translations().all(|d| holds(steps.dynamic, *n, d)))
             .collect();
         let [node] = moving[..] else {
             return None;
         };
-        let free: Vec<Dof> = translations()
-            .filter(|d| !held(dynamic, node, *d))
-            .collect();
-        let [dof @ Dof::Translation(axis)] = free[..] else {
-            return None;
-        };
-        let across_held = translations().all(|d| d == dof || held(static_step, node, d));
-        // Released: the dynamic step neither holds nor prescribes the free translation.
-        let prescribed = dynamic
-            .conditions
-            .iter()
-            .any(|c| c.node == node && c.dof == dof);
-        if scene.nodes[node].mass <= 0.0 || !across_held || prescribed {
-            return None;
-        }
-        let released_from = static_step
-            .conditions
-            .iter()
-            .find(|c| c.node == node && c.dof == dof)?
-            .value?;
-        let along = scene.nodes[node].frame.column(axis).into_owned();
+        let (dof, along, start) = steps.free_translation(node)?;
+        let released_from = start?;
         // Whether an element acts on the node along `dof` (Some(true)), joins still nodes
         // alone (Some(false)), or is neither (None: not this system).
         let acts = |e: &Element| match e.connection {
@@ -187,6 +161,77 @@ impl DampedOscillator {
 /// A scene of masses, springs and dashpots alone (no bodies, contacts, loads or initial
 /// velocities; the centred dashpot treatment) with a static step that sets where they start
 /// and a dynamic step that releases them: the two steps and the dynamic step's duration.
+/// The static and the dynamic step of a scene a floor takes ([`released`]), as the floors read
+/// its nodes' conditions.
+struct Release<'a> {
+    scene: &'a Scene,
+    static_step: &'a Step,
+    dynamic: &'a Step,
+}
+
+impl<'a> Release<'a> {
+    /// The scene's two steps and the dynamic step's duration, where [`released`] takes it.
+    fn of(scene: &'a Scene) -> Option<(Self, f64)> {
+        let (static_step, dynamic, duration) = released(scene)?;
+        let steps = Self {
+            scene,
+            static_step,
+            dynamic,
+        };
+        Some((steps, duration))
+    }
+
+    /// The translations of the scene's dimension.
+    fn translations(&self) -> impl Iterator<Item = Dof> + use<> {
+        (0..self.scene.dimension.count()).map(Dof::Translation)
+    }
+
+    /// Whether `node` is held in every translation in both steps.
+    fn still(&self, node: usize) -> bool {
+        let both = |d: Dof| holds(self.static_step, node, d) && holds(self.dynamic, node, d);
+        self.translations().all(both)
+    }
+
+    /// The one translation `node` moves along in the dynamic step, when the node has mass, is
+    /// held in its other translations in both steps and is released on this one (the dynamic
+    /// step neither holds nor prescribes it): the translation, its direction in world axes, and
+    /// the value the static step prescribes on it (None where the static step holds it). None
+    /// where the static step has no condition on it.
+    fn free_translation(&self, node: usize) -> Option<(Dof, Vector3<f64>, Option<f64>)> {
+        let (scene, static_step, dynamic) = (self.scene, self.static_step, self.dynamic);
+        let free: Vec<Dof> = self
+            .translations()
+            .filter(|d| !holds(dynamic, node, *d))
+            .collect();
+        let [dof @ Dof::Translation(axis)] = free[..] else {
+            return None;
+        };
+        let across_held = self
+            .translations()
+            .all(|d| d == dof || holds(static_step, node, d));
+        let prescribed = dynamic
+            .conditions
+            .iter()
+            .any(|c| c.node == node && c.dof == dof);
+        if scene.nodes[node].mass <= 0.0 || !across_held || prescribed {
+            return None;
+        }
+        let start = static_step
+            .conditions
+            .iter()
+            .find(|c| c.node == node && c.dof == dof)?;
+        let along = scene.nodes[node].frame.column(axis).into_owned();
+        Some((dof, along, start.value))
+    }
+}
+
+/// Whether `step` holds `node` on `dof` (a condition without a prescribed value).
+fn holds(step: &Step, node: usize, dof: Dof) -> bool {
+    step.conditions
+        .iter()
+        .any(|c| c.node == node && c.dof == dof && c.value.is_none())
+}
+
 fn released(scene: &Scene) -> Option<(&Step, &Step, f64)> {
     if scene.settings.damping != DampingTreatment::Centred
         || !scene.bodies.is_empty()

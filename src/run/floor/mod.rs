@@ -22,7 +22,10 @@
 //!   with node indices, then the dashpots' centred forces, then one pass over the particles).
 //!   What one pass computes reaches the next through memory.
 
-use crate::scene::{Connection, DampingTreatment, Dof, Element, Scene, Step, StepKind};
+use crate::scene::{
+    BoundaryCondition, Connection, ContactPair, DampingTreatment, Dimension, Dof, Element,
+    RigidBody, Scene, Step, StepKind,
+};
 use nalgebra::Vector3;
 use std::hint::black_box;
 
@@ -223,6 +226,32 @@ impl<'a> Release<'a> {
         let along = scene.nodes[node].frame.column(axis).into_owned();
         Some((dof, along, start.value))
     }
+}
+
+/// What the body floors read first: a scene in `dimension` without dashpots, with one body,
+/// one contact pair and one step, a dynamic one; those three and the step's duration.
+fn one_body(scene: &Scene, dimension: Dimension) -> Option<(&RigidBody, &ContactPair, &Step, f64)> {
+    if scene.dimension != dimension || !scene.dashpots.is_empty() {
+        return None;
+    }
+    let ([body], [contact], [step]) = (
+        scene.bodies.as_slice(),
+        scene.contacts.as_slice(),
+        scene.steps.as_slice(),
+    ) else {
+        return None;
+    };
+    let StepKind::Dynamic { duration } = step.kind else {
+        return None;
+    };
+    Some((body, contact, step, duration))
+}
+
+/// The first condition `step` puts on `node`'s `dof`, if any.
+fn condition(step: &Step, node: usize, dof: Dof) -> Option<&BoundaryCondition> {
+    step.conditions
+        .iter()
+        .find(|c| c.node == node && c.dof == dof)
 }
 
 /// Whether `step` holds `node` on `dof` (a condition without a prescribed value).

@@ -15,8 +15,8 @@
 //! engine against, not its answer to round-off: `tests/floor.rs` holds it to the case's exact
 //! solution at the case's tolerance.
 
-use super::compensated_add;
-use crate::scene::{Attachment, Connection, Dimension, Dof, Scene, StepKind, Surface};
+use super::{compensated_add, holds, one_body};
+use crate::scene::{Attachment, Connection, Dimension, Dof, Scene, Surface};
 use nalgebra::Vector2;
 use std::hint::black_box;
 
@@ -61,24 +61,8 @@ impl PinnedBody {
     /// contact between the particle and the body, loads on body points, one dynamic step, no
     /// dashpots, the identity frame everywhere.
     pub fn of(scene: &Scene) -> Option<Self> {
-        if scene.dimension != Dimension::Two || !scene.dashpots.is_empty() {
-            return None;
-        }
-        let ([body], [contact], [step]) = (
-            scene.bodies.as_slice(),
-            scene.contacts.as_slice(),
-            scene.steps.as_slice(),
-        ) else {
-            return None;
-        };
-        let StepKind::Dynamic { duration } = step.kind else {
-            return None;
-        };
-        let held = |node: usize, dof: Dof| {
-            step.conditions
-                .iter()
-                .any(|c| c.node == node && c.dof == dof && c.value.is_none())
-        };
+        let (body, contact, step, duration) = one_body(scene, Dimension::Two)?;
+        let held = |node: usize, dof: Dof| holds(step, node, dof);
         let pin = body.reference;
         let particle = contact.node;
         let on_body = |n: usize| scene.nodes[n].attachment != Attachment::Free;

@@ -43,10 +43,10 @@
 //! once after the run. `tests/floor.rs` holds it to the case's exact solution at the case's
 //! tolerance and to the 2D floor's end state.
 
-use super::compensated_add;
 use super::pinned_body::PinnedBody;
 use super::sliding_body::{SlidingBody, SlidingState, centred, plus};
-use crate::scene::{Attachment, DampingTreatment, Dimension, Dof, Scene, StepKind, Surface};
+use super::{compensated_add, condition, one_body};
+use crate::scene::{Attachment, DampingTreatment, Dimension, Dof, Scene, Surface};
 use nalgebra::{Matrix3, Vector3, Vector4};
 use std::hint::black_box;
 
@@ -244,27 +244,11 @@ impl TurningBody3d {
     /// dashpot; loads on body points; initial velocities on the reference node and the particle
     /// only; one dynamic step; no dashpots; the centred velocity; the identity frame everywhere.
     pub fn of(scene: &Scene) -> Option<Self> {
-        if scene.dimension != Dimension::Three
-            || !scene.dashpots.is_empty()
-            || scene.settings.damping != DampingTreatment::Centred
-        {
+        if scene.settings.damping != DampingTreatment::Centred {
             return None;
         }
-        let ([body], [contact], [step]) = (
-            scene.bodies.as_slice(),
-            scene.contacts.as_slice(),
-            scene.steps.as_slice(),
-        ) else {
-            return None;
-        };
-        let StepKind::Dynamic { duration } = step.kind else {
-            return None;
-        };
-        let condition = |node: usize, dof: Dof| {
-            step.conditions
-                .iter()
-                .find(|c| c.node == node && c.dof == dof)
-        };
+        let (body, contact, step, duration) = one_body(scene, Dimension::Three)?;
+        let condition = |node: usize, dof: Dof| condition(step, node, dof);
         let held = |node: usize, dof: Dof| condition(node, dof).is_some_and(|c| c.value.is_none());
         let free = |node: usize, dof: Dof| condition(node, dof).is_none();
         let (reference, particle) = (body.reference, contact.node);

@@ -849,6 +849,7 @@ mod tests {
                 );
             }
         }
-        assert_eq!(next_multiple(u64::MAX - 2, 5), u64::MAX);
+        // No multiple of 2 at or after u64::MAX: none is left.
+        assert_eq!(next_multiple(u64::MAX, 2), u64::MAX);
     }
 }

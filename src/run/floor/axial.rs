@@ -75,12 +75,7 @@ impl AxialOscillator {
             return None;
         }
         let (static_step, dynamic, duration) = released(scene)?;
-        let holds = |node: usize, dof: Dof| {
-            dynamic
-                .conditions
-                .iter()
-                .any(|c| c.node == node && c.dof == dof && c.value.is_none())
-        };
+        let holds = |node: usize, dof: Dof| super::holds(dynamic, node, dof);
         let moves =
             |node: usize| !(holds(node, Dof::Translation(0)) && holds(node, Dof::Translation(1)));
         let moving: Vec<usize> = (0..scene.nodes.len()).filter(|n| moves(*n)).collect();

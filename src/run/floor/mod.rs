@@ -161,11 +161,8 @@ impl DampedOscillator {
     }
 }
 
-/// A scene of masses, springs and dashpots alone (no bodies, contacts, loads or initial
-/// velocities; the centred dashpot treatment) with a static step that sets where they start
-/// and a dynamic step that releases them: the two steps and the dynamic step's duration.
-/// The static and the dynamic step of a scene a floor takes ([`released`]), as the floors read
-/// its nodes' conditions.
+/// The static and the dynamic step of a scene a floor takes ([`released`]), as the damped and
+/// the line oscillator read its nodes' conditions.
 struct Release<'a> {
     scene: &'a Scene,
     static_step: &'a Step,
@@ -261,6 +258,9 @@ fn holds(step: &Step, node: usize, dof: Dof) -> bool {
         .any(|c| c.node == node && c.dof == dof && c.value.is_none())
 }
 
+/// A scene of masses, springs and dashpots alone (no bodies, contacts, loads or initial
+/// velocities; the centred dashpot treatment) with a static step that sets where they start
+/// and a dynamic step that releases them: the two steps and the dynamic step's duration.
 fn released(scene: &Scene) -> Option<(&Step, &Step, f64)> {
     if scene.settings.damping != DampingTreatment::Centred
         || !scene.bodies.is_empty()

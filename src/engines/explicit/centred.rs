@@ -19,8 +19,12 @@
 //! `(S + (h/2)·K) σ = E w`, with `S = diag(|l_j|²)` (1 for a fixed unit line) and K now
 //! formed from the unnormalised `e_j`; `S + (h/2)·K` is non-singular while every |l_j| > 0.
 //! The force on the ends is `−c_j σ_j e_j` and the power `Σ c_j |l_j|² σ_j²`. No square root
-//! or normalising division is on the increment's chain. Where no line turns, `I + (h/2)·K` is
-//! the same at every increment of a step, and its inverse is formed once per step.
+//! or normalising division is on the increment's chain. A line does not turn where every
+//! moving end is confined to it (held on every direction across it): for a step it is then the
+//! fixed unit line along its span at the step's start, the rate along it being the rate of
+//! its length (the span's direction only flips, which the force, quadratic in the line, does
+//! not see). Where no line turns, `I + (h/2)·K` is the same at every increment of a step, and
+//! its inverse is formed once per step.
 
 use super::model::{
     Config, Constraints, Counters, DashpotLine, Model, ParticleDashpot, Rates, fill_zero,
@@ -38,6 +42,9 @@ pub type End<S> = (usize, usize, <S as Space>::V, <S as Space>::V);
 #[derive(Debug, Clone)]
 pub struct ParticleDashpots<S: Space> {
     list: Vec<ParticleDashpot<S>>,
+    /// Each dashpot's line in the current step: its own, or fixed where it does not turn
+    /// ([`ParticleDashpots::prepare`]).
+    lines: Vec<DashpotLine<S>>,
     /// Each dashpot's moving ends at this increment (for the whole step where no line turns).
     ends: Vec<End<S>>,
     /// Each dashpot's |l|² at this increment (1 for a fixed unit line).
@@ -58,6 +65,7 @@ impl<S: Space> ParticleDashpots<S> {
         let list = model.particle_dashpots()?;
         let k = list.len();
         (k <= MAX_DASHPOTS).then(|| Self {
+            lines: list.iter().map(|d| d.line).collect(),
             list,
             ends: Vec::with_capacity(2 * k),
             span_squares: [1.0; MAX_DASHPOTS],
@@ -66,10 +74,10 @@ impl<S: Space> ParticleDashpots<S> {
         })
     }
 
-    /// Start a step with constraints `held` at increment `h`: where no line turns, form the
-    /// step's ends and the inverse of `I + (h/2)·K` once (the same arithmetic
-    /// [`ParticleDashpots::solve`] does otherwise at every increment). `cfg` is not read
-    /// then: only a turning line depends on the configuration.
+    /// Start a step with constraints `held` at increment `h` from `cfg`: each dashpot's line
+    /// for the step ([`step_line`]), and where no line turns, the step's ends and the inverse
+    /// of `I + (h/2)·K` formed once (the same arithmetic [`ParticleDashpots::solve`] does
+    /// otherwise at every increment).
     pub fn prepare<const FINITE: bool>(
         &mut self,
         model: &Model<S, FINITE>,
@@ -78,10 +86,14 @@ impl<S: Space> ParticleDashpots<S> {
         h: f64,
     ) {
         self.steady = None;
+        self.span_squares = [1.0; MAX_DASHPOTS];
+        for (line, dashpot) in self.lines.iter_mut().zip(&self.list) {
+            *line = step_line(model, cfg, held, dashpot);
+        }
         if self
-            .list
+            .lines
             .iter()
-            .any(|d| matches!(d.line, DashpotLine::TwoPoint { .. }))
+            .any(|line| matches!(line, DashpotLine::TwoPoint { .. }))
         {
             return;
         }
@@ -115,8 +127,8 @@ impl<S: Space> ParticleDashpots<S> {
         held: &Constraints<S>,
     ) {
         self.ends.clear();
-        for (j, dashpot) in self.list.iter().enumerate() {
-            let d = match dashpot.line {
+        for (j, (dashpot, line)) in self.list.iter().zip(&self.lines).enumerate() {
+            let d = match *line {
                 DashpotLine::Fixed(d) => d,
                 DashpotLine::TwoPoint { dashpot, scale } => {
                     let l = model.dashpot_span(cfg, dashpot) * scale;
@@ -218,6 +230,29 @@ impl<S: Space> ParticleDashpots<S> {
             acc.p.sub(p, g * (self.list[j].c * sigma[j]));
         }
         power
+    }
+}
+
+/// `dashpot`'s line in a step that starts at `cfg` under `held`: a two-point line whose moving
+/// ends are each confined to it ([`Motion::confines_to`](super::model::Motion::confines_to))
+/// is fixed along its span at the start; any other line is its own.
+fn step_line<S: Space, const FINITE: bool>(
+    model: &Model<S, FINITE>,
+    cfg: &Config<S>,
+    held: &Constraints<S>,
+    dashpot: &ParticleDashpot<S>,
+) -> DashpotLine<S> {
+    let DashpotLine::TwoPoint { dashpot: k, .. } = dashpot.line else {
+        return dashpot.line;
+    };
+    let span = model.dashpot_span(cfg, k);
+    let length = span.dot(&span).sqrt();
+    let u = span * (1.0 / length);
+    let confined = |p: usize| held.motions[held.particle_motion[p] as usize].confines_to(u);
+    if length > 0.0 && [dashpot.a, dashpot.b].into_iter().flatten().all(confined) {
+        DashpotLine::Fixed(u)
+    } else {
+        dashpot.line
     }
 }
 

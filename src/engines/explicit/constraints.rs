@@ -434,6 +434,39 @@ mod tests {
         assert_eq!(held.particle_kernel, ParticleKernel::General);
     }
 
+    /// springs_n2n_c's dynamic step holds 102 and 103 across the 45° line of their frame: each
+    /// moves on the line through it along (1, 1)/√2, the springs' and the dashpot's, and on no
+    /// line 1e-13 rad off it (a cosine of 1e-13 with the hold, ten times [`ACROSS`]), while
+    /// 1e-16 rad off, a direction formed with round-off, it still does. Released across the
+    /// line, 103 moves on no line; 12 of springs_grounded_b, held on both axes, on every line.
+    #[test]
+    fn a_particle_held_across_a_line_is_confined_to_it() {
+        let scene = case::load(&case::cases_dir().join("springs_n2n_c.toml")).unwrap();
+        let model = Model::<Planar, true>::compile(&scene, 1.0);
+        let motion =
+            |held: &Constraints<Planar>, i: usize| held.motions[held.particle_motion[i] as usize];
+        let at = |angle: f64| Vector2::new(angle.cos(), angle.sin());
+        let line = std::f64::consts::FRAC_PI_4;
+        let held = model.constraints(&scene.steps[1]);
+        for name in ["102", "103"] {
+            let m = motion(&held, particle(&scene, &model, name));
+            assert!(m.confines_to(Vector2::new(1.0, 1.0).normalize()), "{name}");
+            assert!(m.confines_to(at(line + 1e-16)), "{name}");
+            assert!(!m.confines_to(at(line + 1e-13)), "{name}");
+            assert!(!m.confines_to(Vector2::x()), "{name}");
+        }
+        let n103 = scene.node_named("103").unwrap();
+        let mut released = scene.steps[1].clone();
+        released.conditions.retain(|c| c.node != n103);
+        let free = model.constraints(&released);
+        let m103 = motion(&free, particle(&scene, &model, "103"));
+        assert!(!m103.confines_to(Vector2::new(1.0, 1.0).normalize()));
+        let (scene_b, model_b) = grounded_b();
+        let held_b = model_b.constraints(&scene_b.steps[1]);
+        let m12 = motion(&held_b, particle(&scene_b, &model_b, "12"));
+        assert!(m12.confines_to(Vector2::x()) && m12.confines_to(at(0.3)));
+    }
+
     /// An increment of that step by the fused pass, then a further motion by the pass that takes
     /// formed accelerations, under the axis kernel and under the projections, from a state with
     /// every component of both particles set (but the velocities and carries on their held axes

@@ -252,6 +252,12 @@ impl<S: Space> Constraints<S> {
     }
 }
 
+/// The largest cosine between a held direction and a line for [`Motion::confines_to`] to
+/// take them as perpendicular: a few hundred times the round-off of forming two unit vectors,
+/// so that a line and a hold formed from the same frame or the same points agree, while a
+/// particle whose free direction leaves the line by more than 1e-14 rad is not confined to it.
+pub const ACROSS: f64 = 1e-14;
+
 /// How a particle's acceleration is projected onto its free directions in a step.
 #[derive(Debug, Clone, Copy)]
 pub enum Motion<V: Lin> {
@@ -274,6 +280,19 @@ impl<V: Lin> Motion<V> {
             [d] => Motion::Across(*d),
             [d, e] => Motion::AcrossTwo(*d, *e),
             _ => Motion::Held,
+        }
+    }
+
+    /// True when every direction this projection leaves free is along the unit vector `u`
+    /// (or none is): a particle under it moves on the line through it along `u`. A held
+    /// direction counts as across `u` when its cosine with `u` is at most [`ACROSS`].
+    pub fn confines_to(&self, u: V) -> bool {
+        let across = |d: &V| d.dot(&u).abs() <= ACROSS;
+        match self {
+            Motion::Free => false,
+            Motion::Held => true,
+            Motion::Across(d) => V::DIM == 2 && across(d),
+            Motion::AcrossTwo(d, e) => V::DIM == 3 && across(d) && across(e),
         }
     }
 

@@ -52,9 +52,9 @@ pub struct ParticleDashpots<S: Space> {
     /// The augmented system `[S + (h/2)·K | E w]`, row-major, k × (k + 1).
     system: Vec<f64>,
     /// Where no dashpot's line turns, `(I + (h/2)·K)⁻¹` (row-major, k × k) of the current
-    /// step: it and `ends` depend only on the step's constraints and the increment, so
-    /// [`ParticleDashpots::prepare`] forms them once per step and an increment only
-    /// multiplies.
+    /// step: it and `ends` depend only on the step's constraints, its increment and the lines
+    /// at its start, so [`ParticleDashpots::prepare`] forms them once per step and an
+    /// increment only multiplies.
     steady: Option<Vec<f64>>,
 }
 
@@ -75,7 +75,7 @@ impl<S: Space> ParticleDashpots<S> {
     }
 
     /// Start a step with constraints `held` at increment `h` from `cfg`: each dashpot's line
-    /// for the step ([`step_line`]), and where no line turns, the step's ends and the inverse
+    /// for the step (fixed where its moving ends are confined to it), and where no line turns, the step's ends and the inverse
     /// of `I + (h/2)·K` formed once (the same arithmetic [`ParticleDashpots::solve`] does
     /// otherwise at every increment).
     pub fn prepare<const FINITE: bool>(
@@ -242,14 +242,14 @@ fn step_line<S: Space, const FINITE: bool>(
     held: &Constraints<S>,
     dashpot: &ParticleDashpot<S>,
 ) -> DashpotLine<S> {
-    let DashpotLine::TwoPoint { dashpot: k, .. } = dashpot.line else {
+    let DashpotLine::TwoPoint { dashpot: index, .. } = dashpot.line else {
         return dashpot.line;
     };
-    let span = model.dashpot_span(cfg, k);
-    let length = span.dot(&span).sqrt();
-    let u = span * (1.0 / length);
-    let confined = |p: usize| held.motions[held.particle_motion[p] as usize].confines_to(u);
-    if length > 0.0 && [dashpot.a, dashpot.b].into_iter().flatten().all(confined) {
+    let u = model.dashpot_line(cfg, index);
+    // Coincident ends (u not finite) have no line to be confined to.
+    let confined = |p: usize| held.particle_projection(p).confines_to(u);
+    let unit = (u.dot(&u) - 1.0).abs() <= 1e-12;
+    if unit && [dashpot.a, dashpot.b].into_iter().flatten().all(confined) {
         DashpotLine::Fixed(u)
     } else {
         dashpot.line
@@ -290,5 +290,49 @@ fn eliminate(a: &mut [f64], k: usize, x: &mut [f64; MAX_DASHPOTS]) {
             s -= a[row * w + c] * x[c];
         }
         x[row] = s / a[row * w + row];
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::case;
+    use crate::engines::explicit::space::Planar;
+
+    /// springs_n2n_c's dynamic step holds both masses across the dashpot's 45° line: the line
+    /// is fixed for the step and the system's inverse formed once. Release either mass across
+    /// the line and the line turns again, formed at every increment.
+    #[test]
+    fn a_dashpot_whose_moving_ends_are_held_across_its_line_does_not_turn() {
+        let scene = case::load(&case::cases_dir().join("springs_n2n_c.toml")).unwrap();
+        let model = Model::<Planar, true>::compile(&scene, 1.0);
+        let cfg = model.initial_config();
+        let prepared = |step: &crate::scene::Step| {
+            let mut dashpots = ParticleDashpots::of(&model).expect("one particle dashpot");
+            assert!(matches!(
+                dashpots.list[0].line,
+                DashpotLine::TwoPoint { .. }
+            ));
+            dashpots.prepare(&model, &cfg, &model.constraints(step), 1e-4);
+            dashpots
+        };
+        let held = prepared(&scene.steps[1]);
+        let DashpotLine::Fixed(line) = held.lines[0] else {
+            panic!("the line of a dashpot held on it is fixed");
+        };
+        let diagonal = std::f64::consts::FRAC_1_SQRT_2;
+        assert!((line.x - diagonal).abs() <= 1e-16 && (line.y - diagonal).abs() <= 1e-16);
+        assert!(held.steady.is_some());
+        for name in ["102", "103"] {
+            let node = scene.node_named(name).unwrap();
+            let mut released = scene.steps[1].clone();
+            released.conditions.retain(|c| c.node != node);
+            let turning = prepared(&released);
+            assert!(
+                matches!(turning.lines[0], DashpotLine::TwoPoint { .. }),
+                "{name}"
+            );
+            assert!(turning.steady.is_none(), "{name}");
+        }
     }
 }

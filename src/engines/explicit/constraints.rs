@@ -443,8 +443,7 @@ mod tests {
     fn a_particle_held_across_a_line_is_confined_to_it() {
         let scene = case::load(&case::cases_dir().join("springs_n2n_c.toml")).unwrap();
         let model = Model::<Planar, true>::compile(&scene, 1.0);
-        let motion =
-            |held: &Constraints<Planar>, i: usize| held.motions[held.particle_motion[i] as usize];
+        let motion = |held: &Constraints<Planar>, i: usize| *held.particle_projection(i);
         let at = |angle: f64| Vector2::new(angle.cos(), angle.sin());
         let line = std::f64::consts::FRAC_PI_4;
         let held = model.constraints(&scene.steps[1]);

@@ -179,12 +179,19 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         out.clear();
         out.extend(self.dashpots.iter().enumerate().map(|(k, s)| {
             if s.axial && FINITE {
-                let l = self.dashpot_span(cfg, k);
-                l * (1.0 / l.dot(&l).sqrt())
+                self.dashpot_line(cfg, k)
             } else {
                 s.direction
             }
         }));
+    }
+
+    /// The unit line from end a to end b of two-point dashpot `k` at `cfg` (not finite where
+    /// its ends coincide).
+    #[inline]
+    pub fn dashpot_line(&self, cfg: &Config<S>, k: usize) -> S::V {
+        let l = self.dashpot_span(cfg, k);
+        l * (1.0 / l.dot(&l).sqrt())
     }
 
     /// The vector from end a to end b of two-point dashpot `k` at `cfg`: its line of action,
@@ -241,7 +248,8 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
     /// gives it.
     #[inline]
     pub fn particle_response(&self, held: &Constraints<S>, i: usize, f: S::V) -> S::V {
-        held.motions[held.particle_motion[i] as usize].project(f * self.inverse_masses[i])
+        held.particle_projection(i)
+            .project(f * self.inverse_masses[i])
     }
 
     /// [`Model::damping`] with the two-point dashpots' directions given (from

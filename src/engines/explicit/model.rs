@@ -224,6 +224,12 @@ impl<S: Space> Constraints<S> {
         &self.held_sets[self.particle_motion[i] as usize]
     }
 
+    /// The projection of particle `i`'s accelerations.
+    #[inline]
+    pub fn particle_projection(&self, i: usize) -> &Motion<S::V> {
+        &self.motions[self.particle_motion[i] as usize]
+    }
+
     /// Whether any velocity-dependent term acts (dashpots aside).
     pub fn any_velocity_terms(&self) -> bool {
         self.velocity_terms.iter().any(|x| *x)
@@ -253,9 +259,11 @@ impl<S: Space> Constraints<S> {
 }
 
 /// The largest cosine between a held direction and a line for [`Motion::confines_to`] to
-/// take them as perpendicular: a few hundred times the round-off of forming two unit vectors,
-/// so that a line and a hold formed from the same frame or the same points agree, while a
-/// particle whose free direction leaves the line by more than 1e-14 rad is not confined to it.
+/// take them as perpendicular: 45 times the machine epsilon, several times the round-off of
+/// forming the two unit vectors from a frame and from two points, so that a hold across the
+/// line those points span is found across it; a free direction that leaves the line by more
+/// (in 3D by up to √2 times this, one hold off on each side) is not confined to it, and the
+/// line is then treated as turning, which is always right.
 pub const ACROSS: f64 = 1e-14;
 
 /// How a particle's acceleration is projected onto its free directions in a step.

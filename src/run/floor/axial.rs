@@ -1,18 +1,20 @@
-//! The arithmetic floor of an increment whose dashpot turns with its nodes: 2D masses, each
-//! free along one direction, joined to each other and to held nodes by axial springs and one
-//! axial dashpot (springs_grounded_c, springs_n2n_c), written out by hand with the state in
-//! heap slices.
+//! The arithmetic floor of an increment with an axial dashpot: 2D masses, each free along one
+//! direction, joined to each other and to held nodes by axial springs and one axial dashpot
+//! (springs_grounded_c, springs_n2n_c), written out by hand with the state in heap slices.
 //!
 //! It is the explicit engine's recurrence for such a scene: central differences; each axial
 //! spring's force along its current line, 1/|l| formed as |l|·(1/|l|²); the projection that
-//! removes each mass's held direction; the centred dashpot solved directly in its rate along
-//! the current line `l` (taken over its length at t = 0, so no square root on the chain):
+//! removes each mass's held direction; the centred dashpot solved directly in its rate:
 //! `(|l|² + (h/2)·c·Σ e·g) σ = Σ e·w` over its moving ends, `e = ∓l` at end a and b,
-//! `g = P e / m`, `w` the undamped centred velocity; the half-step velocities restarted from
-//! rest at the release; the displacements summed with a compensated (Kahan) addition. A
-//! spring between two held nodes moves nothing and is left out, as is what records or checks
-//! a run (rows, energy). It is written here from the scheme, not taken from the engine, and
-//! `tests/floor.rs` checks that the two agree to round-off.
+//! `g = P e / m`, `w` the undamped centred velocity. Where every mass the dashpot moves is held
+//! across its line at the release (the seed cases), the line cannot turn: it is the unit line
+//! there, and `g` and the system's one entry are formed once for the run; otherwise it is the
+//! current line `l` (taken over its length at t = 0, so no square root on the chain), formed at
+//! every increment. The half-step velocities restart from rest at the release; the
+//! displacements are summed with a compensated (Kahan) addition. A spring between two held
+//! nodes moves nothing and is left out, as is what records or checks a run (rows, energy). It
+//! is written here from the scheme, not taken from the engine, and `tests/floor.rs` checks
+//! that the two agree to round-off.
 
 use super::{compensated_add, released};
 use crate::scene::{Connection, Dimension, Dof, Element, Scene, Step};
@@ -54,6 +56,10 @@ pub struct AxialOscillator {
     /// Duration of the dynamic step (s).
     pub duration: f64,
 }
+
+/// A moving end of a dashpot on a fixed line: the mass, the line's sign at that end `e`, and
+/// the acceleration `g = P e / m` a unit force along it gives the mass.
+type DashpotEnd = (usize, Vector2<f64>, Vector2<f64>);
 
 /// The state after a run: each mass's displacement and half-step velocity.
 #[derive(Debug, Clone, PartialEq)]
@@ -191,25 +197,38 @@ impl AxialOscillator {
         for i in 0..n {
             v[i] = acceleration[i] * (-0.5 * h);
         }
+        let c = self.dashpot.coefficient;
+        let fixed = self.fixed_line(&u, &held, &inverse_mass, h);
         for _ in 0..steps {
             accelerations(&u, &mut force, &mut acceleration);
-            for &(d, scale) in &dashpots {
-                let l = (d.span + (at(&u, d.ends[1]) - at(&u, d.ends[0]))) * scale;
-                let c = d.coefficient;
-                let moving = d
-                    .ends
-                    .iter()
-                    .zip([-l, l])
-                    .filter_map(|(end, e)| Some(((*end)?, e)));
-                let (mut matrix, mut rhs) = (l.dot(&l), 0.0);
-                for (i, e) in moving.clone() {
-                    let g = project(e * inverse_mass[i], &held[i]);
-                    matrix += 0.5 * h * c * e.dot(&g);
-                    rhs += e.dot(&(v[i] + acceleration[i] * (0.5 * h)));
+            match &fixed {
+                Some((ends, inverse)) => {
+                    let centred = |i: usize| v[i] + acceleration[i] * (0.5 * h);
+                    let rate: f64 = ends.iter().map(|(i, e, _)| e.dot(&centred(*i))).sum();
+                    let sigma = rate * inverse;
+                    for (i, _, g) in ends {
+                        acceleration[*i] -= g * (c * sigma);
+                    }
                 }
-                let sigma = rhs / matrix;
-                for (i, e) in moving {
-                    acceleration[i] -= project(e * inverse_mass[i], &held[i]) * (c * sigma);
+                None => {
+                    for &(d, scale) in &dashpots {
+                        let l = (d.span + (at(&u, d.ends[1]) - at(&u, d.ends[0]))) * scale;
+                        let moving = d
+                            .ends
+                            .iter()
+                            .zip([-l, l])
+                            .filter_map(|(end, e)| Some(((*end)?, e)));
+                        let (mut matrix, mut rhs) = (l.dot(&l), 0.0);
+                        for (i, e) in moving.clone() {
+                            let g = project(e * inverse_mass[i], &held[i]);
+                            matrix += 0.5 * h * c * e.dot(&g);
+                            rhs += e.dot(&(v[i] + acceleration[i] * (0.5 * h)));
+                        }
+                        let sigma = rhs / matrix;
+                        for (i, e) in moving {
+                            acceleration[i] -= project(e * inverse_mass[i], &held[i]) * (c * sigma);
+                        }
+                    }
                 }
             }
             for i in 0..n {
@@ -223,5 +242,33 @@ impl AxialOscillator {
             displacements: u,
             velocities: v,
         }
+    }
+
+    /// Where every mass the dashpot moves is held across its line at displacements `u` (a
+    /// cosine of at most 1e-14 between the two), its moving ends `(mass, e, g)` along that unit
+    /// line, `e = ∓line`, `g = P e / m`, and `1/(1 + (h/2)·c·Σ e·g)`; None otherwise.
+    fn fixed_line(
+        &self,
+        u: &[Vector2<f64>],
+        held: &[Vector2<f64>],
+        inverse_mass: &[f64],
+        h: f64,
+    ) -> Option<(Vec<DashpotEnd>, f64)> {
+        let d = &self.dashpot;
+        let at = |end: Option<usize>| end.map_or(Vector2::zeros(), |i| u[i]);
+        let span = d.span + (at(d.ends[1]) - at(d.ends[0]));
+        let line = span / span.norm();
+        let mut ends = Vec::with_capacity(2);
+        let mut entry = 1.0;
+        for (end, e) in d.ends.iter().zip([-line, line]) {
+            let Some(i) = *end else { continue };
+            if held[i].dot(&line).abs() > 1e-14 {
+                return None;
+            }
+            let g = (e - held[i] * held[i].dot(&e)) * inverse_mass[i];
+            entry += 0.5 * h * d.coefficient * e.dot(&g);
+            ends.push((i, e, g));
+        }
+        Some((ends, 1.0 / entry))
     }
 }

@@ -1,5 +1,6 @@
-//! `crosscheck compare BASE NEW`: two runs of the same build compare clean; a history
-//! perturbed by 10 % is named as drift; a newly failing cell is a physics regression; JUnit XML
+//! `crosscheck compare BASE NEW`: two runs of the same build compare clean; round-off in an
+//! energy balance or in a column at rest is not drift; a history perturbed by 10 % from a
+//! given row is named as drift, from that row, over its peak and its scale; a newly failing cell is a physics regression; JUnit XML
 //! parses; reports are compared over what they share and refused (exit 2) when that is nothing;
 //! baselines are saved, compared and accepted.
 use crosscheck::comparison::summary::SCHEMA_VERSION;
@@ -48,6 +49,33 @@ fn edit_column(file: &Path, column: &str, f: impl Fn(&str) -> String) {
     std::fs::write(file, out.join("\n") + "\n").unwrap();
 }
 
+/// Rewrite column `column` of `file` row by row through `f(t, value)`.
+fn edit_rows(file: &Path, column: &str, f: impl Fn(f64, f64) -> f64) {
+    let t = column_of(file, "t");
+    let row = std::cell::Cell::new(0);
+    edit_column(file, column, |x| {
+        let value = f(t[row.get()], x.parse().unwrap());
+        row.set(row.get() + 1);
+        format!("{value:e}")
+    });
+}
+
+/// The values of column `column` of `file` (a CSV).
+fn column_of(file: &Path, column: &str) -> Vec<f64> {
+    let text = std::fs::read_to_string(file).unwrap();
+    let mut lines = text.lines();
+    let k = lines.next().unwrap().split(',').position(|c| c == column);
+    let k = k.unwrap();
+    lines
+        .map(|l| l.split(',').nth(k).unwrap().parse().unwrap())
+        .collect()
+}
+
+/// The largest magnitude in `values`.
+fn peak(values: &[f64]) -> f64 {
+    values.iter().fold(0.0_f64, |m, x| m.max(x.abs()))
+}
+
 /// The engine whose history is perturbed: `rapier_f64` (`explicit` in a build without rapier).
 const PERTURBED: &str = if cfg!(feature = "rapier") {
     "rapier_f64"
@@ -71,22 +99,70 @@ fn two_runs_compare_clean_and_a_perturbed_history_is_named() {
         "{stdout}"
     );
 
-    // rapier_f64's ux_node on one case 10 % larger: drift 1e-1 of the peak, named.
-    edit_column(
-        &b.join(format!("data/rigid2d_pin_lumped/{PERTURBED}.csv")),
+    // Round-off is not drift. `explicit`'s energy balance, a residual of round-off (about 1e-3 J
+    // here, against 3.3e3 J of kinetic energy), moved by 1e-13 of that energy: 500 ulps of it,
+    // and 3e-7 of the balance's own peak. A column at rest but for round-off (ux, held at 0;
+    // set to 1e-17 m in both reports) moved by 1e-17 m, all of its own peak and 3e-18 of the
+    // scene's extent. Both are read against the scale their round-off comes from: clean.
+    let history = |r: &Path| r.join("data/rigid2d_pin_lumped/explicit.csv");
+    let energy = {
+        let (k, e) = (
+            column_of(&history(&a), "e_kinetic"),
+            column_of(&history(&a), "e_elastic"),
+        );
+        k.iter().zip(&e).fold(0.0_f64, |m, (k, e)| m.max(k + e))
+    };
+    edit_rows(&history(&b), "e_balance", |_, x| x + 1e-13 * energy);
+    assert!(1e-13 * energy > 1e-9 * peak(&column_of(&history(&a), "e_balance")));
+    edit_rows(&history(&a), "ux", |_, _| 1e-17);
+    edit_rows(&history(&b), "ux", |_, _| 2e-17);
+    let out = compare(&a, &b, &[]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    assert!(stdout.contains("0 drifted"), "{stdout}");
+
+    // rapier_f64's ux_node on one case 10 % larger from t = 0.05 s: the largest change over its
+    // peak, and over its scale, the scene's extent (the farthest node from the origin, as the
+    // base's summary.json keeps it; larger than the peak); named, from the first row at or
+    // after 0.05 s.
+    let perturbed = b.join(format!("data/rigid2d_pin_lumped/{PERTURBED}.csv"));
+    let times = column_of(&perturbed, "t");
+    let from = *times.iter().find(|t| **t >= 0.05).unwrap();
+    let ux_node = column_of(&perturbed, "ux_node");
+    let after: Vec<f64> = ux_node
+        .iter()
+        .zip(&times)
+        .filter(|(_, t)| **t >= from)
+        .map(|(x, _)| *x)
+        .collect();
+    let (whole, moved) = (peak(&ux_node), 0.1 * peak(&after));
+    edit_rows(
+        &perturbed,
         "ux_node",
-        |x| format!("{:e}", 1.1 * x.parse::<f64>().unwrap()),
+        |t, x| if t >= from { 1.1 * x } else { x },
     );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(a.join("summary.json")).unwrap()).unwrap();
+    let case = summary["cases"].as_array().unwrap().iter();
+    let case = case
+        .clone()
+        .find(|c| c["id"] == "rigid2d_pin_lumped")
+        .unwrap();
+    let extent = case["scales"]["ux_node"].as_f64().unwrap();
+    assert!(extent > whole, "{extent} {whole}");
     let junit = root.path().join("junit.xml");
     let out = compare(&a, &b, &["--junit", junit.to_str().unwrap()]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert_eq!(out.status.code(), Some(1), "{stdout}");
-    assert!(
-        stdout.contains(&format!(
-            "| rigid2d_pin_lumped | `{PERTURBED}` | ux_node | 1.00e-1 |"
-        )),
-        "{stdout}"
+    // The largest change is 10 % of the largest |ux_node| from `from`; the time as the report
+    // prints one, to six significant digits.
+    let at: f64 = format!("{from:.5e}").parse().unwrap();
+    let row = format!(
+        "| rigid2d_pin_lumped | `{PERTURBED}` | ux_node | {:.2e} | {:.2e} | {at} |",
+        moved / whole,
+        moved / extent,
     );
+    assert!(stdout.contains(&row), "{row}\n{stdout}");
     let xml = std::fs::read_to_string(&junit).unwrap();
     let doc = roxmltree::Document::parse(&xml).expect("JUnit XML parses");
     let failures: Vec<_> = doc
@@ -370,7 +446,7 @@ fn the_main_command_says_what_changed_since_the_previous_report() {
     report(&out, &cases);
     let text = first_screen();
     assert!(
-        text.contains("1 history columns moved by more than 1.00e-9 of their peak")
+        text.contains("1 history columns moved by more than 1.00e-9 of their scale")
             && text.contains("springs_grounded_a / `explicit` u_end by 9.09e-2"),
         "{text}"
     );
@@ -381,7 +457,7 @@ fn the_main_command_says_what_changed_since_the_previous_report() {
     let text = first_screen();
     assert!(
         text.contains(
-            "and no history by more than 1.00e-9 of its peak; the histories of 1 cells \
+            "and no history by more than 1.00e-9 of its scale; the histories of 1 cells \
                        not compared (the previous report does not keep them)"
         ),
         "{text}"

@@ -90,7 +90,8 @@ enum Command {
     Judge(JudgeArgs),
     /// Compare two reports in two tiers: physics (each side's error against the exact
     /// solution; a cell that passed and now fails is a regression) and machine (the histories
-    /// row by row; a column that moved by more than the threshold of its peak has drifted).
+    /// row by row; a column that moved by more than the threshold of its scale, its peak or the
+    /// scale its round-off comes from where larger, has drifted).
     /// Exit 0 when neither fails, 1 when one does, 2 when they cannot be compared.
     Compare(CompareArgs),
     /// Merge the reports of a partitioned run's shards (`run --partition k/n`, each into a
@@ -257,7 +258,8 @@ struct CompareArgs {
     /// The report to judge against it.
     #[arg(value_name = "NEW")]
     new: PathBuf,
-    /// Drift threshold: the largest difference over the column's peak.
+    /// Drift threshold: the largest difference over the column's scale (its peak, or where larger
+    /// the energy or scene scale its round-off comes from).
     #[arg(long, value_name = "X", default_value_t = report::regression::DRIFT)]
     threshold: f64,
     /// Fail only on the physics tier (drift is reported, not failed).

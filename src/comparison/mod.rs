@@ -313,6 +313,40 @@ pub fn scene_scale(scene: &Scene, column: &str) -> f64 {
     }
 }
 
+/// Each output column's [`scene_scale`] where the scene has one (contract columns and the
+/// case's own; the energy columns are read against [`energy_scale`] instead), by name: what
+/// [`change_scale`] reads a column that stays near zero against, kept in `summary.json` so
+/// that two reports can be compared without their case files.
+pub fn scene_scales(scene: &Scene) -> BTreeMap<String, f64> {
+    scene
+        .columns
+        .iter()
+        .map(|c| (c.name.clone(), scene_scale(scene, &c.name)))
+        .filter(|(_, s)| *s > 0.0)
+        .collect()
+}
+
+/// What a change of history column `column` is read against when two runs of one cell are
+/// compared row by row (the machine tier of `crosscheck compare`): its peak or, where larger,
+/// the scale its round-off comes from. Another order of the same operations moves a value by
+/// a few ulps of the magnitudes it is computed from, not of the value itself: an energy column
+/// (the balance above all, itself a residual of round-off) by ulps of the energy the balance
+/// is read against ([`energy_scale`]), and a column that stays near zero (a sideways
+/// displacement, the work of a load that barely moves) by ulps of the scene's scale in its
+/// unit (`scene_scale`, from [`scene_scales`]; 0 where unknown). 0 where all are.
+pub fn change_scale(h: &History, column: &str, scene_scale: f64) -> f64 {
+    let peak = h
+        .column(column)
+        .map_or(0.0, |c| c.iter().fold(0.0_f64, |m, x| m.max(x.abs())));
+    let floor = if column == contract::E_BALANCE || contract::energy_columns(true).contains(&column)
+    {
+        energy_scale(h).unwrap_or(0.0)
+    } else {
+        scene_scale
+    };
+    peak.max(floor)
+}
+
 /// Largest |e_balance| divided by [`energy_scale`] (in joules where that is 0).
 pub fn energy_balance(h: &History) -> Option<f64> {
     let balance = h.column(contract::E_BALANCE)?;
@@ -361,4 +395,51 @@ pub fn contact_validity(reference: &History) -> Option<ContactValidity> {
         margin: if max > 0.0 { min / max } else { 0.0 },
         valid_until: (n < force.len()).then(|| t[n]),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A history of 1 kJ swapped between kinetic and elastic energy, its balance a residual
+    /// of 1e-10 J, a displacement of 0.2 m and one at rest but for 1e-17 m of round-off.
+    fn history() -> History {
+        let columns = ["t", "ux", "uy", "e_kinetic", "e_elastic", "e_balance"];
+        let rows = (0..=100)
+            .map(|i| {
+                let phase = f64::from(i) * 0.1;
+                let (c, s) = (phase.cos(), phase.sin());
+                vec![
+                    phase,
+                    0.2 * s,
+                    1e-17 * c,
+                    1e3 * c * c,
+                    1e3 * s * s,
+                    1e-10 * s,
+                ]
+            })
+            .collect();
+        History {
+            columns: columns.iter().map(|c| c.to_string()).collect(),
+            rows,
+        }
+    }
+
+    #[test]
+    fn a_change_is_read_against_the_scale_its_round_off_comes_from() {
+        let h = history();
+        // The mechanical energy is 1 kJ on every row (up to round-off of cos² + sin²).
+        let energy = energy_scale(&h).unwrap();
+        assert!((energy - 1e3).abs() < 1e-12, "{energy}");
+        // The balance, 1e-10 J at its peak, is read against that energy.
+        assert_eq!(change_scale(&h, "e_balance", 0.0), energy);
+        assert_eq!(change_scale(&h, "e_kinetic", 5.0), energy);
+        // A column at rest is read against the scene's scale in its unit (3 m), one that moves
+        // more than it against its own peak (0.2 m, reached at phase 4.7 rad to within
+        // 1 − |sin 4.7| = 7.7e-5 of it).
+        assert_eq!(change_scale(&h, "uy", 3.0), 3.0);
+        assert_eq!(change_scale(&h, "uy", 0.0), 1e-17);
+        let ux = change_scale(&h, "ux", 0.1);
+        assert!((ux - 0.2).abs() < 0.2 * 2e-4 && ux < 0.2, "{ux}");
+    }
 }

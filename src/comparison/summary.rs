@@ -112,6 +112,10 @@ pub struct CaseSummary {
     /// `[time] tolerance` in the case file), where it asked one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub requested: Option<f64>,
+    /// The scene's own scale in each output column's unit ([`comparison::scene_scales`]):
+    /// what `crosscheck compare` reads a change of a column that stays near zero against.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub scales: BTreeMap<String, f64>,
 }
 
 /// One engine on one case.
@@ -311,6 +315,7 @@ impl Summary {
                 };
                 CaseSummary {
                     requested,
+                    scales: comparison::scene_scales(scene),
                     id: scene.id.clone(),
                     title: scene.title.clone(),
                     family: scene.family.name().to_string(),

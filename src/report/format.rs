@@ -39,6 +39,13 @@ pub fn tick(y: f64, span: f64) -> String {
     }
 }
 
+/// A time as the report prints it: six significant digits, without the round-off of summing
+/// increments (0.5274, not 0.5274000000000001).
+pub fn instant(t: f64) -> String {
+    let rounded: f64 = format!("{t:.5e}").parse().unwrap_or(t);
+    format!("{rounded}")
+}
+
 /// Format a number as the CSV stores it: shortest round-trip scientific notation.
 pub fn csv_value(x: f64) -> String {
     format!("{x:e}")
@@ -91,6 +98,14 @@ pub fn figure(alt: &str, path: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_instant_keeps_six_significant_digits() {
+        assert_eq!(instant(0.5274000000000001), "0.5274");
+        assert_eq!(instant(1.0e-5), "0.00001");
+        assert_eq!(instant(12.345678), "12.3457");
+        assert_eq!(instant(0.0), "0");
+    }
 
     #[test]
     fn tick_labels_have_three_significant_digits_and_no_round_off_noise() {

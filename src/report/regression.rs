@@ -2,18 +2,25 @@
 //! **physics**, each side's error against the exact solution and its tolerance
 //! (`results.csv`; a cell that passed and now fails is a regression), and **machine**, the
 //! histories themselves (`data/<case>/<engine>.csv`) compared row by row (the largest
-//! difference over the column's peak; above a threshold it is drift, even where both pass).
+//! difference over the column's scale, [`change_scale`]: its peak, or the scale its round-off
+//! comes from where that is larger; above a threshold it is drift, even where both pass).
 
+use crate::comparison::change_scale;
 use crate::comparison::summary::SCHEMA_VERSION;
 use crate::report::data::read_history;
-use crate::report::format::sci;
+use crate::report::format::{instant, sci};
 use std::collections::BTreeMap;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
 /// Default threshold of the machine tier: a history that moved by more than this fraction of
-/// its column's peak has drifted (a few hundred ulps of the peak is round-off from another
-/// order of operations; 1e-9 is far above it and far below any tolerance).
+/// its column's scale ([`change_scale`]) has drifted. Round-off from another order of
+/// operations is a few ulps of that scale per increment and accumulates over a run: a bias of
+/// one ulp on every force the explicit engine applies moves the shipped cases' columns by up
+/// to 1e-10 of their scale (a penalty contact force, whose penetration is about 1e-5 of the
+/// positions it is the difference of), except where it moves a contact's opening by an
+/// increment (contact_slide_ball: 1.5e-6 of the contact force's peak from the row it opens).
+/// 1e-9 is above the first and far below any tolerance.
 pub const DRIFT: f64 = 1e-9;
 
 /// Why two reports cannot be compared.
@@ -79,6 +86,10 @@ pub struct Report {
     pub verdicts: BTreeMap<Key, Verdict>,
     /// Each run's status in `summary.json` (`ok`, `failed`, ...), by (case, engine).
     pub statuses: BTreeMap<(String, String), String>,
+    /// Each case's scene scales by column (`summary.json`'s `scales`), what a column that
+    /// stays near zero is compared against ([`change_scale`]); none in a report written
+    /// before it kept them.
+    pub scales: BTreeMap<String, BTreeMap<String, f64>>,
 }
 
 /// One column's comparison.
@@ -90,15 +101,30 @@ pub struct Change {
     /// energy column).
     pub physics: Option<(Verdict, Verdict)>,
     /// The machine tier: the largest difference between the two histories over the base
-    /// column's peak (absolute where the peak is 0); `None` where a report does not keep the
-    /// cell's history ([`Since::not_kept`]).
+    /// column's scale ([`change_scale`]; absolute where that is 0); `None` where a report does
+    /// not keep the cell's history ([`Since::not_kept`]).
     pub drift: Option<f64>,
+    /// The same difference over the base column's own peak (absolute where that is 0): how
+    /// much the column itself moved.
+    pub of_peak: Option<f64>,
+    /// Where the difference grows: each row (its time) at which the largest difference so far,
+    /// over the scale, rises, with that value (the last is [`Change::drift`]).
+    pub growth: Vec<(f64, f64)>,
 }
 
 impl Change {
-    /// Its history moved by more than `threshold` of its peak.
+    /// Its history moved by more than `threshold` of its scale.
     pub fn drifted(&self, threshold: f64) -> bool {
         self.drift.is_some_and(|d| d > threshold)
+    }
+
+    /// The time of the first row at which the history differs by more than `threshold` of
+    /// its scale, where it does.
+    pub fn onset(&self, threshold: f64) -> Option<f64> {
+        self.growth
+            .iter()
+            .find(|(_, d)| *d > threshold)
+            .map(|(t, _)| *t)
     }
 
     /// Passed in the base report and fails in the new one.
@@ -136,10 +162,23 @@ pub fn read(dir: &Path) -> Result<Report, Unusable> {
             }
         }
     }
+    let scales = json["cases"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(|case| {
+            let columns = case["scales"].as_object()?;
+            let scales = columns
+                .iter()
+                .filter_map(|(c, s)| Some((c.clone(), s.as_f64()?)));
+            Some((case["id"].as_str()?.to_string(), scales.collect()))
+        })
+        .collect();
     Ok(Report {
         dir: dir.to_path_buf(),
         verdicts: read_results(&results)?,
         statuses,
+        scales,
     })
 }
 
@@ -188,9 +227,28 @@ fn read_results(path: &Path) -> Result<BTreeMap<Key, Verdict>, Unusable> {
     Ok(out)
 }
 
-/// The largest difference of each column between two histories of one cell, over the base
-/// column's peak; `Err` where their columns or rows differ.
-fn drift_of(base: &Path, new: &Path) -> Result<Vec<(String, f64)>, Unusable> {
+/// One column's machine tier between two histories of one cell: the largest difference over
+/// the base column's scale, and where it grows ([`Change::growth`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ColumnDrift {
+    /// The column.
+    pub column: String,
+    /// The largest difference over the scale (absolute where the scale is 0).
+    pub drift: f64,
+    /// The largest difference over the column's own peak (absolute where that is 0).
+    pub of_peak: f64,
+    /// [`Change::growth`].
+    pub growth: Vec<(f64, f64)>,
+}
+
+/// Each column's [`ColumnDrift`] between two histories of one cell, read against the base
+/// history and the case's scene `scales` ([`change_scale`]); `Err` where their columns or rows
+/// differ.
+fn drift_of(
+    base: &Path,
+    new: &Path,
+    scales: Option<&BTreeMap<String, f64>>,
+) -> Result<Vec<ColumnDrift>, Unusable> {
     let read = |p: &Path| read_history(p).map_err(|e| Unusable::Read(e.to_string()));
     let (a, b) = (read(base)?, read(new)?);
     if a.columns != b.columns || a.rows.len() != b.rows.len() {
@@ -207,25 +265,37 @@ fn drift_of(base: &Path, new: &Path) -> Result<Vec<(String, f64)>, Unusable> {
             ),
         });
     }
+    let scene = |name: &str| scales.and_then(|s| s.get(name)).copied().unwrap_or(0.0);
     Ok(a.columns
         .iter()
         .enumerate()
         .skip(1)
         .map(|(j, name)| {
-            let peak = a.rows.iter().fold(0.0f64, |m, r| m.max(r[j].abs()));
-            let worst = a
-                .rows
-                .iter()
-                .zip(&b.rows)
-                .fold(0.0f64, |m, (x, y)| m.max((x[j] - y[j]).abs()));
-            (name.clone(), if peak > 0.0 { worst / peak } else { worst })
+            let scale = change_scale(&a, name, scene(name));
+            let over = |scale: f64| if scale > 0.0 { 1.0 / scale } else { 1.0 };
+            let (mut largest, mut growth) = (0.0_f64, Vec::new());
+            for (x, y) in a.rows.iter().zip(&b.rows) {
+                let d = (x[j] - y[j]).abs();
+                if d > largest {
+                    largest = d;
+                    growth.push((x[0], d * over(scale)));
+                }
+            }
+            let peak = a.rows.iter().fold(0.0_f64, |m, r| m.max(r[j].abs()));
+            ColumnDrift {
+                column: name.clone(),
+                drift: largest * over(scale),
+                of_peak: largest * over(peak),
+                growth,
+            }
         })
         .collect())
 }
 
 /// The machine tier between two engines of one report on one case: the largest difference of
-/// each column of `new`'s history from `base`'s, over `base`'s peak (an engine's releases side
-/// by side).
+/// each column of `new`'s history from `base`'s, over `base`'s peak ([`ColumnDrift::of_peak`]:
+/// what each column moved between an engine's releases side by side, which are not round-off
+/// apart).
 pub fn drift_between(
     report: &Report,
     case: &str,
@@ -233,7 +303,8 @@ pub fn drift_between(
     new: &str,
 ) -> Result<Vec<(String, f64)>, Unusable> {
     let file = |engine: &str| crate::report::data::csv_path(&report.dir, case, engine);
-    drift_of(&file(base), &file(new))
+    let drifts = drift_of(&file(base), &file(new), report.scales.get(case))?;
+    Ok(drifts.into_iter().map(|d| (d.column, d.of_peak)).collect())
 }
 
 /// The (case, engine) cells of a report, in order: those `results.csv` judges, those with a
@@ -317,9 +388,13 @@ fn cell_changes(
             });
         }
     };
-    let drifts: Vec<(String, Option<f64>)> = if file(base).is_file() && file(new).is_file() {
-        let drifts = drift_of(&file(base), &file(new))?;
-        drifts.into_iter().map(|(c, d)| (c, Some(d))).collect()
+    let drifts: Vec<(String, Option<ColumnDrift>)> = if file(base).is_file() && file(new).is_file()
+    {
+        let drifts = drift_of(&file(base), &file(new), base.scales.get(case))?;
+        drifts
+            .into_iter()
+            .map(|d| (d.column.clone(), Some(d)))
+            .collect()
     } else {
         base.verdicts
             .keys()
@@ -336,10 +411,15 @@ fn cell_changes(
                 .get(&key)
                 .zip(new.verdicts.get(&key))
                 .map(|(a, b)| (a.clone(), b.clone()));
+            let (drift, of_peak, growth) = drift.map_or((None, None, Vec::new()), |d| {
+                (Some(d.drift), Some(d.of_peak), d.growth)
+            });
             Change {
                 key,
                 physics,
                 drift,
+                of_peak,
+                growth,
             }
         })
         .collect();
@@ -440,7 +520,7 @@ pub const MOVED: f64 = 0.01;
 
 impl Since {
     /// One paragraph: verdicts that flipped (physics), errors that moved by more than
-    /// [`MOVED`], histories that drifted by more than [`DRIFT`] of their peak (machine), and
+    /// [`MOVED`], histories that drifted by more than [`DRIFT`] of their scale (machine), and
     /// the cells added, gone or not comparable.
     pub fn paragraph(&self) -> String {
         let cell = |c: &Change| format!("{} / `{}` {}", c.key.0, c.key.1, c.key.2);
@@ -512,7 +592,7 @@ impl Since {
                 .map(|c| format!("{} by {}", cell(c), sci(c.drift.unwrap_or(0.0))))
                 .collect();
             parts.push(format!(
-                "{} history columns moved by more than {} of their peak (most: {})",
+                "{} history columns moved by more than {} of their scale (most: {})",
                 drifted.len(),
                 sci(DRIFT),
                 shown.join("; ")
@@ -569,7 +649,7 @@ impl Since {
                 ));
             }
             format!(
-                "{moved_none} and no history by more than {} of its peak",
+                "{moved_none} and no history by more than {} of its scale",
                 sci(DRIFT)
             )
         };
@@ -632,7 +712,8 @@ pub fn markdown(base: &Path, new: &Path, compared: &Since, threshold: f64) -> St
             compared.kept_by("base")
         ),
         None => format!(
-            "{} drifted by more than {} of their peak",
+            "{} drifted by more than {} of their scale (its peak, or the energy or scene scale its \
+             round-off comes from where larger)",
             drifted.len(),
             sci(threshold)
         ),
@@ -670,8 +751,7 @@ pub fn markdown(base: &Path, new: &Path, compared: &Since, threshold: f64) -> St
         (&compared.gone, "in the base report only (not compared)"),
     ] {
         if !cells.is_empty() {
-            let list: Vec<String> = cells.iter().map(|(c, e)| format!("{c} / `{e}`")).collect();
-            let _ = writeln!(s, "\n{} cells {what}: {}.", cells.len(), list.join(", "));
+            let _ = writeln!(s, "\n{} cells {what}: {}.", cells.len(), cell_list(cells));
         }
     }
     if !compared.broken.is_empty() {
@@ -710,7 +790,7 @@ pub fn markdown(base: &Path, new: &Path, compared: &Since, threshold: f64) -> St
         }
     }
     if !drifted.is_empty() {
-        s += "\n## Drifted\n\n| case | engine | column | drift / peak | base error | new error |\n|---|---|---|---:|---:|---:|\n";
+        s += "\n## Drifted\n\n| case | engine | column | drift / peak | drift / scale | from t, s | base error | new error |\n|---|---|---|---:|---:|---:|---:|---:|\n";
         for c in &drifted {
             let (a, b) = c
                 .physics
@@ -718,15 +798,39 @@ pub fn markdown(base: &Path, new: &Path, compared: &Since, threshold: f64) -> St
                 .map_or(("–".into(), "–".into()), |(a, b)| (error(a), error(b)));
             let _ = writeln!(
                 s,
-                "| {} | `{}` | {} | {} | {a} | {b} |",
+                "| {} | `{}` | {} | {} | {} | {} | {a} | {b} |",
                 c.key.0,
                 c.key.1,
                 c.key.2,
-                sci(c.drift.unwrap_or(0.0))
+                sci(c.of_peak.unwrap_or(0.0)),
+                sci(c.drift.unwrap_or(0.0)),
+                c.onset(threshold).map_or("–".into(), instant)
             );
         }
     }
     s
+}
+
+/// Cells (case, engine) in words: each one where there are few, otherwise by engine, with its
+/// cases where they are few and their count where they are many.
+fn cell_list(cells: &[(String, String)]) -> String {
+    const FEW: usize = 10;
+    if cells.len() <= FEW {
+        let each: Vec<String> = cells.iter().map(|(c, e)| format!("{c} / `{e}`")).collect();
+        return each.join(", ");
+    }
+    let mut by_engine: BTreeMap<&str, Vec<&str>> = BTreeMap::new();
+    for (case, engine) in cells {
+        by_engine.entry(engine).or_default().push(case);
+    }
+    let each: Vec<String> = by_engine
+        .iter()
+        .map(|(engine, cases)| match cases.len() {
+            n if n <= 3 => format!("`{engine}` on {}", cases.join(", ")),
+            n => format!("`{engine}` on {n} cases ({}, …)", cases[..2].join(", ")),
+        })
+        .collect();
+    each.join("; ")
 }
 
 /// The comparison as JUnit XML: a suite per tier, a test case per column (`case/engine` its
@@ -778,7 +882,7 @@ pub fn junit(compared: &Since, threshold: f64, physics_only: bool) -> String {
     let mut machine = suite("machine", &all, &|c: &Change| {
         (!physics_only && c.drifted(threshold)).then(|| {
             format!(
-                "drifted by {} of the peak (threshold {})",
+                "drifted by {} of the scale (threshold {})",
                 sci(c.drift.unwrap_or(0.0)),
                 sci(threshold)
             )

@@ -1,7 +1,7 @@
 //! `crosscheck compare BASE NEW`: two runs of the same build compare clean; round-off in an
 //! energy balance or in a column at rest is not drift; a history perturbed by 10 % from a
-//! given row is named as drift, from that row, over its peak and its scale; a newly failing cell is a physics regression; JUnit XML
-//! parses; reports are compared over what they share and refused (exit 2) when that is nothing;
+//! given row is named as drift, from that row, over its peak and its scale; a newly failing
+//! cell is a physics regression; JUnit XML parses; reports are compared over what they share and refused (exit 2) when that is nothing;
 //! baselines are saved, compared and accepted.
 use crosscheck::comparison::summary::SCHEMA_VERSION;
 use std::path::Path;
@@ -148,14 +148,17 @@ fn two_runs_compare_clean_and_a_perturbed_history_is_named() {
         .clone()
         .find(|c| c["id"] == "rigid2d_pin_lumped")
         .unwrap();
+    // The farthest node from the origin is G1 at (2, -3) (cases/rigid2d_pin_lumped.toml).
     let extent = case["scales"]["ux_node"].as_f64().unwrap();
+    assert_eq!(extent, 13.0_f64.sqrt());
     assert!(extent > whole, "{extent} {whole}");
     let junit = root.path().join("junit.xml");
     let out = compare(&a, &b, &["--junit", junit.to_str().unwrap()]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert_eq!(out.status.code(), Some(1), "{stdout}");
-    // The largest change is 10 % of the largest |ux_node| from `from`; the time as the report
-    // prints one, to six significant digits.
+    // The largest change is 10 % of the largest |ux_node| from `from`, and the first changed
+    // row already moved by far more than 1e-9 of the scale (10 % of 1 mm against 3.6 m); the
+    // time as the report prints one, to six significant digits.
     let at: f64 = format!("{from:.5e}").parse().unwrap();
     let row = format!(
         "| rigid2d_pin_lumped | `{PERTURBED}` | ux_node | {:.2e} | {:.2e} | {at} |",
@@ -422,7 +425,8 @@ fn baselines_are_saved_compared_and_accepted() {
 
 /// The main command says what changed since the report it replaces, with `compare`'s two
 /// tiers: nothing after a second run of the same build; a history of the previous report
-/// 10 % larger in one column is named with its drift, 0.1/1.1 of that report's peak; one of
+/// 10 % larger in one column is named with its drift, 0.1/1.1 of that report's peak (its
+/// scale: the peak, larger than the scene's 1 m extent); one of
 /// another schema version is said to be incomparable.
 #[test]
 fn the_main_command_says_what_changed_since_the_previous_report() {

@@ -313,16 +313,16 @@ pub fn scene_scale(scene: &Scene, column: &str) -> f64 {
     }
 }
 
-/// Each output column's [`scene_scale`] where the scene has one (contract columns and the
-/// case's own; the energy columns are read against [`energy_scale`] instead), by name: what
-/// [`change_scale`] reads a column that stays near zero against, kept in `summary.json` so
-/// that two reports can be compared without their case files.
+/// Each output column's [`scene_scale`] where the scene has a finite one (contract columns
+/// and the case's own; the energy columns are read against [`energy_scale`] instead), by
+/// name: what [`change_scale`] reads a column whose peak is smaller against, kept in
+/// `summary.json` so that two reports can be compared without their case files.
 pub fn scene_scales(scene: &Scene) -> BTreeMap<String, f64> {
     scene
         .columns
         .iter()
         .map(|c| (c.name.clone(), scene_scale(scene, &c.name)))
-        .filter(|(_, s)| *s > 0.0)
+        .filter(|(_, s)| *s > 0.0 && s.is_finite())
         .collect()
 }
 
@@ -331,15 +331,16 @@ pub fn scene_scales(scene: &Scene) -> BTreeMap<String, f64> {
 /// the scale its round-off comes from. Another order of the same operations moves a value by
 /// a few ulps of the magnitudes it is computed from, not of the value itself: an energy column
 /// (the balance above all, itself a residual of round-off) by ulps of the energy the balance
-/// is read against ([`energy_scale`]), and a column that stays near zero (a sideways
-/// displacement, the work of a load that barely moves) by ulps of the scene's scale in its
-/// unit (`scene_scale`, from [`scene_scales`]; 0 where unknown). 0 where all are.
+/// is read against ([`energy_scale`]), and any other column by ulps of the scene's scale in
+/// its unit (`scene_scale`, from [`scene_scales`]; 0 where unknown): a displacement by ulps of
+/// the positions it is the difference of, so that a sideways displacement at rest but for
+/// round-off is not read against its own 1e-17 m, and a displacement smaller than the scene's
+/// extent is read against the extent. 0 where all are.
 pub fn change_scale(h: &History, column: &str, scene_scale: f64) -> f64 {
     let peak = h
         .column(column)
         .map_or(0.0, |c| c.iter().fold(0.0_f64, |m, x| m.max(x.abs())));
-    let floor = if column == contract::E_BALANCE || contract::energy_columns(true).contains(&column)
-    {
+    let floor = if contract::energy_columns(true).contains(&column) {
         energy_scale(h).unwrap_or(0.0)
     } else {
         scene_scale
@@ -433,7 +434,7 @@ mod tests {
         assert!((energy - 1e3).abs() < 1e-12, "{energy}");
         // The balance, 1e-10 J at its peak, is read against that energy.
         assert_eq!(change_scale(&h, "e_balance", 0.0), energy);
-        assert_eq!(change_scale(&h, "e_kinetic", 5.0), energy);
+        assert_eq!(change_scale(&h, "e_kinetic", 5e3), energy);
         // A column at rest is read against the scene's scale in its unit (3 m), one that moves
         // more than it against its own peak (0.2 m, reached at phase 4.7 rad to within
         // 1 − |sin 4.7| = 7.7e-5 of it).

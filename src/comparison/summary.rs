@@ -113,7 +113,7 @@ pub struct CaseSummary {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub requested: Option<f64>,
     /// The scene's own scale in each output column's unit ([`comparison::scene_scales`]):
-    /// what `crosscheck compare` reads a change of a column that stays near zero against.
+    /// what `crosscheck compare` reads a change of a column with a smaller peak against.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub scales: BTreeMap<String, f64>,
 }

@@ -275,7 +275,7 @@ fn drift_of(
             let over = |scale: f64| if scale > 0.0 { 1.0 / scale } else { 1.0 };
             let (mut largest, mut growth) = (0.0_f64, Vec::new());
             for (x, y) in a.rows.iter().zip(&b.rows) {
-                let d = (x[j] - y[j]).abs();
+                let d = difference(x[j], y[j]);
                 if d > largest {
                     largest = d;
                     growth.push((x[0], d * over(scale)));
@@ -290,6 +290,16 @@ fn drift_of(
             }
         })
         .collect())
+}
+
+/// |a − b|, with a value that is not a number on one side only infinitely far from the other
+/// (on both, where they agree, 0).
+fn difference(a: f64, b: f64) -> f64 {
+    match (a.is_nan(), b.is_nan()) {
+        (false, false) => (a - b).abs(),
+        (true, true) => 0.0,
+        _ => f64::INFINITY,
+    }
 }
 
 /// The machine tier between two engines of one report on one case: the largest difference of
@@ -388,9 +398,11 @@ fn cell_changes(
             });
         }
     };
+    // A base report written before reports kept their scales reads them from the new one.
+    let scales = base.scales.get(case).or(new.scales.get(case));
     let drifts: Vec<(String, Option<ColumnDrift>)> = if file(base).is_file() && file(new).is_file()
     {
-        let drifts = drift_of(&file(base), &file(new), base.scales.get(case))?;
+        let drifts = drift_of(&file(base), &file(new), scales)?;
         drifts
             .into_iter()
             .map(|d| (d.column.clone(), Some(d)))
@@ -712,8 +724,8 @@ pub fn markdown(base: &Path, new: &Path, compared: &Since, threshold: f64) -> St
             compared.kept_by("base")
         ),
         None => format!(
-            "{} drifted by more than {} of their scale (its peak, or the energy or scene scale its \
-             round-off comes from where larger)",
+            "{} drifted by more than {} of their scale (a column's peak, or where larger the \
+             energy or scene scale its round-off comes from)",
             drifted.len(),
             sci(threshold)
         ),
@@ -899,4 +911,30 @@ pub fn junit(compared: &Since, threshold: f64, physics_only: bool) -> String {
     }
     report.add_test_suite(machine);
     report.to_string().unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_value_that_is_not_a_number_on_one_side_only_is_infinitely_far() {
+        assert_eq!(difference(1.0, 1.5), 0.5);
+        assert_eq!(difference(f64::NAN, 1.0), f64::INFINITY);
+        assert_eq!(difference(1.0, f64::NAN), f64::INFINITY);
+        assert_eq!(difference(f64::NAN, f64::NAN), 0.0);
+    }
+
+    #[test]
+    fn many_cells_are_listed_by_engine() {
+        let cell = |c: usize, e: &str| (format!("case{c:02}"), e.to_string());
+        let few: Vec<_> = (0..2).map(|c| cell(c, "a")).collect();
+        assert_eq!(cell_list(&few), "case00 / `a`, case01 / `a`");
+        let mut many: Vec<_> = (0..10).map(|c| cell(c, "a")).collect();
+        many.extend((0..2).map(|c| cell(c, "b")));
+        assert_eq!(
+            cell_list(&many),
+            "`a` on 10 cases (case00, case01, …); `b` on case00, case01"
+        );
+    }
 }

@@ -17,9 +17,9 @@ use std::path::{Path, PathBuf};
 /// its column's scale ([`change_scale`]) has drifted. Round-off from another order of
 /// operations is a few ulps of that scale per increment and accumulates over a run: a bias of
 /// one ulp on every force the explicit engine applies moves the shipped cases' columns by up
-/// to 1e-10 of their scale (a penalty contact force, whose penetration is about 1e-5 of the
+/// to 1.5e-10 of their scale (a penalty contact force, whose penetration is about 1e-5 of the
 /// positions it is the difference of), except where it moves a contact's opening by an
-/// increment (contact_slide_ball: 1.5e-6 of the contact force's peak from the row it opens).
+/// increment (contact_slide_ball: 1.3e-6 of the contact force's scale, once it opens).
 /// 1e-9 is above the first and far below any tolerance.
 pub const DRIFT: f64 = 1e-9;
 

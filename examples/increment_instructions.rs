@@ -8,8 +8,8 @@
 //! The count of `explicit` and of the floor is the difference of two whole runs, at a tenth and
 //! a twentieth of the case's increment, over the difference of their increments, so what a run
 //! does once (compiling the scene, the static steps, the 501 output rows) cancels. It is the
-//! cost of one increment where that does not change with the increment; the cases whose
-//! centred velocity is iterated take two passes per increment at both. The count of
+//! cost of one increment where that does not change with the increment (the seed cases whose
+//! centred velocity reads the body's rate solve it in closed form at both). The count of
 //! `rapier_f64` is one whole run at a tenth of the case's increment (the run criterion times)
 //! over its increments: an increment costs it some 25 000 to 100 000 instructions, so what the
 //! run does once is a small part of the count (the difference of two runs, as above, gave the

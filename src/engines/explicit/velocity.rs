@@ -3,7 +3,10 @@
 //!
 //! The centred treatment uses `v(n) = v(n−½) + (h/2)·a(n)`, which keeps the scheme second
 //! order: solved directly where every dashpot joins particles and no body has velocity terms
-//! ([`ParticleDashpots`]), otherwise by fixed-point iteration from the predictor
+//! ([`ParticleDashpots`]); in closed form where no dashpot acts and every body with velocity
+//! terms turns about one axis, whose centripetal force alone reads the velocity, as ω²
+//! ([`Model::centred_bodies_solved`]), wherever the iteration would contract by ½ or less;
+//! otherwise by fixed-point iteration from the predictor
 //! `v(n−½) + (h/2)·a(n−1)`, and, where that iteration cannot contract because of stiff
 //! dashpots, by a direct solve in the free DOFs: the dashpots along directions frozen for the
 //! increment make the map affine, and where bodies have velocity terms (centripetal,
@@ -279,8 +282,10 @@ fn iterate<S: Space, const FINITE: bool>(
 
 /// [`iterate`] where no dashpot acts, from the predictor in `work.guess`: the velocity enters
 /// through the bodies' centripetal and gyroscopic terms alone, so the particles' accelerations
-/// and centred velocities are formed once, from the position forces, and every pass runs over
-/// the bodies alone ([`Model::centred_body_pass`]). After the first pass a particle's change is
+/// and centred velocities are formed once, from the position forces. Where every body that
+/// reads the velocity turns about one axis the bodies' rates are then solved in closed form
+/// ([`Model::centred_bodies_solved`]); otherwise every pass runs over the bodies alone
+/// ([`Model::centred_body_pass`]). After the first pass a particle's change is
 /// exactly 0 and its size the same, as the general iteration finds them: the same iterates and
 /// stop, bit for bit. It is not given up early where it diverges: without dashpots there is no
 /// direct solve to turn to ([`VelocityRule::of`]).
@@ -294,6 +299,10 @@ fn iterate_bodies<S: Space, const FINITE: bool>(
     let (v_half, h, held) = (at.v_half, at.h, at.held);
     model.particle_accelerations(forces, held, acc);
     work.v_n.set_plus_particles(v_half, 0.5 * h, acc);
+    let (operators, state) = (&work.operators, (cfg, forces, held));
+    if model.centred_bodies_solved(state, operators, (v_half, h), &mut work.v_n, acc, counters) {
+        return true;
+    }
     let (mut particle_change, particle_size) = work.v_n.particle_differences(&work.guess);
     let mut previous_change = 0.0;
     for pass in 0..MAX_DAMPING_ITERATIONS {

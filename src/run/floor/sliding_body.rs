@@ -12,12 +12,15 @@
 //! It is the same scheme as the explicit engine's (central differences, finite rotation, a
 //! unilateral penalty). With the mass centre off the reference node the centripetal force
 //! m ω²c reads the angular velocity at time n, so the body's accelerations come from the
-//! centred velocity `v(n) = v(n−½) + (h/2)·a(v(n))`, found as the engine finds it: by
-//! fixed-point iteration from `v(n−½) + (h/2)·a(n−1)`, stopped by the engine's rule (the
-//! change within 1e-14 of the largest rate, or within that of the fixed point by the
-//! contraction bound after a contracting pass). Each pass solves the body's 2×2 mass matrix
-//! about the reference node for the acceleration along x and the angular acceleration; the
-//! part of it that depends on the heading is formed once per increment. The start at t = 0 is
+//! centred velocity `v(n) = v(n−½) + (h/2)·a(v(n))`, found as the engine finds it: the
+//! accelerations are those at rest plus ω² times those under the unit centripetal force, so
+//! ω(n) is the root of a quadratic, taken in closed form ([`centred_about_axis`]) where the
+//! fixed-point iteration would contract by at most ½, and otherwise iterated from
+//! `v(n−½) + (h/2)·a(n−1)` and stopped by the engine's rule (the change within 1e-14 of the
+//! largest rate, or within that of the fixed point by the contraction bound after a
+//! contracting pass). Each solve of the body's 2×2 mass matrix about the reference node gives
+//! the acceleration along x and the angular acceleration; the part of it that depends on the
+//! heading is formed once per increment. The start at t = 0 is
 //! the engine's: a(0) at the initial velocities, then `v(½) = v(0) + (h/2)·a(0)`. The motion
 //! keeps the engine's arithmetic: translations summed with a compensated (Kahan) addition, the
 //! orientation kept as its versine and sine and turned as [`super::PinnedBody`] turns it. Only
@@ -25,9 +28,8 @@
 //! alone (the engine's measures every rate, the particle's too).
 //!
 //! It leaves out what is not the scheme: the contact starts from zero penetration (the engine
-//! starts it where the rigid model is; the penalty mode then rings, and the iteration takes
-//! 2.8 passes per increment at the case's increment where the engine takes 2.5, and 2 at a
-//! tenth of it, as the engine does: measured), an iteration that does not converge in 100
+//! starts it where the rigid model is, and the penalty mode then rings), an iteration that
+//! does not converge in 100
 //! passes is taken as it stands (the engine refuses the run), and nothing is checked or
 //! recorded (rows, energy, the work of impacts). So it is a floor to time the engine against,
 //! not its answer to round-off: `tests/floor.rs` holds it to the case's exact solution at the
@@ -315,7 +317,11 @@ impl SlidingBody {
             } else {
                 let matrix = MassMatrix::at(self, inverse_body_mass[0], &heading[0]);
                 let at = |guess: &Rates| matrix.accelerations(&load[0], guess[1]);
-                let (a, taken) = centred(at, rates[0], acc[0], h);
+                let responses = (at(&[0.0; 2]), matrix.accelerations(&Load::default(), 1.0));
+                let (a, taken) = match centred_about_axis(responses, rates[0], 1, h) {
+                    Some(a) => (a, 2),
+                    None => centred(at, rates[0], acc[0], h),
+                };
                 (acc[0], passes) = (a, passes + taken);
             }
             rates[0] = plus(rates[0], h, acc[0]);
@@ -351,6 +357,30 @@ pub(super) fn plus<const N: usize>(a: [f64; N], s: f64, b: [f64; N]) -> [f64; N]
 #[inline(always)]
 fn largest<const N: usize>(f: impl Fn(usize) -> f64) -> f64 {
     (1..N).fold(f(0), |m, k| m.max(f(k)))
+}
+
+/// The accelerations at the centred velocity where they read the rates through the square of
+/// one alone, ω, the rate about the body's one free axis (index `spin`): with `at_rest` the
+/// accelerations at ω = 0 and `per_square` those per ω², ω(n) solves ω = C + k·ω² with
+/// C = ω(n−½) + (h/2)·at_rest[spin] and k = (h/2)·per_square[spin], whose root near C is
+/// 2C/(1 + √(1 − 4kC)). Taken as the engine takes it, where the iteration would contract by at
+/// most ½ there (the square root within [½, 3/2]); `None` elsewhere, where the caller
+/// iterates ([`centred`]).
+#[inline(always)]
+pub(super) fn centred_about_axis<const N: usize>(
+    (at_rest, per_square): ([f64; N], [f64; N]),
+    half: [f64; N],
+    spin: usize,
+    h: f64,
+) -> Option<[f64; N]> {
+    let s = 0.5 * h;
+    let (c, k) = (half[spin] + s * at_rest[spin], s * per_square[spin]);
+    let root = (1.0 - 4.0 * k * c).sqrt();
+    if !(0.5..=1.5).contains(&root) {
+        return None;
+    }
+    let w = 2.0 * c / (1.0 + root);
+    Some(plus(at_rest, w * w, per_square))
 }
 
 /// The accelerations at the centred velocity `v(n) = v(n−½) + (h/2)·a(v(n))`, by fixed-point

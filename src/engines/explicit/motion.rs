@@ -412,23 +412,60 @@ impl<S: Space, const FINITE: bool> Model<S, FINITE> {
         held: &Constraints<S>,
         counters: &mut Counters,
     ) {
-        for ((x, c), v) in cfg.bu.iter_mut().zip(carry.b.iter_mut()).zip(&vel.b) {
-            compensated_add(x, c, *v * h);
-        }
         for b in 0..self.bodies.len() {
-            if !held.rotating[b] {
-                continue;
-            }
-            counters.rotation_updates += 1;
-            if FINITE {
-                // The mass properties from the new orientation while it is still in
-                // registers, not read back from the configuration just written.
-                let r = S::advance_compensated(&cfg.br[b], &mut cfg.br_carry[b], &(vel.w[b] * h));
-                cfg.inertia[b] = self.oriented(b, &r);
-                cfg.br[b] = r;
-            } else {
-                compensated_add(&mut cfg.bth[b], &mut carry.w[b], vel.w[b] * h);
-            }
+            self.move_body(b, (cfg, carry), h, (vel.b[b], vel.w[b]), held, counters);
+        }
+    }
+
+    /// The bodies' part of an increment from their accelerations `acc`: v(n+½) = v(n−½) + h·a(n)
+    /// in place of v(n−½) in `v_half`, and the configuration moved by it, in one pass over
+    /// the bodies. The arithmetic of [`Rates::set_plus_bodies`] and [`Model::advance_bodies`],
+    /// bit for bit.
+    #[inline(always)]
+    pub fn step_bodies(
+        &self,
+        (cfg, carry): (&mut Config<S>, &mut Rates<S>),
+        h: f64,
+        v_half: &mut Rates<S>,
+        acc: &Rates<S>,
+        held: &Constraints<S>,
+        counters: &mut Counters,
+    ) {
+        let n = self.bodies.len();
+        let (vb, vw) = (&mut v_half.b[..n], &mut v_half.w[..n]);
+        let (ab, aw) = (&acc.b[..n], &acc.w[..n]);
+        for b in 0..n {
+            (vb[b], vw[b]) = (vb[b] + ab[b] * h, vw[b] + aw[b] * h);
+            self.move_body(b, (cfg, carry), h, (vb[b], vw[b]), held, counters);
+        }
+    }
+
+    /// Body `b` moved over an increment of `h` at the rates `(v, ω)`: its reference node by
+    /// a compensated sum, its orientation (where it can turn) by the exact exponential, with
+    /// its mass properties.
+    #[inline(always)]
+    fn move_body(
+        &self,
+        b: usize,
+        (cfg, carry): (&mut Config<S>, &mut Rates<S>),
+        h: f64,
+        (v, w): (S::V, S::W),
+        held: &Constraints<S>,
+        counters: &mut Counters,
+    ) {
+        compensated_add(&mut cfg.bu[b], &mut carry.b[b], v * h);
+        if !held.rotating[b] {
+            return;
+        }
+        counters.rotation_updates += 1;
+        if FINITE {
+            // The mass properties from the new orientation while it is still in registers,
+            // not read back from the configuration just written.
+            let r = S::advance_compensated(&cfg.br[b], &mut cfg.br_carry[b], &(w * h));
+            cfg.inertia[b] = self.oriented(b, &r);
+            cfg.br[b] = r;
+        } else {
+            compensated_add(&mut cfg.bth[b], &mut carry.w[b], w * h);
         }
     }
 

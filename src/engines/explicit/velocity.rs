@@ -213,6 +213,30 @@ impl<S: Space> VelocityRule<S> {
     }
 }
 
+/// Where no dashpot acts and every body whose rate its forces read turns about one axis: the
+/// bodies' accelerations into `acc` and their v(n) into `work.v_n`, in closed form, as
+/// [`iterate_bodies`] takes them ([`Model::centred_bodies_solved`]), bit for bit; the particles'
+/// are left to the caller, since no force on them reads the velocity. False, with nothing
+/// counted, where the closed form does not apply at this increment (the iteration then runs).
+pub(super) fn bodies_in_closed_form<S: Space, const FINITE: bool>(
+    at: &AtIncrement<S, FINITE>,
+    work: &mut Velocities<S>,
+    acc: &mut Rates<S>,
+    counters: &mut Counters,
+) -> bool {
+    let (model, cfg, held) = (at.model, at.cfg, at.held);
+    debug_assert!(!model.has_dashpots());
+    let work = work.shaped(model);
+    model.body_operators(cfg, held, &mut work.operators);
+    let (state, rates) = ((cfg, at.forces, held), (at.v_half, at.h));
+    let before = *counters;
+    if model.centred_bodies_solved(state, &work.operators, rates, &mut work.v_n, acc, counters) {
+        return true;
+    }
+    *counters = before;
+    false
+}
+
 /// Why the centred velocity iteration's failure ends the run: stiff dashpots in a scene with
 /// more free DOFs than a direct solve takes, or, without dashpots, velocity terms too fast for
 /// the increment.

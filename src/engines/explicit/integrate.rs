@@ -242,10 +242,12 @@ struct TimeLoop<'a, S: Space, const FINITE: bool> {
     /// Configuration at increment n, and the rounding carry of its compensated sums.
     cfg: Config<S>,
     carry: Rates<S>,
-    /// v(n−½), and v(n+½) once formed.
+    /// v(n−½), and v(n+½) where the general path forms it apart (the shorter paths update
+    /// `v_half` in place).
     v_half: Rates<S>,
     v_next: Rates<S>,
-    /// Accelerations at increment n and n − 1.
+    /// Accelerations at increment n and n − 1. The shorter paths that nothing in their step
+    /// reads a(n−1) on ([`TimeLoop::keep_accelerations`]) keep it only for the next step.
     acc: Rates<S>,
     acc_prev: Rates<S>,
     /// Position-dependent forces at increment n.
@@ -297,6 +299,10 @@ struct StepPlan<S: Space> {
     count: u64,
     /// Whether no dynamic step follows (the last runs its final increment's row).
     last: bool,
+    /// Whether an increment may take the bodies' centred rates in closed form
+    /// ([`TimeLoop::advance_turning`]): no dashpot acts, and every body whose velocity terms
+    /// act turns about one axis.
+    turning: bool,
 }
 
 impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
@@ -462,7 +468,9 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         } else {
             (1, (duration / h - 1e-9).ceil() as u64)
         };
+        let turning = !model.has_dashpots() && held.velocity_terms_about_one_axis();
         StepPlan {
+            turning,
             held,
             velocity,
             stride,
@@ -536,9 +544,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
                     self.advance_centred(n, plan);
                     return Ok(());
                 }
-                VelocityRule::Iterated { solved: false, .. }
-                    if !model.has_dashpots() && self.advance_turning(n, plan) =>
-                {
+                VelocityRule::Iterated { .. } if plan.turning && self.advance_turning(n, plan) => {
                     return Ok(());
                 }
                 _ => {}
@@ -618,9 +624,10 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
 
     /// After an increment of [`TimeLoop::advance_fused`] or [`TimeLoop::advance_centred`],
     /// whose accelerations (in `acc`) are a(n−1) only to the next step's restart, which
-    /// follows the step's `last` increment: kept there, where they are whole, as the general
-    /// path keeps them at every increment. Exchanging the two sets costs an increment of a
-    /// small scene about 20 instructions.
+    /// follows the step's `last` increment: their rules ([`VelocityRule::Absent`],
+    /// [`VelocityRule::Direct`]) hold for the whole step and read no a(n−1). Kept there,
+    /// where they are whole, as the general path keeps them at every increment. Exchanging the
+    /// two sets costs an increment of a small scene about 20 instructions.
     fn keep_accelerations(&mut self, last: bool) {
         if last {
             std::mem::swap(&mut self.acc_prev, &mut self.acc);

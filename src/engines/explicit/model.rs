@@ -235,6 +235,14 @@ impl<S: Space> Constraints<S> {
         self.velocity_terms.iter().any(|x| *x)
     }
 
+    /// Whether every body whose velocity terms act turns about one free axis: where no
+    /// dashpot acts, its centred rate may then be in closed form
+    /// ([`Model::centred_bodies_solved`]).
+    pub fn velocity_terms_about_one_axis(&self) -> bool {
+        let mut terms = self.velocity_terms.iter().zip(&self.body_free_r);
+        terms.all(|(reads, free)| !reads || free.len() == 1)
+    }
+
     /// The accelerations of body `b` at mass properties `inertia` under `force` and `moment`
     /// and this step's constraints, with `operator` where one is formed for them, otherwise
     /// the step's operator where it has one ([`Constraints::body_operators`]), otherwise one

@@ -29,7 +29,9 @@ const MAX_DAMPING_ITERATIONS: usize = 100;
 const VELOCITY_TOLERANCE: f64 = 1e-14;
 
 /// What the accelerations of increment n read: the model at x(n) with its position forces,
-/// v(n−½) and a(n−1), the increment and the step's constraints.
+/// v(n−½) and a(n−1), the increment and the step's constraints. a(n−1) is read only by the
+/// iteration's predictor ([`VelocityRule::Iterated`]); under the other rules the time loop
+/// keeps it only for the next step ([`super::integrate`]), and it may be older.
 pub(super) struct AtIncrement<'a, S: Space, const FINITE: bool> {
     pub(super) model: &'a Model<S, FINITE>,
     pub(super) cfg: &'a Config<S>,

@@ -1,11 +1,12 @@
 //! BENCHMARKS.md's table from criterion's last run of `benches/increment.rs`: per seed case,
 //! ns per increment of `explicit` and of `rapier_f64` (matched), their ratio, and the
 //! arithmetic floor where the case has one; then, timed in turn here at the benchmark's
-//! increment, `rapier_f64` against `explicit` (`run::floor::engines_in_turn`) and `explicit`
-//! against its floor (`run::floor::time_in_turn`), each as the median and the quartiles of the
-//! rounds' ratios. Criterion times each benchmark apart, minutes from the others, and a ratio
-//! of two of its medians moves with the machine in between; a ratio timed in turn moves much
-//! less.
+//! increment, `rapier_f64` against `explicit` (`run::floor::engines_pair`) and `explicit`
+//! against its floor (`run::floor::floor_pair`), every case's pairs interleaved round by round
+//! (`run::floor::interleaved`), each as the median and the quartiles of the rounds' ratios and
+//! the ratio of the two runs' fastest rounds. Criterion times each benchmark apart, minutes
+//! from the others, and a ratio of two of its medians moves with the machine in between; a
+//! ratio timed in turn moves much less.
 //! Run by `scripts/benchmarks.sh`, which passes the commit and the date; the machine is read
 //! from `/proc/cpuinfo`.
 //!
@@ -15,9 +16,9 @@ use crosscheck::case;
 use crosscheck::engines::Engine;
 use crosscheck::engines::RunSettings;
 use crosscheck::engines::explicit::ExplicitEngine;
-use crosscheck::run::floor::{self, InTurn, REFINEMENT};
+use crosscheck::run::floor::{self, FloorRun, InTurn, REFINEMENT};
 use crosscheck::run::{matching, registry};
-use crosscheck::scene::IncrementRule;
+use crosscheck::scene::{IncrementRule, Scene};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -28,56 +29,88 @@ const ROUNDS: usize = 21;
 /// benchmark's increment takes about a second).
 const ENGINE_ROUNDS: usize = 7;
 
-/// "median`unit` (lower–upper quartile)" of rounds timed in turn, each ratio scaled by
-/// `scale`.
+/// "median`unit` (lower–upper quartile; fastest ratio)" of rounds timed in turn, each ratio
+/// scaled by `scale`.
 fn as_text(paired: &InTurn, scale: f64, digits: usize, unit: &str) -> String {
     let (low, high) = paired.quartiles();
     let (median, low, high) = (paired.median() * scale, low * scale, high * scale);
-    format!("{median:.digits$}{unit} ({low:.digits$}–{high:.digits$})")
+    let fastest = paired.fastest() * scale;
+    format!("{median:.digits$}{unit} ({low:.digits$}–{high:.digits$}; {fastest:.digits$})")
 }
 
-/// Per seed case, timed in turn at the benchmark's increment: `rapier_f64` (matched) against
-/// `explicit`, per increment, and `explicit` against the case's floor where it has one.
+/// A seed case as the benchmark runs it: at a tenth of its increment, `explicit` and
+/// `rapier_f64` each under their job settings.
+struct Benchmarked {
+    scene: Scene,
+    explicit: RunSettings,
+    rapier: Option<RunSettings>,
+}
+
+/// Per seed case, timed in turn at the benchmark's increment, every case's pairs interleaved
+/// (`run::floor::interleaved`): `rapier_f64` (matched) against `explicit`, per increment, and
+/// `explicit` against the case's floor where it has one.
 fn in_turn() -> (BTreeMap<String, String>, BTreeMap<String, String>) {
-    let (mut against_rapier, mut against_floor) = (BTreeMap::new(), BTreeMap::new());
     let paths = case::discover(&case::cases_dir()).expect("cases/");
     let engine = ExplicitEngine::finite();
     let rapier = registry::all()
         .into_iter()
         .find(|e| e.name() == "rapier_f64");
-    for scene in paths
+    let cases: Vec<Benchmarked> = paths
         .iter()
         .map(|p| case::load(p).expect("a valid seed case"))
-    {
-        let IncrementRule::Given(h) = scene.settings.increment else {
-            continue;
-        };
-        let finer = RunSettings {
-            increment: Some(IncrementRule::Given(h / REFINEMENT)),
-            ..RunSettings::default()
-        };
-        let settings = matching::job_settings(&engine, &scene, &finer);
-        if let Some(rapier) = rapier.as_deref() {
-            let rapier_settings = matching::job_settings(rapier, &scene, &finer);
+        .filter_map(|scene| {
+            let IncrementRule::Given(h) = scene.settings.increment else {
+                return None;
+            };
+            let finer = RunSettings {
+                increment: Some(IncrementRule::Given(h / REFINEMENT)),
+                ..RunSettings::default()
+            };
+            Some(Benchmarked {
+                explicit: matching::job_settings(&engine, &scene, &finer),
+                rapier: rapier
+                    .as_deref()
+                    .map(|r| matching::job_settings(r, &scene, &finer)),
+                scene,
+            })
+        })
+        .collect();
+    let mut pairs = Vec::new();
+    // Per case: which kind of pair, and the scale from whole runs to increments.
+    let mut measured: Vec<(&str, bool, f64)> = Vec::new();
+    let floors: Vec<Option<FloorRun>> = cases.iter().map(|c| floor::in_slices(&c.scene)).collect();
+    for (case, floor) in cases.iter().zip(floors) {
+        let scene = &case.scene;
+        if let (Some(rapier), Some(settings)) = (rapier.as_deref(), case.rapier.as_ref()) {
             let steps = |e: &dyn Engine, s: &RunSettings| {
-                let output = e.run(&scene, s).unwrap_or_else(|e| panic!("{e}"));
+                let output = e.run(scene, s).unwrap_or_else(|e| panic!("{e}"));
                 output.info.steps as f64
             };
             // Per increment: the whole runs' ratio times explicit's increments over rapier's.
-            let scale = steps(&engine, &settings) / steps(rapier, &rapier_settings);
-            let paired = floor::engines_in_turn(
-                &scene,
-                (rapier, &rapier_settings),
-                (&engine, &settings),
+            let scale = steps(&engine, &case.explicit) / steps(rapier, settings);
+            let mine = (&engine as &dyn Engine, &case.explicit);
+            pairs.push(floor::engines_pair(
+                scene,
+                (rapier, settings),
+                mine,
                 ENGINE_ROUNDS,
-            )
-            .unwrap_or_else(|e| panic!("{e}"));
-            against_rapier.insert(scene.id.clone(), as_text(&paired, scale, 0, "×"));
+            ));
+            measured.push((&scene.id, false, scale));
         }
-        if let Some(floor) = floor::in_slices(&scene) {
-            let paired = floor::time_in_turn(&engine, &scene, &settings, &floor, ROUNDS)
+        if let Some(slices) = floor {
+            let pair = floor::floor_pair(&engine, scene, &case.explicit, slices, ROUNDS)
                 .unwrap_or_else(|e| panic!("{e}"));
-            against_floor.insert(scene.id.clone(), as_text(&paired, 1.0, 2, ""));
+            pairs.push(pair);
+            measured.push((&scene.id, true, 1.0));
+        }
+    }
+    let paired = floor::interleaved(&pairs).unwrap_or_else(|e| panic!("{e}"));
+    let (mut against_rapier, mut against_floor) = (BTreeMap::new(), BTreeMap::new());
+    for ((id, is_floor, scale), paired) in measured.into_iter().zip(&paired) {
+        if is_floor {
+            against_floor.insert(id.to_string(), as_text(paired, scale, 2, ""));
+        } else {
+            against_rapier.insert(id.to_string(), as_text(paired, scale, 0, "×"));
         }
     }
     (against_rapier, against_floor)
@@ -148,7 +181,9 @@ fn main() {
         "Measured on {}, commit {commit}, {date}, by `scripts/benchmarks.sh` (criterion's \
          median; one thread; at a tenth of each case's increment; in turn: whole runs timed \
          back to back, {ENGINE_ROUNDS} rounds of `rapier_f64` and `explicit`, {ROUNDS} of \
-         `explicit` and its floor, the median of the rounds' ratios and their quartiles).\n",
+         `explicit` and its floor, every case's rounds interleaved with the others'; the median \
+         of the rounds' ratios, their quartiles, and after the semicolon the ratio of the two \
+         runs' fastest rounds).\n",
         machine()
     );
     println!(

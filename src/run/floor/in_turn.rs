@@ -5,6 +5,15 @@
 //! round's ratio as it is; the median over the rounds sets aside the rounds a shorter spell
 //! split. Timed apart (criterion measures each benchmark for seconds, the floors minutes after
 //! the engine), the same code's ratio moves by up to 1.7× between runs.
+//!
+//! Paired rounds do not remove a spell that lasts longer than a case's rounds and slows the
+//! two runs unequally: on a 2-core VM the engine's run, many independent instructions, and
+//! the floor's, one chain of dependent ones, are slowed by different factors, and a case whose
+//! rounds all fell in one such spell read 1.43 on one run and 2.41 on another of the same
+//! binary. So the pairs of several cases are interleaved ([`interleaved`]): each round times
+//! every case's pair once, so that each case's rounds are spread over the whole measurement,
+//! and each case also reports the ratio of its two runs' fastest rounds
+//! ([`InTurn::fastest`]), which a spell that only adds time does not move.
 
 use super::FloorRun;
 use crate::engines::{Engine, RunSettings};
@@ -17,10 +26,11 @@ use std::time::Instant;
 pub const REFINEMENT: f64 = 10.0;
 
 /// The ratios of one run time to another's (an engine's to its floor's, or one engine's to
-/// another's), one per round, in increasing order.
+/// another's), one per round, in increasing order, and the ratio of their fastest rounds.
 #[derive(Debug, Clone, PartialEq)]
 pub struct InTurn {
     ratios: Vec<f64>,
+    fastest: f64,
 }
 
 impl InTurn {
@@ -28,7 +38,12 @@ impl InTurn {
     pub fn from_times(rounds: &[(f64, f64)]) -> Self {
         let mut ratios: Vec<f64> = rounds.iter().map(|(e, f)| e / f).collect();
         ratios.sort_by(f64::total_cmp);
-        InTurn { ratios }
+        let least = |time: fn(&(f64, f64)) -> f64| rounds.iter().map(time).reduce(f64::min);
+        let fastest = match (least(|r| r.0), least(|r| r.1)) {
+            (Some(first), Some(second)) => first / second,
+            _ => f64::NAN,
+        };
+        InTurn { ratios, fastest }
     }
 
     /// The median of the rounds' ratios (the mean of the middle two for an even count; NaN
@@ -53,44 +68,71 @@ impl InTurn {
         let k = (n - 1) / 4;
         (self.ratios[k], self.ratios[n - 1 - k])
     }
+
+    /// The first run's fastest round over the second's (NaN without rounds): what each costs
+    /// where the machine took nothing from it, read from rounds that may differ.
+    pub fn fastest(&self) -> f64 {
+        self.fastest
+    }
+}
+
+/// A timed run: its seconds.
+pub type TimedRun<'a> = Box<dyn Fn() -> Result<f64, String> + 'a>;
+
+/// Two runs to time in turn over `rounds` rounds: the ratio is `first`'s time over `second`'s.
+pub struct Pair<'a> {
+    /// What the pair is, for an error.
+    pub name: String,
+    /// The numerator's run.
+    pub first: TimedRun<'a>,
+    /// The denominator's run.
+    pub second: TimedRun<'a>,
+    /// Rounds to time.
+    pub rounds: usize,
 }
 
 /// `engine`'s whole run of `scene` under `settings` (an increment given, as the job planner
 /// sets it) against `floor` over as many increments of that length as its dynamic step takes
-/// (as the benchmark runs it), timed in turn over `rounds` rounds after one untimed run of
-/// each. The engine's time includes dropping its output, as criterion's does.
-pub fn time_in_turn(
-    engine: &dyn Engine,
-    scene: &Scene,
-    settings: &RunSettings,
-    floor: &FloorRun,
+/// (as the benchmark runs it). The engine's time includes dropping its output, as criterion's
+/// does.
+pub fn floor_pair<'a>(
+    engine: &'a dyn Engine,
+    scene: &'a Scene,
+    settings: &'a RunSettings,
+    floor: FloorRun,
     rounds: usize,
-) -> Result<InTurn, String> {
+) -> Result<Pair<'a>, String> {
     let Some(IncrementRule::Given(h)) = settings.increment else {
         return Err(format!("{}: the floor needs an increment given", scene.id));
     };
     let steps = (floor.duration / h).round() as u64;
-    let engine_run = || whole_run(engine, scene, settings);
-    let floor_run = || {
+    let floor_run = move || {
         let started = Instant::now();
         floor.run(h, steps);
         Ok(started.elapsed().as_secs_f64())
     };
-    in_turn(engine_run, floor_run, rounds)
+    Ok(Pair {
+        name: format!("{} / {} against its floor", scene.id, engine.name()),
+        first: Box::new(move || whole_run(engine, scene, settings)),
+        second: Box::new(floor_run),
+        rounds,
+    })
 }
 
 /// Engine `first`'s whole run of `scene` under `first_settings` against engine `second`'s
-/// under `second_settings`, timed in turn over `rounds` rounds after one untimed run of each:
-/// the ratios are `first`'s time over `second`'s.
-pub fn engines_in_turn(
-    scene: &Scene,
-    (first, first_settings): (&dyn Engine, &RunSettings),
-    (second, second_settings): (&dyn Engine, &RunSettings),
+/// under `second_settings`: the ratio is `first`'s time over `second`'s.
+pub fn engines_pair<'a>(
+    scene: &'a Scene,
+    (first, first_settings): (&'a dyn Engine, &'a RunSettings),
+    (second, second_settings): (&'a dyn Engine, &'a RunSettings),
     rounds: usize,
-) -> Result<InTurn, String> {
-    let first_run = || whole_run(first, scene, first_settings);
-    let second_run = || whole_run(second, scene, second_settings);
-    in_turn(first_run, second_run, rounds)
+) -> Pair<'a> {
+    Pair {
+        name: format!("{} / {} against {}", scene.id, first.name(), second.name()),
+        first: Box::new(move || whole_run(first, scene, first_settings)),
+        second: Box::new(move || whole_run(second, scene, second_settings)),
+        rounds,
+    }
 }
 
 /// The seconds of `engine`'s whole run of `scene` under `settings`, dropping its output
@@ -102,31 +144,45 @@ fn whole_run(engine: &dyn Engine, scene: &Scene, settings: &RunSettings) -> Resu
     Ok(started.elapsed().as_secs_f64())
 }
 
-/// `first` against `second` (each returns its run's seconds) over `rounds` rounds after one
-/// untimed run of each, the one that goes first alternating.
-fn in_turn(
-    first: impl Fn() -> Result<f64, String>,
-    second: impl Fn() -> Result<f64, String>,
-    rounds: usize,
-) -> Result<InTurn, String> {
-    first()?;
-    second()?;
-    let mut times = Vec::with_capacity(rounds);
-    for round in 0..rounds {
-        let pair = if round % 2 == 0 {
-            (first()?, second()?)
-        } else {
-            let second_seconds = second()?;
-            (first()?, second_seconds)
-        };
-        times.push(pair);
+/// Every pair of `pairs` timed in turn, interleaved, after one untimed run of each of its two
+/// runs: round r of the longest pair's R rounds times each pair that [`spread`] places there,
+/// its two runs back to back, the one that goes first alternating from one of its rounds to
+/// the next. One [`InTurn`] per pair, in order.
+pub fn interleaved(pairs: &[Pair]) -> Result<Vec<InTurn>, String> {
+    let with = |pair: &Pair, e: String| format!("{}: {e}", pair.name);
+    for pair in pairs {
+        (pair.first)().map_err(|e| with(pair, e))?;
+        (pair.second)().map_err(|e| with(pair, e))?;
     }
-    Ok(InTurn::from_times(&times))
+    let total = pairs.iter().map(|p| p.rounds).max().unwrap_or(0);
+    let mut times: Vec<Vec<(f64, f64)>> =
+        pairs.iter().map(|p| Vec::with_capacity(p.rounds)).collect();
+    for round in 0..total {
+        for (pair, times) in pairs.iter().zip(&mut times) {
+            if !spread(round, pair.rounds, total) {
+                continue;
+            }
+            let (first, second) = (&pair.first, &pair.second);
+            let timed = if times.len() % 2 == 0 {
+                first().and_then(|a| Ok((a, second()?)))
+            } else {
+                second().and_then(|b| Ok((first()?, b)))
+            };
+            times.push(timed.map_err(|e| with(pair, e))?);
+        }
+    }
+    Ok(times.iter().map(|t| InTurn::from_times(t)).collect())
+}
+
+/// Whether a pair of `rounds` rounds is timed at round `round` of `total` (`rounds` ≤
+/// `total`): at `rounds` of them, as evenly apart as whole rounds allow, the first at 0.
+fn spread(round: usize, rounds: usize, total: usize) -> bool {
+    (round * rounds).div_ceil(total) < ((round + 1) * rounds).div_ceil(total)
 }
 
 #[cfg(test)]
 mod tests {
-    use super::InTurn;
+    use super::{InTurn, spread};
 
     /// A simulated machine runs the engine at exactly twice the floor's time; a spell three
     /// times slower covers the first nine rounds whole, and a shorter one slows the engine
@@ -151,5 +207,53 @@ mod tests {
         assert_eq!(even.median(), 2.0);
         assert_eq!(even.quartiles(), (1.0, 3.0));
         assert!(InTurn::from_times(&[]).median().is_nan());
+    }
+
+    /// The same machine, but a spell that slows the engine 1.4× and the floor 1.1× covers
+    /// fifteen rounds whole, and each run's time jitters by up to 4 % from round to round: the
+    /// median reads about the spell's ratio, 2·1.4/1.1; the fastest rounds, the engine's at
+    /// round 1 and the floor's at rounds 0 and 20, the undisturbed 2 exactly.
+    #[test]
+    fn a_long_spell_that_slows_the_two_unequally_moves_the_median_not_the_fastest() {
+        let rounds: Vec<(f64, f64)> = (0..21)
+            .map(|i| {
+                let (engine, floor) = if (2..17).contains(&i) {
+                    (1.4, 1.1)
+                } else {
+                    (1.0, 1.0)
+                };
+                let engine_jitter = 1.0 + 0.01 * ((i + 4) % 5) as f64;
+                let floor_jitter = 1.0 + 0.01 * (i % 4) as f64;
+                (
+                    2.0e-3 * engine * engine_jitter,
+                    1.0e-3 * floor * floor_jitter,
+                )
+            })
+            .collect();
+        let paired = InTurn::from_times(&rounds);
+        let spell = 2.0 * 1.4 / 1.1;
+        assert!((paired.median() - spell).abs() < 0.1, "{}", paired.median());
+        assert_eq!(paired.fastest(), 2.0);
+        assert!(InTurn::from_times(&[]).fastest().is_nan());
+    }
+
+    /// A pair of k rounds among R is timed at exactly k rounds, the first at round 0, no two
+    /// of them further apart than ⌈R/k⌉.
+    #[test]
+    fn a_shorter_pair_is_spread_over_the_longest_ones_rounds() {
+        for total in 1..=30 {
+            for rounds in 1..=total {
+                let at: Vec<usize> = (0..total).filter(|&r| spread(r, rounds, total)).collect();
+                assert_eq!(at.len(), rounds, "{rounds} of {total}");
+                assert_eq!(at[0], 0, "{rounds} of {total}");
+                let widest = at.windows(2).map(|w| w[1] - w[0]).max().unwrap_or(0);
+                assert!(
+                    widest <= total.div_ceil(rounds),
+                    "{rounds} of {total}: {at:?}"
+                );
+            }
+        }
+        let seven: Vec<usize> = (0..21).filter(|&r| spread(r, 7, 21)).collect();
+        assert_eq!(seven, [0, 3, 6, 9, 12, 15, 18]);
     }
 }

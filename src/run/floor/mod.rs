@@ -338,7 +338,7 @@ mod pinned_body;
 mod sliding_body;
 mod turning_body3d;
 pub use axial::{AxialElement, AxialOscillator, AxialState, LineMass};
-pub use in_turn::{InTurn, REFINEMENT, engines_in_turn, time_in_turn};
+pub use in_turn::{InTurn, Pair, REFINEMENT, TimedRun, engines_pair, floor_pair, interleaved};
 pub use line::{LineElement, LineOscillator, LineState};
 pub use pinned_body::PinnedBody;
 pub use sliding_body::{SlidingBody, SlidingState};

@@ -16,7 +16,7 @@ use crosscheck::case;
 use crosscheck::engines::Engine;
 use crosscheck::engines::RunSettings;
 use crosscheck::engines::explicit::ExplicitEngine;
-use crosscheck::run::floor::{self, FloorRun, InTurn, REFINEMENT};
+use crosscheck::run::floor::{self, InTurn, Pair, REFINEMENT};
 use crosscheck::run::{matching, registry};
 use crosscheck::scene::{IncrementRule, Scene};
 use std::collections::BTreeMap;
@@ -46,16 +46,25 @@ struct Benchmarked {
     rapier: Option<RunSettings>,
 }
 
-/// Per seed case, timed in turn at the benchmark's increment, every case's pairs interleaved
-/// (`run::floor::interleaved`): `rapier_f64` (matched) against `explicit`, per increment, and
-/// `explicit` against the case's floor where it has one.
-fn in_turn() -> (BTreeMap<String, String>, BTreeMap<String, String>) {
+/// What a pair times `explicit` against.
+#[derive(Clone, Copy)]
+enum Against {
+    Rapier,
+    Floor,
+}
+
+/// One pair's case, what it times `explicit` against, and the scale from its whole runs'
+/// ratio to a ratio per increment.
+struct Measured<'a> {
+    case: &'a str,
+    against: Against,
+    scale: f64,
+}
+
+/// Every seed case whose increment is given, as the benchmark runs it.
+fn benchmarked(explicit: &dyn Engine, rapier: Option<&dyn Engine>) -> Vec<Benchmarked> {
     let paths = case::discover(&case::cases_dir()).expect("cases/");
-    let engine = ExplicitEngine::finite();
-    let rapier = registry::all()
-        .into_iter()
-        .find(|e| e.name() == "rapier_f64");
-    let cases: Vec<Benchmarked> = paths
+    paths
         .iter()
         .map(|p| case::load(p).expect("a valid seed case"))
         .filter_map(|scene| {
@@ -67,51 +76,73 @@ fn in_turn() -> (BTreeMap<String, String>, BTreeMap<String, String>) {
                 ..RunSettings::default()
             };
             Some(Benchmarked {
-                explicit: matching::job_settings(&engine, &scene, &finer),
-                rapier: rapier
-                    .as_deref()
-                    .map(|r| matching::job_settings(r, &scene, &finer)),
+                explicit: matching::job_settings(explicit, &scene, &finer),
+                rapier: rapier.map(|r| matching::job_settings(r, &scene, &finer)),
                 scene,
             })
         })
-        .collect();
-    let mut pairs = Vec::new();
-    // Per case: which kind of pair, and the scale from whole runs to increments.
-    let mut measured: Vec<(&str, bool, f64)> = Vec::new();
-    let floors: Vec<Option<FloorRun>> = cases.iter().map(|c| floor::in_slices(&c.scene)).collect();
-    for (case, floor) in cases.iter().zip(floors) {
+        .collect()
+}
+
+/// Per case, `rapier_f64` against `explicit` and `explicit` against the case's floor where it
+/// has one, with what each pair measures.
+fn pairs<'a>(
+    cases: &'a [Benchmarked],
+    explicit: &'a dyn Engine,
+    rapier: Option<&'a dyn Engine>,
+) -> (Vec<Pair<'a>>, Vec<Measured<'a>>) {
+    let (mut pairs, mut measured) = (Vec::new(), Vec::new());
+    for case in cases {
         let scene = &case.scene;
-        if let (Some(rapier), Some(settings)) = (rapier.as_deref(), case.rapier.as_ref()) {
+        if let (Some(rapier), Some(settings)) = (rapier, case.rapier.as_ref()) {
             let steps = |e: &dyn Engine, s: &RunSettings| {
                 let output = e.run(scene, s).unwrap_or_else(|e| panic!("{e}"));
                 output.info.steps as f64
             };
             // Per increment: the whole runs' ratio times explicit's increments over rapier's.
-            let scale = steps(&engine, &case.explicit) / steps(rapier, settings);
-            let mine = (&engine as &dyn Engine, &case.explicit);
-            pairs.push(floor::engines_pair(
-                scene,
-                (rapier, settings),
-                mine,
-                ENGINE_ROUNDS,
-            ));
-            measured.push((&scene.id, false, scale));
+            let scale = steps(explicit, &case.explicit) / steps(rapier, settings);
+            let timed = ((rapier, settings), (explicit, &case.explicit));
+            pairs.push(floor::engines_pair(scene, timed.0, timed.1, ENGINE_ROUNDS));
+            let against = Against::Rapier;
+            measured.push(Measured {
+                case: &scene.id,
+                against,
+                scale,
+            });
         }
-        if let Some(slices) = floor {
-            let pair = floor::floor_pair(&engine, scene, &case.explicit, slices, ROUNDS)
+        if let Some(slices) = floor::in_slices(scene) {
+            let pair = floor::floor_pair(explicit, scene, &case.explicit, slices, ROUNDS)
                 .unwrap_or_else(|e| panic!("{e}"));
             pairs.push(pair);
-            measured.push((&scene.id, true, 1.0));
+            let against = Against::Floor;
+            measured.push(Measured {
+                case: &scene.id,
+                against,
+                scale: 1.0,
+            });
         }
     }
-    let paired = floor::interleaved(&pairs).unwrap_or_else(|e| panic!("{e}"));
+    (pairs, measured)
+}
+
+/// Per seed case, timed in turn at the benchmark's increment, every case's pairs interleaved
+/// (`run::floor::interleaved`): `rapier_f64` (matched) against `explicit`, per increment, and
+/// `explicit` against the case's floor where it has one.
+fn in_turn() -> (BTreeMap<String, String>, BTreeMap<String, String>) {
+    let explicit = ExplicitEngine::finite();
+    let rapier = registry::all()
+        .into_iter()
+        .find(|e| e.name() == "rapier_f64");
+    let cases = benchmarked(&explicit, rapier.as_deref());
+    let (pairs, measured) = pairs(&cases, &explicit, rapier.as_deref());
+    let timed = floor::interleaved(&pairs).unwrap_or_else(|e| panic!("{e}"));
     let (mut against_rapier, mut against_floor) = (BTreeMap::new(), BTreeMap::new());
-    for ((id, is_floor, scale), paired) in measured.into_iter().zip(&paired) {
-        if is_floor {
-            against_floor.insert(id.to_string(), as_text(paired, scale, 2, ""));
-        } else {
-            against_rapier.insert(id.to_string(), as_text(paired, scale, 0, "×"));
-        }
+    for (m, paired) in measured.iter().zip(&timed) {
+        let (case, scale) = (m.case.to_string(), m.scale);
+        match m.against {
+            Against::Rapier => against_rapier.insert(case, as_text(paired, scale, 0, "×")),
+            Against::Floor => against_floor.insert(case, as_text(paired, scale, 2, "")),
+        };
     }
     (against_rapier, against_floor)
 }

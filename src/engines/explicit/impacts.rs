@@ -30,8 +30,9 @@ const SETTLED: f64 = 1e-9;
 /// The work account of one contact pair.
 #[derive(Debug, Clone, Copy, Default)]
 struct PairWork {
-    /// The gap at the last two increments (newest first), once known.
-    gaps: [Option<f64>; 2],
+    /// The gap at the last two increments (newest first); `known` of them are.
+    gaps: [f64; 2],
+    known: u8,
     /// The normal force at the last increment (penalty and balance).
     force: f64,
     /// The work the normal force did since the pair's account was last closed.
@@ -77,8 +78,8 @@ impl ImpactWork {
         let mut balanced = false;
         for (k, pair) in self.pairs.iter_mut().enumerate() {
             let gap = forces.gap[k];
-            if let [_, Some(before)] = pair.gaps {
-                let work = 0.5 * pair.force * (gap - before);
+            if pair.known == 2 {
+                let work = 0.5 * pair.force * (gap - pair.gaps[1]);
                 pair.work += work;
                 pair.scale = pair.scale.max(work.abs());
             }
@@ -86,13 +87,15 @@ impl ImpactWork {
             if force == 0.0 && pair.work != 0.0 {
                 if pair.work.abs() <= SETTLED * pair.scale {
                     (pair.work, pair.scale) = (0.0, 0.0);
-                } else if let Some(last) = pair.gaps[0] {
-                    force = push_back(model, cfg, (k, pair.work, gap - last), forces, h);
+                } else if pair.known > 0 {
+                    let step = gap - pair.gaps[0];
+                    force = push_back(model, cfg, (k, pair.work, step), forces, h);
                     balanced = true;
                 }
             }
             pair.force = force;
-            pair.gaps = [Some(gap), pair.gaps[0]];
+            pair.gaps = [gap, pair.gaps[0]];
+            pair.known = (pair.known + 1).min(2);
         }
         balanced
     }

@@ -24,6 +24,23 @@ use crate::scene::{
     StepKind, Surface,
 };
 
+/// The state at increment n that a velocity rule reads ([`AtIncrement`]), from a
+/// [`TimeLoop`] and the constraints `held`. A macro, not a method: it borrows the loop's
+/// fields one by one, so that the rule may write the others (its work and accelerations).
+macro_rules! at_increment {
+    ($loop:expr, $held:expr) => {
+        AtIncrement {
+            model: $loop.model,
+            cfg: &$loop.cfg,
+            forces: &$loop.forces,
+            v_half: &$loop.v_half,
+            acc_prev: &$loop.acc_prev,
+            h: $loop.h,
+            held: $held,
+        }
+    };
+}
+
 /// The outcome of an explicit run.
 pub struct Integration {
     /// Time history.
@@ -279,6 +296,8 @@ struct TimeLoop<'a, S: Space, const FINITE: bool> {
     /// through its solid).
     solid_before: Vec<Option<SolidPosition<S>>>,
     solid_now: Vec<Option<SolidPosition<S>>>,
+    /// Whether any pair's face is a solid's (otherwise nothing is watched).
+    solids: bool,
     columns: Vec<String>,
     rows: Vec<Vec<f64>>,
     sampler: RowSampler,
@@ -347,6 +366,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
             impact_work: None,
             solid_before: Vec::new(),
             solid_now: Vec::new(),
+            solids: model.has_solids(),
             columns,
             rows: Vec::with_capacity(scene.output_rows),
             sampler: RowSampler::new(&scene.output_times(), interval, interval),
@@ -491,6 +511,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
 
     /// Increment n: the forces at x(n), the accelerations, a row where one falls, then
     /// v(n+½) and x(n+1) (not after the run's last increment).
+    #[inline(always)]
     fn increment(&mut self, n: u64, plan: &mut StepPlan<S>) -> Result<(), EngineError> {
         let (model, h) = (self.model, self.h);
         let row = n == plan.next_row;
@@ -553,15 +574,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         let power = if restart {
             self.restart(plan)
         } else {
-            let at = AtIncrement {
-                model,
-                cfg: &self.cfg,
-                forces: &self.forces,
-                v_half: &self.v_half,
-                acc_prev: &self.acc_prev,
-                h,
-                held: &plan.held,
-            };
+            let at = at_increment!(self, &plan.held);
             let (work, acc) = (&mut self.velocities, &mut self.acc);
             plan.velocity
                 .accelerations(&at, work, acc, &mut self.counters)?
@@ -643,15 +656,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
     /// path, bit for bit. False, with nothing done, where the closed form does not apply.
     fn advance_turning(&mut self, n: u64, plan: &StepPlan<S>) -> bool {
         let (model, h, held) = (self.model, self.h, &plan.held);
-        let at = AtIncrement {
-            model,
-            cfg: &self.cfg,
-            forces: &self.forces,
-            v_half: &self.v_half,
-            acc_prev: &self.acc_prev,
-            h,
-            held,
-        };
+        let at = at_increment!(self, held);
         let (work, acc) = (&mut self.velocities, &mut self.acc);
         if !bodies_in_closed_form(&at, work, acc, &mut self.counters) {
             return false;
@@ -671,6 +676,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
     /// The bodies' half-step velocities and configuration from the accelerations in `acc`, as
     /// the general path forms them ([`Model::step_bodies`]; nothing to do in a scene without
     /// bodies).
+    #[inline(always)]
     fn move_bodies(&mut self, held: &Constraints<S>) {
         let (model, h) = (self.model, self.h);
         if model.bodies.is_empty() {
@@ -691,15 +697,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
         let VelocityRule::Direct(dashpots) = &mut plan.velocity else {
             unreachable!("called for a step whose dashpots are solved directly")
         };
-        let at = AtIncrement {
-            model,
-            cfg: &self.cfg,
-            forces: &self.forces,
-            v_half: &self.v_half,
-            acc_prev: &self.acc_prev,
-            h,
-            held: &plan.held,
-        };
+        let at = at_increment!(self, &plan.held);
         let power = dashpots.accelerations(&at, &mut self.acc, &mut self.counters);
         if n > 0 {
             self.dissipated += 0.5 * h * (self.last_power + power);
@@ -744,7 +742,7 @@ impl<'a, S: Space, const FINITE: bool> TimeLoop<'a, S, FINITE> {
     /// Refuse a run whose contact node went through its solid since the last increment.
     fn watch_solids(&mut self, n: u64) -> Result<(), EngineError> {
         let model = self.model;
-        if !model.has_solids() {
+        if !self.solids {
             return Ok(());
         }
         model.solid_positions(&self.cfg, &mut self.solid_now);

@@ -322,8 +322,11 @@ impl<S: Space> Forces<S> {
             }
         }
         self.written = [false; 3];
-        fill_zero(&mut self.b, S::V::zero());
-        fill_zero(&mut self.m, S::W::zero());
+        // The bodies' forces and moments in one pass.
+        let zero = std::hint::black_box((S::V::zero(), S::W::zero()));
+        for (b, m) in self.b.iter_mut().zip(self.m.iter_mut()) {
+            (*b, *m) = zero;
+        }
         fill_zero(&mut self.contact, 0.0);
         self.elastic = 0.0;
         self.dissipation = 0.0;
